@@ -1,0 +1,17 @@
+// Subcommands of the `talus` command-line tool. Each file apps/cmd_*.cpp adds one
+// CLI11 subcommand; apps/talus.cpp wires them up and turns errors into exit codes.
+#pragma once
+#include <CLI/CLI.hpp>
+
+namespace talus::app {
+
+// exit codes (sysexits-like): 0 success, 1 runtime failure, 2 bad usage or bad input
+inline constexpr int kExitFailure = 1;
+inline constexpr int kExitUsage = 2;
+
+void add_pile_command(CLI::App& app);    // build and settle the default pile
+void add_repose_command(CLI::App& app);  // heap test: angle of repose of the gravel
+void add_bench_command(CLI::App& app);   // DEM throughput benchmarks
+void add_run_command(CLI::App& app);     // vehicle scenarios
+
+}  // namespace talus::app

@@ -1,0 +1,28 @@
+// talus: wheel-loader digging in granular terrain. Entry point of the command-line tool.
+#include <iostream>
+
+#include "apps/commands.hpp"
+#include "host/error.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{"talus: nonsmooth DEM and multibody simulation of a wheel loader digging in gravel"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "talus 0.1.0");
+  talus::app::add_pile_command(app);
+  talus::app::add_repose_command(app);
+  talus::app::add_bench_command(app);
+  talus::app::add_run_command(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    // --help and --version are "errors" with exit code 0 in CLI11
+    return app.exit(e) == 0 ? 0 : talus::app::kExitUsage;
+  } catch (const talus::Error& e) {
+    std::cerr << "talus: error: " << e.what() << "\n";
+    return talus::app::kExitFailure;
+  } catch (const std::exception& e) {
+    std::cerr << "talus: error: " << e.what() << "\n";
+    return talus::app::kExitFailure;
+  }
+  return 0;
+}

@@ -1,0 +1,156 @@
+#include "host/device.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <cstdlib>
+#include <filesystem>
+#include <sstream>
+
+#include "host/embedded.hpp"
+
+namespace talus {
+
+namespace {
+
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
+  return s;
+}
+
+bool contains(const std::string& hay, const std::string& needle) {
+  return needle.empty() || lower(hay).find(lower(needle)) != std::string::npos;
+}
+
+// poCL compiles kernels with LLVM on first use and caches the result; keep that cache
+// inside the build folder unless the user chose a place (PoCL reads it at platform init)
+void default_pocl_cache() {
+  if (std::getenv("POCL_CACHE_DIR") != nullptr) return;
+  std::error_code ec;
+  std::filesystem::create_directories(TALUS_DEFAULT_CACHE_DIR, ec);
+  if (!ec) setenv("POCL_CACHE_DIR", TALUS_DEFAULT_CACHE_DIR, 0);
+}
+
+constexpr const char* kInstallHint =
+    "no OpenCL platform found. Install one: on Debian/Ubuntu `sudo apt-get install "
+    "pocl-opencl-icd ocl-icd-libopencl1` runs talus on the CPU; for a GPU install the vendor's "
+    "OpenCL driver (e.g. nvidia-opencl-icd). `clinfo -l` lists what is installed.";
+
+}  // namespace
+
+DeviceChoice device_choice_from_env() {
+  DeviceChoice choice;
+  if (const char* env = std::getenv("TALUS_DEVICE")) {
+    std::string s(env);
+    auto colon = s.find(':');
+    choice.platform = s.substr(0, colon);
+    if (colon != std::string::npos) choice.device = s.substr(colon + 1);
+  }
+  return choice;
+}
+
+Device::Device(const DeviceChoice& choice) {
+  default_pocl_cache();
+  std::vector<cl::Platform> platforms;
+  try {
+    cl::Platform::get(&platforms);
+  } catch (const cl::Error&) {
+    platforms.clear();
+  }
+  if (platforms.empty()) throw Error(kInstallHint);
+
+  // candidates: every device of every matching platform, GPUs first, then CPUs, in listing order
+  struct Candidate {
+    cl::Platform platform;
+    cl::Device device;
+    bool gpu;
+  };
+  std::vector<Candidate> candidates;
+  std::string seen;
+  for (auto& p : platforms) {
+    std::string pname = p.getInfo<CL_PLATFORM_NAME>();
+    std::vector<cl::Device> devices;
+    try {
+      p.getDevices(CL_DEVICE_TYPE_ALL, &devices);
+    } catch (const cl::Error&) {
+      continue;
+    }
+    for (auto& d : devices) {
+      std::string dname = d.getInfo<CL_DEVICE_NAME>();
+      seen += "\n  " + pname + " : " + dname;
+      if (!contains(pname, choice.platform) || !contains(dname, choice.device)) continue;
+      candidates.push_back({p, d, (d.getInfo<CL_DEVICE_TYPE>() & CL_DEVICE_TYPE_GPU) != 0});
+    }
+  }
+  std::stable_partition(candidates.begin(), candidates.end(), [](const Candidate& c) { return c.gpu; });
+  if (candidates.empty()) {
+    if (seen.empty()) throw Error(kInstallHint);
+    throw Error("no OpenCL device matches TALUS_DEVICE / DeviceChoice (platform '" + choice.platform +
+                "', device '" + choice.device + "'); available:" + seen +
+                "\nfix: set TALUS_DEVICE=platform-substring:device-substring, or unset it");
+  }
+
+  const Candidate& c = candidates.front();
+  device_ = c.device;
+  is_gpu_ = c.gpu;
+  cl_checked("creating the context and queue", [&] {
+    context_ = cl::Context(device_);
+    queue_ = cl::CommandQueue(context_, device_);
+    return 0;
+  });
+  std::ostringstream os;
+  os << c.platform.getInfo<CL_PLATFORM_NAME>() << " / " << device_.getInfo<CL_DEVICE_NAME>() << " ("
+     << device_.getInfo<CL_DEVICE_MAX_COMPUTE_UNITS>() << " compute units, "
+     << (device_.getInfo<CL_DEVICE_GLOBAL_MEM_SIZE>() >> 20) << " MiB)";
+  description_ = os.str();
+}
+
+const cl::Program& Device::program(const std::vector<std::string>& files, const std::string& options) {
+  std::string key = options;
+  for (auto& f : files) key += "|" + f;
+  auto it = programs_.find(key);
+  if (it != programs_.end()) return it->second;
+
+  // shared headers (*.h, host/kernel data layouts) come first, in name order
+  std::string source;
+  for (auto& e : embedded_sources()) {
+    std::string name = e.name;
+    if (name.size() > 2 && name.compare(name.size() - 2, 2, ".h") == 0) source += e.text + "\n";
+  }
+  for (auto& f : files) source += embedded_source(f) + "\n";
+
+  cl::Program program(context_, source);
+  try {
+    program.build(std::vector<cl::Device>{device_}, ("-cl-std=CL1.2 " + options).c_str());
+  } catch (const cl::Error& e) {
+    std::string log;
+    try {
+      log = program.getBuildInfo<CL_PROGRAM_BUILD_LOG>(device_);
+    } catch (const cl::Error&) {
+      log = "(no build log)";
+    }
+    std::string names;
+    for (auto& f : files) names += f + " ";
+    throw Error("OpenCL: building kernels " + names + "failed with " + cl_status_name(e.err()) +
+                "; build log:\n" + log);
+  }
+  return programs_.emplace(key, std::move(program)).first->second;
+}
+
+cl::Kernel Device::kernel(const cl::Program& program, const char* name) {
+  return cl_checked(name, [&] { return cl::Kernel(program, name); });
+}
+
+void Device::finish() {
+  cl_checked("waiting for the queue", [&] { return queue_.finish(); });
+}
+
+void launch(Device& dev, cl::Kernel& kernel, size_t count, const char* what) {
+  if (count == 0) return;
+  size_t global = (count + kWorkGroupSize - 1) / kWorkGroupSize * kWorkGroupSize;
+  cl_checked(what, [&] {
+    return dev.queue().enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(global),
+                                            cl::NDRange(kWorkGroupSize));
+  });
+}
+
+}  // namespace talus

@@ -1,0 +1,155 @@
+// The OpenCL runtime: device choice, context and in-order queue, typed buffers,
+// programs built from the embedded kernel sources, and kernel launches.
+//
+// Every OpenCL failure surfaces as talus::Error naming the call, the status code
+// and, for program builds, the compiler's build log.
+#pragma once
+#include <CL/opencl.hpp>
+
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "host/error.hpp"
+
+namespace talus {
+
+// which device to use: substrings of the platform and device names (case-insensitive);
+// empty strings take the default, the first GPU if any, else the first CPU device
+struct DeviceChoice {
+  std::string platform;
+  std::string device;
+};
+
+// reads TALUS_DEVICE ("platform-substring:device-substring", either part may be empty)
+DeviceChoice device_choice_from_env();
+
+// runs an OpenCL C++-binding call; converts cl::Error into talus::Error naming `what`
+template <class F>
+auto cl_checked(const char* what, F&& f) -> decltype(f()) {
+  try {
+    return f();
+  } catch (const cl::Error& e) {
+    throw Error(std::string("OpenCL: ") + what + " failed in " + e.what() + " with " +
+                cl_status_name(e.err()) + " (" + std::to_string(e.err()) + ")");
+  }
+}
+
+class Device {
+ public:
+  explicit Device(const DeviceChoice& choice = device_choice_from_env());
+
+  const cl::Context& context() const { return context_; }
+  const cl::CommandQueue& queue() const { return queue_; }
+  const cl::Device& device() const { return device_; }
+  bool is_gpu() const { return is_gpu_; }
+  // "platform / device (compute units, global memory)"
+  std::string description() const { return description_; }
+
+  // a program made of the shared headers followed by `files` (names in kernels/);
+  // built once per Device and option string, and kept
+  const cl::Program& program(const std::vector<std::string>& files, const std::string& options = "");
+  // a fresh kernel object from a program (kernels carry their arguments, so callers own them)
+  cl::Kernel kernel(const cl::Program& program, const char* name);
+
+  // waits for all enqueued work
+  void finish();
+
+ private:
+  cl::Context context_;
+  cl::Device device_;
+  cl::CommandQueue queue_;
+  bool is_gpu_ = false;
+  std::string description_;
+  std::map<std::string, cl::Program> programs_;
+};
+
+// a device array of trivially copyable T; contents are lost on resize
+template <class T>
+class Buffer {
+ public:
+  Buffer() = default;
+  Buffer(Device& dev, size_t count) : dev_(&dev) { resize(count); }
+
+  size_t size() const { return count_; }
+  const cl::Buffer& raw() const { return buffer_; }
+
+  // reallocates when the capacity is too small (grows by 1.5x to amortise)
+  void resize(size_t count) {
+    count_ = count;
+    if (count <= capacity_ && capacity_ > 0) return;
+    capacity_ = std::max<size_t>(1, count + count / 2);
+    buffer_ = cl_checked("allocating a device buffer", [&] {
+      return cl::Buffer(dev_->context(), CL_MEM_READ_WRITE, capacity_ * sizeof(T));
+    });
+  }
+  void upload(const std::vector<T>& host) {
+    resize(host.size());
+    if (host.empty()) return;
+    cl_checked("uploading a buffer", [&] {
+      dev_->queue().enqueueWriteBuffer(buffer_, CL_TRUE, 0, host.size() * sizeof(T), host.data());
+    });
+  }
+  std::vector<T> download() const { return download(count_); }
+  std::vector<T> download(size_t count) const {
+    std::vector<T> host(count);
+    if (count == 0) return host;
+    cl_checked("downloading a buffer", [&] {
+      dev_->queue().enqueueReadBuffer(buffer_, CL_TRUE, 0, count * sizeof(T), host.data());
+    });
+    return host;
+  }
+  T read_one(size_t index) const {
+    T value;
+    cl_checked("reading one element", [&] {
+      dev_->queue().enqueueReadBuffer(buffer_, CL_TRUE, index * sizeof(T), sizeof(T), &value);
+    });
+    return value;
+  }
+  void fill(const T& value) {
+    if (count_ == 0) return;
+    cl_checked("filling a buffer", [&] {
+      dev_->queue().enqueueFillBuffer(buffer_, value, 0, count_ * sizeof(T));
+    });
+  }
+  void copy_from(const Buffer<T>& other) {
+    resize(other.size());
+    if (count_ == 0) return;
+    cl_checked("copying a buffer", [&] {
+      dev_->queue().enqueueCopyBuffer(other.raw(), buffer_, 0, 0, count_ * sizeof(T));
+    });
+  }
+
+ private:
+  Device* dev_ = nullptr;
+  cl::Buffer buffer_;
+  size_t count_ = 0;
+  size_t capacity_ = 0;
+};
+
+// kernel arguments: Buffer<T> binds its cl::Buffer, anything else binds by value
+namespace detail {
+template <class T>
+const cl::Buffer& arg(const Buffer<T>& b) { return b.raw(); }
+template <class T>
+const T& arg(const T& v) { return v; }
+}  // namespace detail
+
+template <class... Args>
+void set_args(cl::Kernel& kernel, const Args&... args) {
+  cl_uint index = 0;
+  cl_checked("setting kernel arguments", [&] {
+    (kernel.setArg(index++, detail::arg(args)), ...);
+    return 0;
+  });
+}
+
+// the work-group size of every 1-D launch; results depend on it only where a kernel
+// says so (the scan), and a fixed value keeps runs bit-identical across calls
+inline constexpr size_t kWorkGroupSize = 64;
+
+// enqueues `kernel` over `count` items (padded to whole work-groups; kernels bound-check)
+void launch(Device& dev, cl::Kernel& kernel, size_t count, const char* what);
+
+}  // namespace talus

@@ -1,0 +1,26 @@
+// One error type for the whole library: a message that names what failed and how to fix it.
+#pragma once
+#include <stdexcept>
+#include <string>
+
+namespace talus {
+
+class Error : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// the symbolic name of an OpenCL status code, e.g. "CL_OUT_OF_RESOURCES"
+const char* cl_status_name(int code);
+
+}  // namespace talus
+
+namespace talus {
+
+// bad input from the user (a file, a field, a flag): the CLI exits with code 2
+class InputError : public Error {
+ public:
+  using Error::Error;
+};
+
+}  // namespace talus

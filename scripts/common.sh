@@ -1,0 +1,35 @@
+# Shared set-up for scripts/demo and scripts/test: system packages, configure, build.
+# Sourced, not run. Idempotent: installs only what is missing, rebuilds only what changed.
+set -euo pipefail
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+build="$root/build"
+
+# debian 12 packages talus builds against (README "Dependencies")
+packages=(build-essential cmake pkg-config
+  pocl-opencl-icd ocl-icd-opencl-dev opencl-headers opencl-clhpp-headers clinfo
+  libeigen3-dev libembree-dev libsuitesparse-dev libgtest-dev libgmock-dev libbenchmark-dev
+  nlohmann-json3-dev libcli11-dev libpng-dev python3 python3-venv)
+
+install_packages() {
+  local missing=()
+  for p in "${packages[@]}"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+  done
+  [ ${#missing[@]} -eq 0 ] && return 0
+  echo "talus: installing ${missing[*]}" >&2
+  local sudo=""
+  [ "$(id -u)" -ne 0 ] && sudo="sudo"
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+}
+
+configure_and_build() {
+  local werror=OFF
+  [ "${CI:-}" = "true" ] && werror=ON
+  cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release -DTALUS_WERROR=$werror >/dev/null
+  cmake --build "$build" -j "$(nproc)"
+}
+
+# poCL's compiled-kernel cache lives in the build folder, so runs after the first skip LLVM
+export POCL_CACHE_DIR="$build/pocl-cache"
+mkdir -p "$POCL_CACHE_DIR"
