@@ -1,0 +1,52 @@
+#include "host/scan.hpp"
+
+namespace talus {
+
+namespace {
+// must equal SCAN_BLOCK in kernels/scan.cl
+constexpr size_t kScanBlock = 256;
+}
+
+DeviceScan::DeviceScan(Device& dev) : dev_(dev) {
+  const cl::Program& program = dev.program({"scan.cl"});
+  blocks_ = dev.kernel(program, "scan_blocks");
+  add_ = dev.kernel(program, "scan_add_offsets");
+}
+
+void DeviceScan::exclusive(const Buffer<int>& in, Buffer<int>& out, size_t n) {
+  // n + 1 outputs: the kernel reads item n as zero, so out[n] is the total
+  out.resize(n + 1);
+  scan_level(in.raw(), out.raw(), n, n + 1, 0);
+}
+
+void DeviceScan::scan_level(const cl::Buffer& in, const cl::Buffer& out, size_t n_in, size_t n_out,
+                            size_t level) {
+  size_t blocks = (n_out + kScanBlock - 1) / kScanBlock;
+  while (sums_.size() <= level) sums_.emplace_back(dev_, 1);
+  while (offsets_.size() <= level) offsets_.emplace_back(dev_, 1);
+  Buffer<int>& sums = sums_[level];
+  sums.resize(blocks);
+  cl_checked("scan_blocks", [&] {
+    blocks_.setArg(0, in);
+    blocks_.setArg(1, out);
+    blocks_.setArg(2, sums.raw());
+    blocks_.setArg(3, static_cast<int>(n_in));
+    blocks_.setArg(4, static_cast<int>(n_out));
+    return dev_.queue().enqueueNDRangeKernel(blocks_, cl::NullRange, cl::NDRange(blocks * kScanBlock),
+                                             cl::NDRange(kScanBlock));
+  });
+  if (blocks == 1) return;
+  // scan the block totals, then add each block's offset to its items
+  Buffer<int>& offs = offsets_[level];
+  offs.resize(blocks);
+  scan_level(sums.raw(), offs.raw(), blocks, blocks, level + 1);
+  cl_checked("scan_add_offsets", [&] {
+    add_.setArg(0, out);
+    add_.setArg(1, offs.raw());
+    add_.setArg(2, static_cast<int>(n_out));
+    return dev_.queue().enqueueNDRangeKernel(add_, cl::NullRange, cl::NDRange(blocks * kScanBlock),
+                                             cl::NDRange(kScanBlock));
+  });
+}
+
+}  // namespace talus

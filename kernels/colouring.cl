@@ -1,0 +1,96 @@
+// Graph colouring of contacts for parallel PGS: no dynamic body appears twice in a colour;
+// static geometry never blocks. Jones-Plassmann rounds with fixed pseudo-random priorities:
+// an uncoloured contact that outranks all its uncoloured neighbours takes the smallest colour
+// its neighbours do not use. The result depends only on the contact list (deterministic).
+//
+// colour[c] packs (round * TL_MAX_COLOURS + colour), or -1 while uncoloured; a neighbour
+// coloured in the current round is read as still uncoloured (it necessarily outranks c), so
+// the outcome does not depend on the order in which work-items run.
+
+__kernel void colour_round(__global const TlContact* contacts, int n_contacts,
+                           __global const int* adj_offsets, __global const int* adjacency,
+                           __global int* colour, int round, __global int* status) {
+  int c = get_global_id(0);
+  if (c >= n_contacts || colour[c] >= 0) return;
+  uint priority = contact_priority((uint)c);
+  ulong used = 0;
+  int bodies[2] = {contacts[c].a, contacts[c].b};
+  // scan the neighbours through both dynamic bodies
+  for (int side = 0; side < 2; ++side) {
+    int body = bodies[side];
+    if (body < 0) continue;
+    int end = adj_offsets[body + 1];
+    for (int k = adj_offsets[body]; k < end; ++k) {
+      int d = adjacency[k];
+      if (d == c) continue;
+      int packed = colour[d];
+      if (packed < 0 || packed / TL_MAX_COLOURS == round) {
+        if (contact_priority((uint)d) > priority) {
+          atomic_inc(&status[0]);  // still uncoloured after this round
+          return;
+        }
+      } else {
+        used |= 1ul << (packed % TL_MAX_COLOURS);
+      }
+    }
+  }
+  // smallest free colour
+  int k = 0;
+  while (k < TL_MAX_COLOURS && ((used >> k) & 1ul)) ++k;
+  if (k == TL_MAX_COLOURS) {
+    atomic_inc(&status[1]);  // overflow: reported by the host
+    atomic_inc(&status[0]);
+    return;
+  }
+  colour[c] = round * TL_MAX_COLOURS + k;
+}
+
+// stable partition by colour, step 1: per block of COLOUR_BLOCK contacts, count each colour
+#define COLOUR_BLOCK 256
+__kernel void colour_histogram(__global int* colour, int n_contacts, int blocks,
+                               __global int* histogram) {
+  int blk = get_global_id(0);
+  if (blk >= blocks) return;
+  int counts[TL_MAX_COLOURS];
+  for (int k = 0; k < TL_MAX_COLOURS; ++k) counts[k] = 0;
+  int end = min(n_contacts, (blk + 1) * COLOUR_BLOCK);
+  for (int c = blk * COLOUR_BLOCK; c < end; ++c) {
+    int k = colour[c] % TL_MAX_COLOURS;  // unpack the round
+    colour[c] = k;
+    counts[k]++;
+  }
+  // colour-major layout, so one exclusive scan gives every (colour, block) start
+  for (int k = 0; k < TL_MAX_COLOURS; ++k) histogram[k * blocks + blk] = counts[k];
+}
+
+// step 2 (after the scan): each block places its contacts in index order
+__kernel void colour_scatter(__global const int* colour, int n_contacts, int blocks,
+                             __global const int* histogram_offsets, __global int* order,
+                             __global int* row_of_contact) {
+  int blk = get_global_id(0);
+  if (blk >= blocks) return;
+  int next[TL_MAX_COLOURS];
+  for (int k = 0; k < TL_MAX_COLOURS; ++k) next[k] = histogram_offsets[k * blocks + blk];
+  int end = min(n_contacts, (blk + 1) * COLOUR_BLOCK);
+  for (int c = blk * COLOUR_BLOCK; c < end; ++c) {
+    int row = next[colour[c]]++;
+    order[row] = c;
+    row_of_contact[c] = row;
+  }
+}
+
+// the first row of each colour (and the total at index TL_MAX_COLOURS)
+__kernel void colour_ranges(__global const int* histogram_offsets, int blocks,
+                            __global int* colour_start) {
+  int k = get_global_id(0);
+  if (k > TL_MAX_COLOURS) return;
+  colour_start[k] = histogram_offsets[k * blocks];
+}
+
+// rows in contact order, one colour (the projected Jacobi sweep needs no colouring)
+__kernel void identity_order(int n_contacts, __global int* order, __global int* row_of_contact) {
+  int c = get_global_id(0);
+  if (c >= n_contacts) return;
+  order[c] = c;
+  row_of_contact[c] = c;
+}

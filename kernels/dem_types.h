@@ -1,0 +1,81 @@
+// DEM data layouts shared by host C++ (terrain/, solvers/) and the OpenCL kernels.
+// Prepended after common.h to every kernel program. All device data is float32.
+//
+// Particles are stored as structure-of-arrays of float4 so that a kernel touching only
+// positions moves only positions:
+//   position  xyz = centre [m],             w = radius [m]
+//   velocity  xyz = linear velocity [m/s],  w = inverse mass [1/kg] (0 = fixed)
+//   omega     xyz = angular velocity [1/s], w = inverse moment of inertia [1/(kg m^2)]
+//   rotation  quaternion (x, y, z, w)
+#ifndef TALUS_KERNELS_DEM_TYPES_H
+#define TALUS_KERNELS_DEM_TYPES_H
+
+// static geometry kinds
+#define TL_GEOM_PLANE 0
+#define TL_GEOM_BOX 1
+
+// the largest number of colours in the graph colouring of contacts (one bit each in a ulong);
+// a sphere has at most ~14 neighbours of similar size, so a contact has < 32 neighbours
+#define TL_MAX_COLOURS 64
+
+// a contact's "b" index below zero names static geometry number -1-b
+#define TL_STATIC_BODY(geom) (-1 - (geom))
+
+// static geometry: an infinite plane (half-space behind it is solid) or an oriented box
+typedef struct {
+  tl_float4 centre;   // plane: a point on it; box: the centre [m]
+  tl_float4 axis_x;   // plane: unit normal pointing into the free side; box: first unit axis
+  tl_float4 axis_y;   // box: second unit axis
+  tl_float4 axis_z;   // box: third unit axis
+  tl_float4 half_extent;    // box: half extents along the axes [m]
+  tl_int type;        // TL_GEOM_PLANE or TL_GEOM_BOX
+  tl_int pad0, pad1, pad2;
+} TlGeom;
+
+// everything a step's kernels need besides the arrays, passed by value
+typedef struct {
+  tl_float4 gravity;      // xyz [m/s^2]
+  tl_float4 grid_origin;  // xyz lower corner of the broad-phase grid [m]
+  tl_float cell_size;     // edge of a grid cell [m], >= largest diameter + margin
+  tl_int grid_nx, grid_ny, grid_nz;
+  tl_float dt;            // timestep h [s]
+  tl_float young;         // particle Young's modulus E [Pa] (walls: same material)
+  tl_float poisson;       // Poisson ratio
+  tl_float friction;      // Coulomb friction coefficient mu
+  tl_float rolling;       // rolling resistance coefficient mu_r (torque <= mu_r R* lambda_n)
+  tl_float damping_tau;   // SPOOK damping time tau [s] of the normal rows
+  tl_float margin_rel;    // contact margin as a fraction of the smaller radius
+  tl_float overlap_floor_rel;  // smallest overlap (fraction of R*) used for the secant compliance
+  tl_int particles;       // number of particles
+  tl_int geoms;           // number of static geometries
+  tl_int pad0, pad1;
+} TlStepParams;
+
+// a contact as found by the narrow phase, grouped by its owner particle a (b > a, or static).
+// The impulses persist to the next step for warm starting.
+typedef struct {
+  tl_float4 normal;     // xyz unit normal from a towards b; w = gap [m] (negative = overlap)
+  tl_float4 arm_a;      // xyz lever arm from a's centre to the contact point; w = R* [m]
+  tl_float4 arm_b;      // xyz lever arm from b's centre (zero for static b); w = Hertz k_n [N/m^1.5]
+  tl_float4 impulse_t;  // xyz friction impulse on b over the step [N s]; w = normal impulse
+  tl_float4 impulse_r;  // xyz rolling + twisting impulse (angular, on b) [N m s]; w unused
+  tl_int a, b;          // particle indices; b < 0 is static geometry -1-b
+  tl_int pad0, pad1;
+} TlContact;
+
+// one contact's constraint rows prepared for the sweeps (SPOOK, Hertz), laid out in colour
+// order for PGS. Friction and rolling rows act on world vectors: for spheres the lever arms
+// are parallel to the normal, so their effective masses are isotropic (one scalar each).
+typedef struct {
+  tl_float4 normal;     // xyz normal; w = rhs of the normal row B_n [m/s]
+  tl_float4 arm_a;      // xyz lever arm of a; w = 1/D_n, D_n = G M^-1 G^T + Sigma_n
+  tl_float4 arm_b;      // xyz lever arm of b; w = Sigma_n [m/(N s)]
+  tl_float4 impulse_t;  // xyz friction impulse; w = normal impulse lambda_n
+  tl_float4 impulse_r;  // xyz rolling impulse; w = 1/D_t (friction effective mass)
+  tl_float4 coef;       // x = mu, y = mu_r R* [m], z = 1/D_r (rolling effective mass), w unused
+  tl_int a, b;          // bodies (b < 0 static)
+  tl_int contact;       // index of the TlContact this row was made from
+  tl_int pad0;
+} TlRow;
+
+#endif

@@ -1,0 +1,155 @@
+// Narrow phase: sphere-sphere and sphere-static contacts, grouped by owner particle a
+// (the lower index of a pair), written at offsets from a prefix sum of per-particle counts.
+// Enumeration order (27 cells in z,y,x order, particles in index order, then static
+// geometry in index order) is fixed, so the contact list is deterministic.
+
+// the margin below which a pair becomes a (possibly speculative) contact
+float contact_margin(float ra, float rb, const TlStepParams p) {
+  return p.margin_rel * min(ra, rb);
+}
+
+// finds where the previous step stored the pair (a, b); -1 when it is new
+int find_previous(int a, int b, __global const int* prev_offsets, __global const TlContact* prev) {
+  int begin = prev_offsets[a];
+  int end = prev_offsets[a + 1];
+  for (int k = begin; k < end; ++k)
+    if (prev[k].b == b) return k;
+  return -1;
+}
+
+// fills one contact, carrying over last step's impulses when the pair persists
+void emit_contact(__global TlContact* out, int a, int b, float3 n, float gap, float3 arm_a,
+                  float3 arm_b, float reduced_radius, const TlStepParams p,
+                  __global const int* prev_offsets, __global const TlContact* prev, int has_prev) {
+  TlContact c;
+  c.normal = (float4)(n, gap);
+  c.arm_a = (float4)(arm_a, reduced_radius);
+  c.arm_b = (float4)(arm_b, hertz_stiffness(reduced_radius, p));
+  c.impulse_t = (float4)(0.0f);
+  c.impulse_r = (float4)(0.0f);
+  c.a = a;
+  c.b = b;
+  c.pad0 = 0;
+  c.pad1 = 0;
+  if (has_prev) {
+    int k = find_previous(a, b, prev_offsets, prev);
+    if (k >= 0) {
+      c.impulse_t = prev[k].impulse_t;
+      c.impulse_r = prev[k].impulse_r;
+    }
+  }
+  *out = c;
+}
+
+// visits particle i's contacts; writes them when `write` is set, returns their number
+int visit_contacts(int i, int write, __global const float4* position,
+                   __global const int* cell_start, __global const int* cell_particles,
+                   __global const TlGeom* geoms, const TlStepParams p, __global TlContact* out,
+                   __global const int* prev_offsets, __global const TlContact* prev, int has_prev) {
+  float4 pi = position[i];
+  float3 xi = pi.xyz;
+  float ri = pi.w;
+  int3 ci = cell_of(xi, p);
+  int count = 0;
+  // particle pairs (i, j) with j > i in the 27 surrounding cells
+  for (int dz = -1; dz <= 1; ++dz) {
+    int z = ci.z + dz;
+    if (z < 0 || z >= p.grid_nz) continue;
+    for (int dy = -1; dy <= 1; ++dy) {
+      int y = ci.y + dy;
+      if (y < 0 || y >= p.grid_ny) continue;
+      for (int dx = -1; dx <= 1; ++dx) {
+        int x = ci.x + dx;
+        if (x < 0 || x >= p.grid_nx) continue;
+        int cell = cell_index((int3)(x, y, z), p);
+        int end = cell_start[cell + 1];
+        for (int k = cell_start[cell]; k < end; ++k) {
+          int j = cell_particles[k];
+          if (j <= i) continue;
+          float4 pj = position[j];
+          float3 d = pj.xyz - xi;
+          float dist = length(d);
+          float gap = dist - ri - pj.w;
+          if (gap >= contact_margin(ri, pj.w, p)) continue;
+          if (write) {
+            float3 n = dist > 0.0f ? d / dist : (float3)(0.0f, 0.0f, 1.0f);
+            float reduced = ri * pj.w / (ri + pj.w);
+            emit_contact(out + count, i, j, n, gap, n * (ri + 0.5f * gap), -n * (pj.w + 0.5f * gap),
+                         reduced, p, prev_offsets, prev, has_prev);
+          }
+          ++count;
+        }
+      }
+    }
+  }
+  // static geometry (walls, ground) in index order
+  for (int g = 0; g < p.geoms; ++g) {
+    float3 n;
+    float gap = sphere_geom(xi, ri, geoms + g, &n);
+    if (gap >= contact_margin(ri, ri, p)) continue;
+    if (write)
+      emit_contact(out + count, i, TL_STATIC_BODY(g), n, gap, n * (ri + 0.5f * gap),
+                   (float3)(0.0f), ri, p, prev_offsets, prev, has_prev);
+    ++count;
+  }
+  return count;
+}
+
+__kernel void contact_count(__global const float4* position, __global const int* cell_start,
+                            __global const int* cell_particles, __global const TlGeom* geoms,
+                            __global int* counts, __global TlContact* unused_out,
+                            __global const int* prev_offsets, __global const TlContact* prev,
+                            const TlStepParams p) {
+  int i = get_global_id(0);
+  if (i >= p.particles) return;
+  counts[i] = visit_contacts(i, 0, position, cell_start, cell_particles, geoms, p, unused_out,
+                             prev_offsets, prev, 0);
+}
+
+__kernel void contact_write(__global const float4* position, __global const int* cell_start,
+                            __global const int* cell_particles, __global const TlGeom* geoms,
+                            __global const int* offsets, __global TlContact* contacts,
+                            __global const int* prev_offsets, __global const TlContact* prev,
+                            const TlStepParams p, int has_prev) {
+  int i = get_global_id(0);
+  if (i >= p.particles) return;
+  visit_contacts(i, 1, position, cell_start, cell_particles, geoms, p, contacts + offsets[i],
+                 prev_offsets, prev, has_prev);
+}
+
+// contacts per body (both sides), for the body -> contact adjacency
+__kernel void adjacency_count(__global const TlContact* contacts, int n_contacts,
+                              __global int* degree) {
+  int c = get_global_id(0);
+  if (c >= n_contacts) return;
+  atomic_inc(&degree[contacts[c].a]);
+  if (contacts[c].b >= 0) atomic_inc(&degree[contacts[c].b]);
+}
+
+__kernel void adjacency_fill(__global const TlContact* contacts, int n_contacts,
+                             __global const int* adj_offsets, __global int* fill,
+                             __global int* adjacency) {
+  int c = get_global_id(0);
+  if (c >= n_contacts) return;
+  int a = contacts[c].a;
+  adjacency[adj_offsets[a] + atomic_inc(&fill[a])] = c;
+  int b = contacts[c].b;
+  if (b >= 0) adjacency[adj_offsets[b] + atomic_inc(&fill[b])] = c;
+}
+
+// each body's contact list in index order, so gathers sum in a fixed order
+__kernel void adjacency_sort(__global const int* adj_offsets, __global int* adjacency, int bodies) {
+  int i = get_global_id(0);
+  if (i >= bodies) return;
+  int begin = adj_offsets[i];
+  int end = adj_offsets[i + 1];
+  for (int k = begin + 1; k < end; ++k) {
+    int v = adjacency[k];
+    int m = k - 1;
+    while (m >= begin && adjacency[m] > v) {
+      adjacency[m + 1] = adjacency[m];
+      --m;
+    }
+    adjacency[m + 1] = v;
+  }
+}

@@ -1,0 +1,306 @@
+// Contact rows (SPOOK with Hertz compliance, Coulomb friction on the disc, rolling resistance)
+// and the two sweep strategies over them: graph-coloured projected Gauss-Seidel and projected
+// Jacobi with mass splitting. Every kernel has a double-precision twin in solvers/dem_reference.
+
+// the row of a contact: effective masses, SPOOK right-hand side, warm-start impulses
+__kernel void prepare_rows(__global const TlContact* contacts, __global const int* order,
+                           int n_rows, __global const float4* velocity,
+                           __global const float4* omega, __global TlRow* rows,
+                           const TlStepParams p, int warm_start) {
+  int k = get_global_id(0);
+  if (k >= n_rows) return;
+  int c = order[k];
+  TlContact con = contacts[c];
+  float h = p.dt;
+  float3 n = con.normal.xyz;
+  float gap = con.normal.w;
+  float reduced = con.arm_a.w;
+  float kn = con.arm_b.w;
+  float4 va = velocity[con.a];
+  float4 wa = omega[con.a];
+  float4 vb = con.b >= 0 ? velocity[con.b] : (float4)(0.0f);
+  float4 wb = con.b >= 0 ? omega[con.b] : (float4)(0.0f);
+
+  // normal velocity before the step, and the overlap predicted at its end
+  float un = dot(n, vb.xyz - va.xyz);
+  float overlap = fmax(fmax(-gap, -gap - h * un), p.overlap_floor_rel * reduced);
+  // secant Hertz compliance epsilon = 1 / (k_n sqrt(overlap)), SPOOK coefficients
+  float compliance = 1.0f / (kn * sqrt(overlap));
+  float upsilon = 1.0f / (1.0f + 4.0f * p.damping_tau / h);
+  float sigma = 4.0f * compliance * upsilon / (h * h);
+  float rhs = -(4.0f / h) * upsilon * gap + upsilon * un;
+
+  // effective masses: lever arms are parallel to n, so normal rows see no rotation
+  float inv_m = va.w + vb.w;
+  float3 arm_a = con.arm_a.xyz;
+  float3 arm_b = con.arm_b.xyz;
+  float d_t = inv_m + wa.w * dot(arm_a, arm_a) + wb.w * dot(arm_b, arm_b);
+  float d_r = wa.w + wb.w;
+
+  // warm start: last step's impulses carried into the new frame, within the new cones
+  float ln = 0.0f;
+  float3 lt = (float3)(0.0f);
+  float3 lr = (float3)(0.0f);
+  if (warm_start) {
+    ln = con.impulse_t.w;
+    float3 old_t = con.impulse_t.xyz;
+    float mag = length(old_t);
+    float3 proj = old_t - dot(old_t, n) * n;
+    float pm = length(proj);
+    lt = pm > 0.0f ? proj * (fmin(mag, p.friction * ln) / pm) : (float3)(0.0f);
+    lr = con.impulse_r.xyz;
+    float rmax = p.rolling * reduced * ln;
+    float lm = length(lr);
+    if (lm > rmax) lr *= rmax / lm;
+  }
+
+  TlRow row;
+  row.normal = (float4)(n, rhs);
+  row.arm_a = (float4)(arm_a, 1.0f / (inv_m + sigma));
+  row.arm_b = (float4)(arm_b, sigma);
+  row.impulse_t = (float4)(lt, ln);
+  row.impulse_r = (float4)(lr, d_t > 0.0f ? 1.0f / d_t : 0.0f);
+  row.coef = (float4)(p.friction, p.rolling * reduced, d_r > 0.0f ? 1.0f / d_r : 0.0f, 0.0f);
+  row.a = con.a;
+  row.b = con.b;
+  row.contact = c;
+  row.pad0 = 0;
+  rows[k] = row;
+}
+
+// external forces: gravity on every dynamic particle
+__kernel void apply_gravity(__global float4* velocity, const TlStepParams p) {
+  int i = get_global_id(0);
+  if (i >= p.particles) return;
+  float4 v = velocity[i];
+  if (v.w > 0.0f) velocity[i] = (float4)(v.xyz + p.dt * p.gravity.xyz, v.w);
+}
+
+// the impulse body `i` receives from a row: linear and angular (sign -1 for a, +1 for b)
+void row_impulse_on(const TlRow* row, int i, float3* lin, float3* ang) {
+  float s = row->a == i ? -1.0f : 1.0f;
+  float3 arm = row->a == i ? row->arm_a.xyz : row->arm_b.xyz;
+  float3 P = row->impulse_t.w * row->normal.xyz + row->impulse_t.xyz;
+  *lin = s * P;
+  *ang = s * (cross(arm, P) + row->impulse_r.xyz);
+}
+
+// applies the rows' current impulses to each body (warm start), summing in contact order
+__kernel void apply_row_impulses(__global const TlRow* rows, __global const int* adj_offsets,
+                                 __global const int* adjacency, __global const int* row_of_contact,
+                                 __global float4* velocity, __global float4* omega,
+                                 const TlStepParams p) {
+  int i = get_global_id(0);
+  if (i >= p.particles) return;
+  float4 v = velocity[i];
+  float4 w = omega[i];
+  float3 dv = (float3)(0.0f);
+  float3 dw = (float3)(0.0f);
+  int end = adj_offsets[i + 1];
+  for (int k = adj_offsets[i]; k < end; ++k) {
+    TlRow row = rows[row_of_contact[adjacency[k]]];
+    float3 lin, ang;
+    row_impulse_on(&row, i, &lin, &ang);
+    dv += lin;
+    dw += ang;
+  }
+  velocity[i] = (float4)(v.xyz + v.w * dv, v.w);
+  omega[i] = (float4)(w.xyz + w.w * dw, w.w);
+}
+
+// one contact's rows solved in sequence (normal, friction, rolling) against local copies of
+// the two bodies' velocities. inv_ma/inv_ia/inv_mb/inv_ib are the (possibly split) inverse
+// masses; d_n, d_t, d_r the matching inverse effective masses. Returns the impulse changes.
+void solve_contact(TlRow* row, float3* va, float3* wa, float3* vb, float3* wb, float inv_ma,
+                   float inv_ia, float inv_mb, float inv_ib, float inv_dn, float inv_dt,
+                   float inv_dr, float3* d_lin, float3* d_ang) {
+  float3 n = row->normal.xyz;
+  float3 arm_a = row->arm_a.xyz;
+  float3 arm_b = row->arm_b.xyz;
+  float sigma = row->arm_b.w;
+  float ln = row->impulse_t.w;
+
+  // normal: SPOOK row with compliance, lambda_n >= 0
+  float un = dot(n, *vb - *va);
+  float ln_new = fmax(0.0f, ln + (row->normal.w - un - sigma * ln) * inv_dn);
+  float dln = ln_new - ln;
+  *va -= inv_ma * dln * n;
+  *vb += inv_mb * dln * n;
+  ln = ln_new;
+
+  // friction: tangential relative velocity at the contact point, impulse on the disc mu lambda_n
+  float3 u = (*vb + cross(*wb, arm_b)) - (*va + cross(*wa, arm_a));
+  float3 ut = u - dot(u, n) * n;
+  float3 lt = row->impulse_t.xyz;
+  float3 lt_new = lt - ut * inv_dt;
+  float tmax = row->coef.x * ln;
+  float tm = length(lt_new);
+  if (tm > tmax) lt_new *= tm > 0.0f ? tmax / tm : 0.0f;
+  float3 dlt = lt_new - lt;
+  *va -= inv_ma * dlt;
+  *wa -= inv_ia * cross(arm_a, dlt);
+  *vb += inv_mb * dlt;
+  *wb += inv_ib * cross(arm_b, dlt);
+
+  // rolling (tangential, on the disc) and twisting (about n), both bounded by mu_r R* lambda_n
+  float3 wrel = *wb - *wa;
+  float3 lr = row->impulse_r.xyz;
+  float rmax = row->coef.y * ln;
+  float3 lr_n = dot(lr, n) * n;
+  float3 lr_t = lr - lr_n;
+  float3 lr_t_new = lr_t - (wrel - dot(wrel, n) * n) * inv_dr;
+  float rm = length(lr_t_new);
+  if (rm > rmax) lr_t_new *= rm > 0.0f ? rmax / rm : 0.0f;
+  float twist = clamp(dot(lr, n) - dot(wrel, n) * inv_dr, -rmax, rmax);
+  float3 lr_new = lr_t_new + twist * n;
+  float3 dlr = lr_new - lr;
+  *wa -= inv_ia * dlr;
+  *wb += inv_ib * dlr;
+
+  row->impulse_t = (float4)(lt_new, ln);
+  row->impulse_r = (float4)(lr_new, row->impulse_r.w);
+  *d_lin = dln * n + dlt;
+  *d_ang = dlr;
+}
+
+// projected Gauss-Seidel over one colour: rows [begin, end) share no dynamic body
+__kernel void pgs_colour(__global TlRow* rows, int begin, int end, __global float4* velocity,
+                         __global float4* omega) {
+  int k = begin + get_global_id(0);
+  if (k >= end) return;
+  TlRow row = rows[k];
+  int a = row.a;
+  int b = row.b;
+  float4 va4 = velocity[a];
+  float4 wa4 = omega[a];
+  float4 vb4 = b >= 0 ? velocity[b] : (float4)(0.0f);
+  float4 wb4 = b >= 0 ? omega[b] : (float4)(0.0f);
+  float3 va = va4.xyz, wa = wa4.xyz, vb = vb4.xyz, wb = wb4.xyz;
+  float3 d_lin, d_ang;
+  solve_contact(&row, &va, &wa, &vb, &wb, va4.w, wa4.w, vb4.w, wb4.w, row.arm_a.w, row.impulse_r.w,
+                row.coef.z, &d_lin, &d_ang);
+  rows[k].impulse_t = row.impulse_t;
+  rows[k].impulse_r = row.impulse_r;
+  velocity[a] = (float4)(va, va4.w);
+  omega[a] = (float4)(wa, wa4.w);
+  if (b >= 0) {
+    velocity[b] = (float4)(vb, vb4.w);
+    omega[b] = (float4)(wb, wb4.w);
+  }
+}
+
+// projected Jacobi with mass splitting (Tonge 2012): every row against the same velocities,
+// each body's mass split evenly among its contacts; the impulse changes are gathered per body
+__kernel void jacobi_rows(__global TlRow* rows, int n_rows, __global const float4* velocity,
+                          __global const float4* omega, __global const int* adj_offsets,
+                          __global float4* delta_lin, __global float4* delta_ang) {
+  int k = get_global_id(0);
+  if (k >= n_rows) return;
+  TlRow row = rows[k];
+  int a = row.a;
+  int b = row.b;
+  float4 va4 = velocity[a];
+  float4 wa4 = omega[a];
+  float4 vb4 = b >= 0 ? velocity[b] : (float4)(0.0f);
+  float4 wb4 = b >= 0 ? omega[b] : (float4)(0.0f);
+  // split inverse masses: n_body copies, each with 1/n_body of the mass
+  float na = (float)(adj_offsets[a + 1] - adj_offsets[a]);
+  float nb = b >= 0 ? (float)(adj_offsets[b + 1] - adj_offsets[b]) : 0.0f;
+  float ima = na * va4.w, iia = na * wa4.w, imb = nb * vb4.w, iib = nb * wb4.w;
+  float3 arm_a = row.arm_a.xyz, arm_b = row.arm_b.xyz;
+  float inv_dn = 1.0f / (ima + imb + row.arm_b.w);
+  float dt_ = ima + iia * dot(arm_a, arm_a) + imb + iib * dot(arm_b, arm_b);
+  float dr_ = iia + iib;
+  float3 va = va4.xyz, wa = wa4.xyz, vb = vb4.xyz, wb = wb4.xyz;
+  float3 d_lin, d_ang;
+  solve_contact(&row, &va, &wa, &vb, &wb, ima, iia, imb, iib, inv_dn,
+                dt_ > 0.0f ? 1.0f / dt_ : 0.0f, dr_ > 0.0f ? 1.0f / dr_ : 0.0f, &d_lin, &d_ang);
+  rows[k].impulse_t = row.impulse_t;
+  rows[k].impulse_r = row.impulse_r;
+  delta_lin[k] = (float4)(d_lin, 0.0f);
+  delta_ang[k] = (float4)(d_ang, 0.0f);
+}
+
+// sums each body's impulse changes in contact order: v += M^-1 sum(G^T d_lambda)
+__kernel void jacobi_bodies(__global const TlRow* rows, __global const float4* delta_lin,
+                            __global const float4* delta_ang, __global const int* adj_offsets,
+                            __global const int* adjacency, __global const int* row_of_contact,
+                            __global float4* velocity, __global float4* omega, int particles) {
+  int i = get_global_id(0);
+  if (i >= particles) return;
+  float3 dv = (float3)(0.0f);
+  float3 dw = (float3)(0.0f);
+  int end = adj_offsets[i + 1];
+  for (int k = adj_offsets[i]; k < end; ++k) {
+    int r = row_of_contact[adjacency[k]];
+    int is_a = rows[r].a == i;
+    float s = is_a ? -1.0f : 1.0f;
+    float3 arm = is_a ? rows[r].arm_a.xyz : rows[r].arm_b.xyz;
+    float3 P = delta_lin[r].xyz;
+    dv += s * P;
+    dw += s * (cross(arm, P) + delta_ang[r].xyz);
+  }
+  float4 v = velocity[i];
+  float4 w = omega[i];
+  velocity[i] = (float4)(v.xyz + v.w * dv, v.w);
+  omega[i] = (float4)(w.xyz + w.w * dw, w.w);
+}
+
+// the natural-map residual of each row (velocity units): how far one more projection step
+// would move the impulses, times the effective mass; zero at the exact solution
+__kernel void row_residual(__global const TlRow* rows, int n_rows, __global const float4* velocity,
+                           __global const float4* omega, __global float* residual) {
+  int k = get_global_id(0);
+  if (k >= n_rows) return;
+  TlRow row = rows[k];
+  float4 va4 = velocity[row.a];
+  float4 wa4 = omega[row.a];
+  float4 vb4 = row.b >= 0 ? velocity[row.b] : (float4)(0.0f);
+  float4 wb4 = row.b >= 0 ? omega[row.b] : (float4)(0.0f);
+  float3 n = row.normal.xyz;
+  float ln = row.impulse_t.w;
+  float dn = 1.0f / row.arm_a.w;
+  float un = dot(n, vb4.xyz - va4.xyz);
+  float rn = (fmax(0.0f, ln + (row.normal.w - un - row.arm_b.w * ln) / dn) - ln) * dn;
+  float3 u = (vb4.xyz + cross(wb4.xyz, row.arm_b.xyz)) - (va4.xyz + cross(wa4.xyz, row.arm_a.xyz));
+  float3 ut = u - dot(u, n) * n;
+  float rt = 0.0f;
+  if (row.impulse_r.w > 0.0f) {
+    float dt_ = 1.0f / row.impulse_r.w;
+    float3 lt = row.impulse_t.xyz;
+    float3 lt_new = lt - ut / dt_;
+    float tmax = row.coef.x * ln;
+    float tm = length(lt_new);
+    if (tm > tmax) lt_new *= tm > 0.0f ? tmax / tm : 0.0f;
+    rt = length(lt_new - lt) * dt_;
+  }
+  residual[k] = rn * rn + rt * rt;
+}
+
+// copies the solved impulses back to the contacts for the next step's warm start
+__kernel void store_impulses(__global const TlRow* rows, int n_rows, __global TlContact* contacts) {
+  int k = get_global_id(0);
+  if (k >= n_rows) return;
+  int c = rows[k].contact;
+  contacts[c].impulse_t = rows[k].impulse_t;
+  contacts[c].impulse_r = (float4)(rows[k].impulse_r.xyz, 0.0f);
+}
+
+// SPOOK position update: x += h v, q += h/2 (omega, 0) q, renormalised
+__kernel void integrate(__global float4* position, __global const float4* velocity,
+                        __global const float4* omega, __global float4* rotation,
+                        const TlStepParams p) {
+  int i = get_global_id(0);
+  if (i >= p.particles) return;
+  float4 v = velocity[i];
+  if (v.w <= 0.0f) return;
+  float4 x = position[i];
+  position[i] = (float4)(x.xyz + p.dt * v.xyz, x.w);
+  float3 w = omega[i].xyz;
+  float4 q = rotation[i];
+  float half_h = 0.5f * p.dt;
+  float4 dq = (float4)(w.x * q.w + w.y * q.z - w.z * q.y, -w.x * q.z + w.y * q.w + w.z * q.x,
+                       w.x * q.y - w.y * q.x + w.z * q.w, -w.x * q.x - w.y * q.y - w.z * q.z);
+  q += half_h * dq;
+  rotation[i] = q / length(q);
+}

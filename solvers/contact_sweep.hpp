@@ -1,0 +1,26 @@
+// One interface for the sweep strategies over contact rows (solver2d-style: one file per
+// algorithm, so projected Gauss-Seidel and projected Jacobi stay comparable).
+#pragma once
+#include <memory>
+
+#include "host/device.hpp"
+#include "solvers/dem_buffers.hpp"
+#include "solvers/dem_settings.hpp"
+
+namespace talus {
+
+class ContactSweep {
+ public:
+  virtual ~ContactSweep() = default;
+  // runs `iterations` sweeps over all rows, updating impulses and body velocities in place
+  virtual void iterate(DemBuffers& b, int iterations) = 0;
+  virtual const char* name() const = 0;
+};
+
+// graph-coloured projected Gauss-Seidel (solvers/pgs_sweep.cpp)
+std::unique_ptr<ContactSweep> make_pgs_sweep(Device& dev);
+// projected Jacobi with mass splitting (solvers/jacobi_sweep.cpp)
+std::unique_ptr<ContactSweep> make_jacobi_sweep(Device& dev, int particles);
+std::unique_ptr<ContactSweep> make_sweep(SweepKind kind, Device& dev, int particles);
+
+}  // namespace talus

@@ -1,0 +1,45 @@
+// Device arrays of one DEM system, owned by DemWorld and shared with its stages and sweeps.
+#pragma once
+#include <array>
+#include <vector>
+
+#include "host/device.hpp"
+#include "kernels/common.h"
+#include "kernels/dem_types.h"
+
+namespace talus {
+
+struct DemBuffers {
+  explicit DemBuffers(Device& dev);
+
+  // particle state (layouts in kernels/dem_types.h)
+  Buffer<cl_float4> position, velocity, omega, rotation;
+  Buffer<TlGeom> geoms;
+
+  // broad phase: particle cell, per-cell counts and starts, particles sorted by cell
+  Buffer<int> particle_cell, cell_counts, cell_start, cell_fill, cell_particles;
+
+  // narrow phase: per-particle counts, owner offsets and contacts; [current] and [previous]
+  Buffer<int> contact_counts;
+  std::array<Buffer<int>, 2> owner_offsets;
+  std::array<Buffer<TlContact>, 2> contacts;
+  int current = 0;          // which of the pairs above is this step's
+  bool has_previous = false;
+  int n_contacts = 0;
+
+  // body -> contact adjacency (CSR, each list in contact order)
+  Buffer<int> degree, adjacency_offsets, adjacency_fill, adjacency;
+
+  // colouring: packed colour per contact, partition into rows
+  Buffer<int> colour, colour_status, colour_histogram, colour_offsets, colour_start_dev;
+  Buffer<int> order, row_of_contact;
+  std::vector<int> colour_start;  // host copy: rows of colour k are [start[k], start[k+1])
+  int colour_rounds = 0;
+
+  // rows and the Jacobi impulse changes
+  Buffer<TlRow> rows;
+  Buffer<cl_float4> delta_lin, delta_ang;
+  Buffer<float> residual;
+};
+
+}  // namespace talus

@@ -1,0 +1,33 @@
+// Settings of the particle (type-D) stepper: SPEC §2.1-2.2.
+#pragma once
+#include <string>
+
+#include "terrain/particles.hpp"
+
+namespace talus {
+
+// the two sweep strategies over contact rows, behind one interface (solvers/contact_sweep.hpp)
+enum class SweepKind { Pgs, Jacobi };
+
+const char* sweep_name(SweepKind kind);
+// "pgs" or "jacobi"; throws InputError naming `field` otherwise
+SweepKind parse_sweep(const std::string& text, const std::string& field);
+
+struct DemSettings {
+  double dt = 1.0e-3;       // timestep h [s]
+  int iterations = 50;      // sweeps per step (upper bound when tolerance > 0)
+  bool warm_start = true;   // start from last step's impulses of persistent contacts
+  // stop early once the RMS row residual [m/s] falls below this (checked every 10 sweeps);
+  // 0 runs all iterations, as the paper's fixed N_it
+  double tolerance = 0.0;
+  SweepKind sweep = SweepKind::Pgs;
+  Vec3 gravity = Vec3(0.0, 0.0, -9.81);  // [m/s^2]
+  // pairs closer than margin_rel * min(r_a, r_b) get a (speculative) contact row: SPOOK lets
+  // them close within the step but never pulls them together
+  double margin_rel = 0.05;
+  // smallest overlap used in the secant Hertz compliance, as a fraction of R*: a new contact
+  // is stiff from its first step instead of infinitely soft (SPEC §2.2 "guard delta -> 0")
+  double overlap_floor_rel = 1.0e-4;
+};
+
+}  // namespace talus

@@ -1,0 +1,377 @@
+#include "solvers/dem_world.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+namespace talus {
+
+namespace {
+// must equal COLOUR_BLOCK in kernels/colouring.cl
+constexpr int kColourBlock = 256;
+// a grid larger than this many cells means the bounds are far too big for the particles
+constexpr double kMaxGridCells = 64.0e6;
+// the residual check interval when a tolerance is set (sweeps)
+constexpr int kToleranceCheckEvery = 10;
+}  // namespace
+
+cl_float4 to_float4(const Vec3& v, double w) {
+  cl_float4 f;
+  f.s[0] = static_cast<float>(v.x());
+  f.s[1] = static_cast<float>(v.y());
+  f.s[2] = static_cast<float>(v.z());
+  f.s[3] = static_cast<float>(w);
+  return f;
+}
+
+TlGeom to_device(const StaticGeom& g) {
+  TlGeom d{};
+  d.centre = to_float4(g.centre, 0.0);
+  d.axis_x = to_float4(g.axes.col(0), 0.0);
+  d.axis_y = to_float4(g.axes.col(1), 0.0);
+  d.axis_z = to_float4(g.axes.col(2), 0.0);
+  d.half_extent = to_float4(g.half, 0.0);
+  d.type = g.type == StaticGeom::Type::Plane ? TL_GEOM_PLANE : TL_GEOM_BOX;
+  return d;
+}
+
+DemWorld::DemWorld(Device& dev, const Material& material, const DemSettings& settings,
+                   const Bounds& bounds, std::vector<StaticGeom> geoms)
+    : dev_(dev), material_(material), settings_(settings), bounds_(bounds), geoms_(std::move(geoms)),
+      buffers_(dev), scan_(dev), sweep_kind_(settings.sweep) {
+  if (!(settings.dt > 0.0)) throw InputError("DemSettings.dt: the timestep must be positive");
+  if (settings.iterations < 1) throw InputError("DemSettings.iterations: must be at least 1");
+  if (!(material.young > 0.0) || !(material.density > 0.0))
+    throw InputError("Material: young and density must be positive");
+  if ((bounds.hi - bounds.lo).minCoeff() <= 0.0)
+    throw InputError("Bounds: hi must exceed lo on every axis");
+
+  // kernels of every stage (each program is built once per device and cached by PoCL)
+  const cl::Program& broad = dev.program({"dem_common.cl", "broadphase.cl"});
+  k_cell_count_ = dev.kernel(broad, "cell_count");
+  k_cell_fill_ = dev.kernel(broad, "cell_fill");
+  k_cell_sort_ = dev.kernel(broad, "cell_sort");
+  const cl::Program& narrow = dev.program({"dem_common.cl", "narrowphase.cl"});
+  k_contact_count_ = dev.kernel(narrow, "contact_count");
+  k_contact_write_ = dev.kernel(narrow, "contact_write");
+  k_adj_count_ = dev.kernel(narrow, "adjacency_count");
+  k_adj_fill_ = dev.kernel(narrow, "adjacency_fill");
+  k_adj_sort_ = dev.kernel(narrow, "adjacency_sort");
+  const cl::Program& colour = dev.program({"dem_common.cl", "colouring.cl"});
+  k_colour_round_ = dev.kernel(colour, "colour_round");
+  k_colour_hist_ = dev.kernel(colour, "colour_histogram");
+  k_colour_scatter_ = dev.kernel(colour, "colour_scatter");
+  k_colour_ranges_ = dev.kernel(colour, "colour_ranges");
+  k_identity_ = dev.kernel(colour, "identity_order");
+  const cl::Program& solver = dev.program({"dem_common.cl", "solver.cl"});
+  k_prepare_ = dev.kernel(solver, "prepare_rows");
+  k_gravity_ = dev.kernel(solver, "apply_gravity");
+  k_apply_impulses_ = dev.kernel(solver, "apply_row_impulses");
+  k_store_ = dev.kernel(solver, "store_impulses");
+  k_integrate_ = dev.kernel(solver, "integrate");
+  k_residual_ = dev.kernel(solver, "row_residual");
+
+  std::vector<TlGeom> g;
+  for (auto& s : geoms_) g.push_back(to_device(s));
+  if (g.empty()) g.push_back(TlGeom{});  // keep the buffer non-empty; params.geoms stays 0
+  buffers_.geoms.upload(g);
+  update_params();
+}
+
+void DemWorld::update_params() {
+  TlStepParams& p = params_;
+  p = TlStepParams{};
+  p.gravity = to_float4(settings_.gravity, 0.0);
+  // grid cells hold the largest pair within the contact margin
+  // (before particles arrive, one cell spans the bounds)
+  Vec3 extent = bounds_.hi - bounds_.lo;
+  double cell = particle_count_ > 0 ? 2.0 * max_radius_ * (1.0 + settings_.margin_rel)
+                                    : extent.maxCoeff();
+  Eigen::Vector3i dims = (extent / cell).array().ceil().cast<int>().cwiseMax(1);
+  double cells = double(dims.x()) * dims.y() * dims.z();
+  if (cells > kMaxGridCells)
+    throw InputError("Bounds: the broad-phase grid would have " + std::to_string(cells) +
+                     " cells; shrink the bounds to the region particles can reach");
+  p.grid_origin = to_float4(bounds_.lo, 0.0);
+  p.cell_size = static_cast<float>(cell);
+  p.grid_nx = dims.x();
+  p.grid_ny = dims.y();
+  p.grid_nz = dims.z();
+  p.dt = static_cast<float>(settings_.dt);
+  p.young = static_cast<float>(material_.young);
+  p.poisson = static_cast<float>(material_.poisson);
+  p.friction = static_cast<float>(material_.friction);
+  p.rolling = static_cast<float>(material_.rolling);
+  p.damping_tau = static_cast<float>(material_.damping_steps * settings_.dt);
+  p.margin_rel = static_cast<float>(settings_.margin_rel);
+  p.overlap_floor_rel = static_cast<float>(settings_.overlap_floor_rel);
+  p.particles = static_cast<int>(particle_count_);
+  p.geoms = static_cast<int>(geoms_.size());
+  if (!sweep_ || sweep_kind_ != settings_.sweep) {
+    sweep_kind_ = settings_.sweep;
+    sweep_ = make_sweep(sweep_kind_, dev_, p.particles);
+  }
+}
+
+void DemWorld::set_particles(const Particles& in) {
+  size_t n = in.size();
+  std::vector<cl_float4> x(n), v(n), w(n), q(n);
+  max_radius_ = 0.0;
+  for (size_t i = 0; i < n; ++i) {
+    x[i] = to_float4(in.position[i], in.radius[i]);
+    v[i] = to_float4(in.velocity[i], in.inv_mass[i]);
+    w[i] = to_float4(in.omega[i], in.inv_inertia[i]);
+    const auto& r = in.rotation[i];
+    q[i] = to_float4(r.head<3>(), r.w());
+    max_radius_ = std::max(max_radius_, in.radius[i]);
+  }
+  particle_count_ = n;
+  buffers_.position.upload(x);
+  buffers_.velocity.upload(v);
+  buffers_.omega.upload(w);
+  buffers_.rotation.upload(q);
+  buffers_.has_previous = false;
+  buffers_.n_contacts = 0;
+  sweep_.reset();
+  update_params();
+}
+
+Particles DemWorld::particles() const {
+  Particles out;
+  auto x = buffers_.position.download(particle_count_);
+  auto v = buffers_.velocity.download(particle_count_);
+  auto w = buffers_.omega.download(particle_count_);
+  auto q = buffers_.rotation.download(particle_count_);
+  for (size_t i = 0; i < particle_count_; ++i) {
+    out.position.emplace_back(x[i].s[0], x[i].s[1], x[i].s[2]);
+    out.radius.push_back(x[i].s[3]);
+    out.velocity.emplace_back(v[i].s[0], v[i].s[1], v[i].s[2]);
+    out.inv_mass.push_back(v[i].s[3]);
+    out.omega.emplace_back(w[i].s[0], w[i].s[1], w[i].s[2]);
+    out.inv_inertia.push_back(w[i].s[3]);
+    out.rotation.emplace_back(q[i].s[0], q[i].s[1], q[i].s[2], q[i].s[3]);
+  }
+  return out;
+}
+
+void DemWorld::broad_phase() {
+  DemBuffers& b = buffers_;
+  const TlStepParams& p = params_;
+  size_t n = particle_count_;
+  size_t cells = size_t(p.grid_nx) * p.grid_ny * p.grid_nz;
+  // count particles per cell, prefix-sum into starts, place, then order each cell by index
+  b.particle_cell.resize(n);
+  b.cell_counts.resize(cells);
+  b.cell_counts.fill(0);
+  set_args(k_cell_count_, b.position, b.particle_cell, b.cell_counts, p);
+  launch(dev_, k_cell_count_, n, "cell_count");
+  scan_.exclusive(b.cell_counts, b.cell_start, cells);
+  b.cell_fill.resize(cells);
+  b.cell_fill.fill(0);
+  b.cell_particles.resize(std::max<size_t>(n, 1));
+  set_args(k_cell_fill_, b.particle_cell, b.cell_start, b.cell_fill, b.cell_particles, p);
+  launch(dev_, k_cell_fill_, n, "cell_fill");
+  set_args(k_cell_sort_, b.cell_start, b.cell_particles, static_cast<int>(cells));
+  launch(dev_, k_cell_sort_, cells, "cell_sort");
+}
+
+void DemWorld::narrow_phase() {
+  DemBuffers& b = buffers_;
+  const TlStepParams& p = params_;
+  size_t n = particle_count_;
+  int cur = b.current;
+  int prev = 1 - cur;
+  // count, offsets (with the total at [n]), then write with last step's impulses matched
+  b.contact_counts.resize(std::max<size_t>(n, 1));
+  if (!b.has_previous) {
+    b.owner_offsets[prev].resize(n + 1);
+    b.owner_offsets[prev].fill(0);
+  }
+  set_args(k_contact_count_, b.position, b.cell_start, b.cell_particles, b.geoms, b.contact_counts,
+           b.contacts[cur], b.owner_offsets[prev], b.contacts[prev], p);
+  launch(dev_, k_contact_count_, n, "contact_count");
+  scan_.exclusive(b.contact_counts, b.owner_offsets[cur], n);
+  b.n_contacts = b.owner_offsets[cur].read_one(n);
+  b.contacts[cur].resize(std::max(b.n_contacts, 1));
+  set_args(k_contact_write_, b.position, b.cell_start, b.cell_particles, b.geoms, b.owner_offsets[cur],
+           b.contacts[cur], b.owner_offsets[prev], b.contacts[prev], p, b.has_previous ? 1 : 0);
+  launch(dev_, k_contact_write_, n, "contact_write");
+}
+
+void DemWorld::build_adjacency() {
+  DemBuffers& b = buffers_;
+  size_t n = particle_count_;
+  int nc = b.n_contacts;
+  const Buffer<TlContact>& contacts = b.contacts[b.current];
+  b.degree.resize(std::max<size_t>(n, 1));
+  b.degree.fill(0);
+  set_args(k_adj_count_, contacts, nc, b.degree);
+  launch(dev_, k_adj_count_, nc, "adjacency_count");
+  scan_.exclusive(b.degree, b.adjacency_offsets, n);
+  b.adjacency_fill.resize(std::max<size_t>(n, 1));
+  b.adjacency_fill.fill(0);
+  b.adjacency.resize(std::max(2 * nc, 1));
+  set_args(k_adj_fill_, contacts, nc, b.adjacency_offsets, b.adjacency_fill, b.adjacency);
+  launch(dev_, k_adj_fill_, nc, "adjacency_fill");
+  set_args(k_adj_sort_, b.adjacency_offsets, b.adjacency, static_cast<int>(n));
+  launch(dev_, k_adj_sort_, n, "adjacency_sort");
+}
+
+void DemWorld::colour_contacts() {
+  DemBuffers& b = buffers_;
+  int nc = b.n_contacts;
+  b.order.resize(std::max(nc, 1));
+  b.row_of_contact.resize(std::max(nc, 1));
+  if (settings_.sweep == SweepKind::Jacobi) {
+    set_args(k_identity_, nc, b.order, b.row_of_contact);
+    launch(dev_, k_identity_, nc, "identity_order");
+    b.colour_start = {0, nc};
+    b.colour_rounds = 0;
+    return;
+  }
+  // jones-plassmann rounds until every contact has a colour
+  const Buffer<TlContact>& contacts = b.contacts[b.current];
+  b.colour.resize(std::max(nc, 1));
+  b.colour.fill(-1);
+  int round = 0;
+  for (int remaining = nc; remaining > 0; ++round) {
+    b.colour_status.fill(0);
+    set_args(k_colour_round_, contacts, nc, b.adjacency_offsets, b.adjacency, b.colour, round,
+             b.colour_status);
+    launch(dev_, k_colour_round_, nc, "colour_round");
+    auto status = b.colour_status.download(2);
+    if (status[1] > 0)
+      throw Error("contact colouring needs more than " + std::to_string(TL_MAX_COLOURS) +
+                  " colours: a particle touches too many others (particles far smaller than "
+                  "their neighbours?); use the Jacobi sweep for such systems");
+    if (status[0] >= remaining && round > 0)
+      throw Error("contact colouring made no progress (internal error)");
+    remaining = status[0];
+  }
+  b.colour_rounds = round;
+  // stable partition by colour: block histograms, one scan, block scatters
+  int blocks = std::max(1, (nc + kColourBlock - 1) / kColourBlock);
+  b.colour_histogram.resize(size_t(TL_MAX_COLOURS) * blocks);
+  set_args(k_colour_hist_, b.colour, nc, blocks, b.colour_histogram);
+  launch(dev_, k_colour_hist_, blocks, "colour_histogram");
+  scan_.exclusive(b.colour_histogram, b.colour_offsets, size_t(TL_MAX_COLOURS) * blocks);
+  set_args(k_colour_scatter_, b.colour, nc, blocks, b.colour_offsets, b.order, b.row_of_contact);
+  launch(dev_, k_colour_scatter_, blocks, "colour_scatter");
+  set_args(k_colour_ranges_, b.colour_offsets, blocks, b.colour_start_dev);
+  launch(dev_, k_colour_ranges_, TL_MAX_COLOURS + 1, "colour_ranges");
+  // host copy of the ranges, trimmed to the colours in use
+  b.colour_start = b.colour_start_dev.download(TL_MAX_COLOURS + 1);
+  while (b.colour_start.size() > 2 && b.colour_start[b.colour_start.size() - 2] == nc)
+    b.colour_start.pop_back();
+}
+
+void DemWorld::prepare_rows() {
+  DemBuffers& b = buffers_;
+  int nc = b.n_contacts;
+  b.rows.resize(std::max(nc, 1));
+  set_args(k_prepare_, b.contacts[b.current], b.order, nc, b.velocity, b.omega, b.rows, params_,
+           settings_.warm_start ? 1 : 0);
+  launch(dev_, k_prepare_, nc, "prepare_rows");
+}
+
+void DemWorld::apply_gravity() {
+  set_args(k_gravity_, buffers_.velocity, params_);
+  launch(dev_, k_gravity_, particle_count_, "apply_gravity");
+}
+
+void DemWorld::warm_start() {
+  if (!settings_.warm_start) return;
+  DemBuffers& b = buffers_;
+  set_args(k_apply_impulses_, b.rows, b.adjacency_offsets, b.adjacency, b.row_of_contact, b.velocity,
+           b.omega, params_);
+  launch(dev_, k_apply_impulses_, particle_count_, "apply_row_impulses");
+}
+
+int DemWorld::sweep(int iterations) {
+  if (buffers_.n_contacts == 0) return 0;
+  if (settings_.tolerance <= 0.0) {
+    sweep_->iterate(buffers_, iterations);
+    return iterations;
+  }
+  // with a tolerance: sweep in chunks and stop once the residual is small enough
+  int done = 0;
+  while (done < iterations) {
+    int chunk = std::min(kToleranceCheckEvery, iterations - done);
+    sweep_->iterate(buffers_, chunk);
+    done += chunk;
+    if (residual() < settings_.tolerance) break;
+  }
+  return done;
+}
+
+void DemWorld::store_impulses() {
+  DemBuffers& b = buffers_;
+  set_args(k_store_, b.rows, b.n_contacts, b.contacts[b.current]);
+  launch(dev_, k_store_, b.n_contacts, "store_impulses");
+}
+
+void DemWorld::integrate() {
+  DemBuffers& b = buffers_;
+  set_args(k_integrate_, b.position, b.velocity, b.omega, b.rotation, params_);
+  launch(dev_, k_integrate_, particle_count_, "integrate");
+}
+
+double DemWorld::residual() {
+  DemBuffers& b = buffers_;
+  int nc = b.n_contacts;
+  if (nc == 0) return 0.0;
+  b.residual.resize(nc);
+  set_args(k_residual_, b.rows, nc, b.velocity, b.omega, b.residual);
+  launch(dev_, k_residual_, nc, "row_residual");
+  auto r = b.residual.download(nc);
+  double sum = 0.0;
+  for (float x : r) sum += x;
+  return std::sqrt(sum / nc);
+}
+
+void DemWorld::step() { step_impl(nullptr); }
+
+std::vector<double> DemWorld::step_recording_residuals() {
+  std::vector<double> history;
+  step_impl(&history);
+  return history;
+}
+
+void DemWorld::step_impl(std::vector<double>* history) {
+  if (sweep_kind_ != settings_.sweep) update_params();
+  stats_ = StepStats{};
+  if (particle_count_ > 0) {
+    // contacts, colours and rows of this step
+    broad_phase();
+    narrow_phase();
+    build_adjacency();
+    colour_contacts();
+    prepare_rows();
+    // velocities: external forces, warm start, then the sweeps
+    apply_gravity();
+    warm_start();
+    if (history == nullptr) {
+      stats_.iterations = sweep(settings_.iterations);
+    } else {
+      history->push_back(residual());
+      for (int it = 0; it < settings_.iterations; ++it) {
+        sweep(1);
+        history->push_back(residual());
+      }
+      stats_.iterations = settings_.iterations;
+    }
+    stats_.contacts = buffers_.n_contacts;
+    stats_.colours = static_cast<int>(buffers_.colour_start.size()) - 1;
+    stats_.colour_rounds = buffers_.colour_rounds;
+    if (history != nullptr) stats_.residual = history->back();
+    else if (settings_.tolerance > 0.0) stats_.residual = residual();
+    // keep the impulses for the next warm start, move the particles
+    store_impulses();
+    integrate();
+    buffers_.has_previous = true;
+    buffers_.current = 1 - buffers_.current;
+  }
+  time_ += settings_.dt;
+}
+
+}  // namespace talus

@@ -1,0 +1,101 @@
+// The particle (type-D) simulator on an OpenCL device: one DemWorld owns a granular system
+// and steps it with the pipeline of SPEC §1 (broad phase, narrow phase with persistent
+// contacts, colouring, SPOOK rows, PGS or Jacobi sweeps, position update).
+//
+// The stages are public so tests can run them one at a time and compare each with its
+// double-precision twin in solvers/dem_reference.hpp.
+#pragma once
+#include <memory>
+#include <vector>
+
+#include "host/device.hpp"
+#include "host/scan.hpp"
+#include "solvers/contact_sweep.hpp"
+#include "solvers/dem_buffers.hpp"
+#include "solvers/dem_settings.hpp"
+#include "terrain/particles.hpp"
+
+namespace talus {
+
+struct StepStats {
+  int contacts = 0;
+  int colours = 0;
+  int colour_rounds = 0;
+  int iterations = 0;      // sweeps run (fewer than settings.iterations when tolerance stopped)
+  double residual = -1.0;  // RMS row residual after the sweeps [m/s]; -1 when not computed
+};
+
+class DemWorld {
+ public:
+  DemWorld(Device& dev, const Material& material, const DemSettings& settings, const Bounds& bounds,
+           std::vector<StaticGeom> geoms);
+
+  // replaces the particles (contacts start fresh: no warm start on the next step)
+  void set_particles(const Particles& particles);
+  // the particles as they are on the device now
+  Particles particles() const;
+  size_t size() const { return particle_count_; }
+
+  // one full time step
+  void step();
+  double time() const { return time_; }
+  const StepStats& stats() const { return stats_; }
+  const DemSettings& settings() const { return settings_; }
+  DemSettings& settings() { return settings_; }
+  const TlStepParams& params() const { return params_; }
+  const std::vector<StaticGeom>& geoms() const { return geoms_; }
+
+  // the stages of step(), in order
+  void broad_phase();
+  void narrow_phase();
+  void build_adjacency();
+  void colour_contacts();  // PGS: graph colouring; Jacobi: one colour in contact order
+  void prepare_rows();
+  void apply_gravity();
+  void warm_start();       // applies the rows' initial impulses to the bodies
+  int sweep(int iterations);
+  void store_impulses();
+  void integrate();
+
+  // RMS of the row residuals (kernels/solver.cl row_residual) [m/s], summed on the host in
+  // row order in double
+  double residual();
+  // one step that records the residual after every sweep (diagnostics, convergence tables)
+  std::vector<double> step_recording_residuals();
+
+  DemBuffers& buffers() { return buffers_; }
+  const DemBuffers& buffers() const { return buffers_; }
+  Device& device() { return dev_; }
+
+ private:
+  void update_params();
+  // one step; records the residual after every sweep when `history` is given
+  void step_impl(std::vector<double>* history);
+
+  Device& dev_;
+  Material material_;
+  DemSettings settings_;
+  Bounds bounds_;
+  std::vector<StaticGeom> geoms_;
+  TlStepParams params_{};
+  size_t particle_count_ = 0;
+  double max_radius_ = 0.0;
+  double time_ = 0.0;
+  StepStats stats_;
+
+  DemBuffers buffers_;
+  DeviceScan scan_;
+  std::unique_ptr<ContactSweep> sweep_;
+  SweepKind sweep_kind_;
+  cl::Kernel k_cell_count_, k_cell_fill_, k_cell_sort_;
+  cl::Kernel k_contact_count_, k_contact_write_;
+  cl::Kernel k_adj_count_, k_adj_fill_, k_adj_sort_;
+  cl::Kernel k_colour_round_, k_colour_hist_, k_colour_scatter_, k_colour_ranges_, k_identity_;
+  cl::Kernel k_prepare_, k_gravity_, k_apply_impulses_, k_store_, k_integrate_, k_residual_;
+};
+
+// conversions between the host description and the device layouts
+TlGeom to_device(const StaticGeom& g);
+cl_float4 to_float4(const Vec3& v, double w);
+
+}  // namespace talus

@@ -1,0 +1,61 @@
+// Host-side description of a granular system: spherical particles, their material, and the
+// static geometry (planes, boxes) they rest on. Double precision, SI units.
+#pragma once
+#include <Eigen/Geometry>
+#include <vector>
+
+namespace talus {
+
+using Vec3 = Eigen::Vector3d;
+
+// contact material of particles and walls (one material, as in the paper's gravel)
+struct Material {
+  double density = 2590.0;  // [kg/m^3] paper §4.3 (gravel)
+  // young's modulus [Pa]: not given by the paper (nonsmooth DEM is near-rigid); 1e8 Pa gives
+  // overlaps of ~1% of D under 2 m of gravel (documented in docs/dem.md)
+  double young = 1.0e8;
+  double poisson = 0.3;       // rock-like; enters only through E* = E / (2 (1 - nu^2))
+  double friction = 0.3;      // Coulomb mu, paper §4.3
+  double rolling = 0.02;      // rolling resistance mu_r, torque <= mu_r R* lambda_n, paper §4.3
+  double damping_steps = 2.0; // SPOOK damping time of normal rows in timesteps (tau = n h)
+};
+
+// the paper's gravel (SPEC §2.2)
+inline Material gravel() { return Material{}; }
+
+// particles as structure of arrays; orientation quaternions stored (x, y, z, w)
+struct Particles {
+  std::vector<Vec3> position;
+  std::vector<Vec3> velocity;
+  std::vector<Vec3> omega;
+  std::vector<Eigen::Vector4d> rotation;
+  std::vector<double> radius;
+  std::vector<double> inv_mass;     // 0 for fixed particles
+  std::vector<double> inv_inertia;  // solid sphere: 1 / (2/5 m r^2)
+
+  size_t size() const { return position.size(); }
+  // appends a solid sphere of the given density at rest
+  void add(const Vec3& x, double r, double density);
+  // mass of particle i [kg] (0 for fixed ones)
+  double mass(size_t i) const { return inv_mass[i] > 0 ? 1.0 / inv_mass[i] : 0.0; }
+};
+
+// static geometry: a plane (solid behind it) or an oriented box
+struct StaticGeom {
+  enum class Type { Plane, Box };
+  Type type = Type::Plane;
+  Vec3 centre = Vec3::Zero();            // plane: a point on it
+  Eigen::Matrix3d axes = Eigen::Matrix3d::Identity();  // columns; plane: column 0 = normal
+  Vec3 half = Vec3::Zero();              // box half extents
+
+  static StaticGeom plane(const Vec3& point, const Vec3& normal_into_free_side);
+  static StaticGeom box(const Vec3& centre, const Vec3& half, const Eigen::Matrix3d& axes);
+};
+
+// an axis-aligned region [lo, hi] that bounds where particles live (the broad-phase grid)
+struct Bounds {
+  Vec3 lo = Vec3::Zero();
+  Vec3 hi = Vec3::Zero();
+};
+
+}  // namespace talus
