@@ -1,11 +1,54 @@
+// talus repose: the heap test of the gravel (terrain/heap.hpp), angle of repose and bulk density.
+#include <chrono>
+#include <iostream>
+
 #include "apps/commands.hpp"
-#include "host/error.hpp"
+#include "host/device.hpp"
+#include "io/output.hpp"
+#include "terrain/heap.hpp"
 
 namespace talus::app {
 
 void add_repose_command(CLI::App& app) {
-  auto* cmd = app.add_subcommand("repose", "not yet implemented");
-  cmd->callback([] { throw Error("'talus repose' is not implemented yet"); });
+  struct Options {
+    std::string out;
+    HeapOptions heap;
+    bool quiet = false;
+  };
+  auto opt = std::make_shared<Options>();
+  auto* cmd = app.add_subcommand("repose", "heap test: angle of repose and bulk density of the gravel");
+  cmd->add_option("--out", opt->out, "output folder (particles.csv, particles.vtp, summary.json)")->required();
+  cmd->add_option("--diameter", opt->heap.diameter, "mean particle diameter D [m]")->check(CLI::PositiveNumber);
+  cmd->add_option("--columns", opt->heap.columns, "column width in particles")->check(CLI::Range(4, 200));
+  cmd->add_option("--layers", opt->heap.layers, "column height in particles")->check(CLI::Range(4, 400));
+  cmd->add_option("--iterations", opt->heap.iterations, "PGS sweeps per step")->check(CLI::Range(1, 100000));
+  cmd->add_option("--dt", opt->heap.dt, "timestep [s]")->check(CLI::PositiveNumber);
+  cmd->add_option("--seed", opt->heap.seed, "random seed of the particle sizes and jitter");
+  cmd->add_flag("--quiet", opt->quiet, "no progress on stderr");
+  cmd->callback([opt] {
+    make_output_dir(opt->out);
+    auto t0 = std::chrono::steady_clock::now();
+    Device dev;
+    Progress progress("repose", opt->heap.max_fill_time + opt->heap.max_runout_time, !opt->quiet);
+    HeapResult r = run_heap_test(dev, gravel(), opt->heap, &progress);
+    double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    progress.finish();
+    write_file_atomically(opt->out + "/particles.csv", particles_csv(r.final_state));
+    write_file_atomically(opt->out + "/particles.vtp", particles_vtp(r.final_state));
+    nlohmann::json j = {{"repose_angle_deg", r.repose_angle_deg},
+                        {"repose_spread_deg", r.repose_spread_deg},
+                        {"sectors", r.sectors},
+                        {"bulk_density", r.bulk_density},
+                        {"heap_height_m", r.heap_height},
+                        {"particles", r.particles},
+                        {"diameter_m", opt->heap.diameter},
+                        {"sim_time_s", r.sim_time},
+                        {"wall_s", wall},
+                        {"device", dev.description()},
+                        {"anchor", {{"repose_angle_deg", 32.0}, {"bulk_density", 1727.0}}}};
+    write_json(opt->out + "/summary.json", j);
+    std::cout << j.dump(2) << "\n";
+  });
 }
 
 }  // namespace talus::app

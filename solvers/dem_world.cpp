@@ -71,10 +71,16 @@ DemWorld::DemWorld(Device& dev, const Material& material, const DemSettings& set
   k_integrate_ = dev.kernel(solver, "integrate");
   k_residual_ = dev.kernel(solver, "row_residual");
 
+  set_geoms(geoms_);
+}
+
+void DemWorld::set_geoms(std::vector<StaticGeom> geoms) {
+  geoms_ = std::move(geoms);
   std::vector<TlGeom> g;
   for (auto& s : geoms_) g.push_back(to_device(s));
   if (g.empty()) g.push_back(TlGeom{});  // keep the buffer non-empty; params.geoms stays 0
   buffers_.geoms.upload(g);
+  buffers_.has_previous = false;  // static contacts are matched by geometry index
   update_params();
 }
 

@@ -32,6 +32,8 @@ class DemWorld {
 
   // replaces the particles (contacts start fresh: no warm start on the next step)
   void set_particles(const Particles& particles);
+  // replaces the static geometry (e.g. walls removed); contacts start fresh
+  void set_geoms(std::vector<StaticGeom> geoms);
   // the particles as they are on the device now
   Particles particles() const;
   size_t size() const { return particle_count_; }

@@ -1,0 +1,81 @@
+#include "io/output.hpp"
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "host/error.hpp"
+
+namespace talus {
+
+void make_output_dir(const std::string& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw InputError("--out " + dir + ": cannot create the folder (" + ec.message() + ")");
+}
+
+void write_file_atomically(const std::string& path, const std::string& content) {
+  std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary);
+    if (!out) throw Error(path + ": cannot write (check the folder exists and is writable)");
+    out << content;
+    if (!out.flush()) throw Error(path + ": write failed (disk full?)");
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) throw Error(path + ": cannot move the finished file into place (" + ec.message() + ")");
+}
+
+void write_json(const std::string& path, const nlohmann::json& j) {
+  write_file_atomically(path, j.dump(2) + "\n");
+}
+
+std::string particles_csv(const Particles& p) {
+  std::ostringstream os;
+  os.precision(9);
+  os << "x,y,z,r,vx,vy,vz\n";
+  for (size_t i = 0; i < p.size(); ++i) {
+    const Vec3& x = p.position[i];
+    const Vec3& v = p.velocity[i];
+    os << x.x() << ',' << x.y() << ',' << x.z() << ',' << p.radius[i] << ',' << v.x() << ','
+       << v.y() << ',' << v.z() << '\n';
+  }
+  return os.str();
+}
+
+std::string particles_vtp(const Particles& p) {
+  std::ostringstream os;
+  os.precision(7);
+  size_t n = p.size();
+  os << "<?xml version=\"1.0\"?>\n"
+     << "<VTKFile type=\"PolyData\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
+     << "<PolyData>\n<Piece NumberOfPoints=\"" << n << "\" NumberOfVerts=\"" << n
+     << "\" NumberOfLines=\"0\" NumberOfStrips=\"0\" NumberOfPolys=\"0\">\n";
+  // points
+  os << "<Points><DataArray type=\"Float32\" NumberOfComponents=\"3\" format=\"ascii\">\n";
+  for (size_t i = 0; i < n; ++i)
+    os << p.position[i].x() << ' ' << p.position[i].y() << ' ' << p.position[i].z() << '\n';
+  os << "</DataArray></Points>\n";
+  // per-particle data: radius (scale the Point Gaussian by it), velocity, speed
+  os << "<PointData Scalars=\"radius\" Vectors=\"velocity\">\n"
+     << "<DataArray type=\"Float32\" Name=\"radius\" format=\"ascii\">\n";
+  for (size_t i = 0; i < n; ++i) os << p.radius[i] << '\n';
+  os << "</DataArray>\n<DataArray type=\"Float32\" Name=\"velocity\" NumberOfComponents=\"3\" "
+        "format=\"ascii\">\n";
+  for (size_t i = 0; i < n; ++i)
+    os << p.velocity[i].x() << ' ' << p.velocity[i].y() << ' ' << p.velocity[i].z() << '\n';
+  os << "</DataArray>\n<DataArray type=\"Float32\" Name=\"speed\" format=\"ascii\">\n";
+  for (size_t i = 0; i < n; ++i) os << p.velocity[i].norm() << '\n';
+  os << "</DataArray>\n</PointData>\n";
+  // one vertex cell per particle
+  os << "<Verts><DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
+  for (size_t i = 0; i < n; ++i) os << i << '\n';
+  os << "</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n";
+  for (size_t i = 0; i < n; ++i) os << i + 1 << '\n';
+  os << "</DataArray></Verts>\n</Piece>\n</PolyData>\n</VTKFile>\n";
+  return os.str();
+}
+
+}  // namespace talus

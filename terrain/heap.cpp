@@ -1,0 +1,148 @@
+#include "terrain/heap.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "terrain/pile.hpp"
+#include "terrain/settle.hpp"
+
+namespace talus {
+
+namespace {
+
+// a least-squares slope of y against x
+double fit_slope(const std::vector<double>& x, const std::vector<double>& y) {
+  double n = static_cast<double>(x.size());
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  for (size_t k = 0; k < x.size(); ++k) {
+    sx += x[k];
+    sy += y[k];
+    sxx += x[k] * x[k];
+    sxy += x[k] * y[k];
+  }
+  return (n * sxy - sx * sy) / (n * sxx - sx * sx);
+}
+
+}  // namespace
+
+FlankFit measure_flank_angle(const Particles& p, double bin_width, int sectors) {
+  FlankFit fit;
+  // the heap's height: the highest free particle top
+  for (size_t i = 0; i < p.size(); ++i)
+    if (p.inv_mass[i] > 0) fit.height = std::max(fit.height, p.position[i].z() + p.radius[i]);
+  double rmax = 0.0;
+  for (size_t i = 0; i < p.size(); ++i)
+    if (p.inv_mass[i] > 0) rmax = std::max(rmax, p.position[i].head<2>().norm());
+  int bins = static_cast<int>(rmax / bin_width) + 1;
+  // upper envelope of free particles per (sector, radial bin)
+  std::vector<std::vector<double>> top(sectors, std::vector<double>(bins, 0.0));
+  for (size_t i = 0; i < p.size(); ++i) {
+    if (p.inv_mass[i] <= 0) continue;
+    const Vec3& x = p.position[i];
+    double rho = x.head<2>().norm();
+    int s = static_cast<int>((std::atan2(x.y(), x.x()) + M_PI) / (2 * M_PI) * sectors) % sectors;
+    int b = static_cast<int>(rho / bin_width);
+    top[s][b] = std::max(top[s][b], x.z() + p.radius[i]);
+  }
+  // per sector: the flank between 20% and 80% of the height
+  std::vector<double> angles;
+  for (int s = 0; s < sectors; ++s) {
+    std::vector<double> r, z;
+    for (int b = 0; b < bins; ++b) {
+      double h = top[s][b];
+      if (h > 0.2 * fit.height && h < 0.8 * fit.height) {
+        r.push_back((b + 0.5) * bin_width);
+        z.push_back(h);
+      }
+    }
+    if (r.size() < 3) continue;
+    angles.push_back(std::atan(-fit_slope(r, z)) * 180.0 / M_PI);
+  }
+  fit.sectors = static_cast<int>(angles.size());
+  if (angles.empty()) return fit;
+  double mean = 0.0;
+  for (double a : angles) mean += a;
+  mean /= angles.size();
+  double var = 0.0;
+  for (double a : angles) var += (a - mean) * (a - mean);
+  fit.angle_deg = mean;
+  fit.spread_deg = std::sqrt(var / angles.size());
+  return fit;
+}
+
+HeapResult run_heap_test(Device& dev, const Material& material, const HeapOptions& o,
+                         Progress* progress) {
+  HeapResult result;
+  double d = o.diameter;
+  double spacing = 1.1 * d * 1.02;
+  double half = 0.5 * o.columns * spacing;
+  // base: fixed particles on a square grid wide enough for the run-out (rough base)
+  double column_height = o.layers * spacing;
+  double base_half = half + 1.2 * column_height;
+  Particles particles;
+  for (double x = -base_half; x <= base_half; x += d)
+    for (double y = -base_half; y <= base_half; y += d) {
+      particles.add(Vec3(x, y, 0.5 * d), 0.5 * d, material.density);
+      particles.inv_mass.back() = 0.0;
+      particles.inv_inertia.back() = 0.0;
+    }
+  // column: jittered lattice of D +- 0.1 D spheres inside the walls
+  std::mt19937 rng(o.seed);
+  std::uniform_real_distribution<double> size(0.9 * d, 1.1 * d);
+  double jitter = 0.5 * (spacing - 1.1 * d);
+  std::uniform_real_distribution<double> offset(-jitter, jitter);
+  for (int k = 0; k < o.layers; ++k)
+    for (int j = 0; j < o.columns; ++j)
+      for (int i = 0; i < o.columns; ++i) {
+        Vec3 x(-half + (i + 0.5) * spacing, -half + (j + 0.5) * spacing, d + (k + 0.5) * spacing);
+        particles.add(x + Vec3(offset(rng), offset(rng), offset(rng)), 0.5 * size(rng), material.density);
+      }
+  result.particles = o.columns * o.columns * o.layers;
+
+  std::vector<StaticGeom> ground = {StaticGeom::plane(Vec3::Zero(), Vec3::UnitZ())};
+  std::vector<StaticGeom> walled = ground;
+  walled.push_back(StaticGeom::plane(Vec3(-half, 0, 0), Vec3::UnitX()));
+  walled.push_back(StaticGeom::plane(Vec3(half, 0, 0), -Vec3::UnitX()));
+  walled.push_back(StaticGeom::plane(Vec3(0, -half, 0), Vec3::UnitY()));
+  walled.push_back(StaticGeom::plane(Vec3(0, half, 0), -Vec3::UnitY()));
+  Bounds bounds{Vec3(-base_half - d, -base_half - d, 0.0), Vec3(base_half + d, base_half + d, column_height + 3 * d)};
+
+  DemSettings settings;
+  settings.dt = o.dt;
+  settings.iterations = o.iterations;
+  DemWorld world(dev, material, settings, bounds, walled);
+  world.set_particles(particles);
+
+  // fill: settle inside the walls, then measure the bulk density away from walls and surfaces
+  SettleOptions fill;
+  fill.min_time = 0.5;
+  fill.max_time = o.max_fill_time;
+  settle(world, fill, progress);
+  Particles settled = world.particles();
+  double top = 0.0;
+  for (size_t i = 0; i < settled.size(); ++i)
+    if (settled.inv_mass[i] > 0) top = std::max(top, settled.position[i].z());
+  double margin = 2.0 * d;
+  Bounds core{Vec3(-half + margin, -half + margin, d + margin), Vec3(half - margin, half - margin, top - margin)};
+  result.bulk_density = bulk_density(settled, core, material.density);
+
+  // lift: remove the walls and let the column run out into a heap
+  world.set_geoms(ground);
+  SettleOptions runout;
+  runout.min_time = 1.0;
+  runout.max_time = o.max_runout_time;
+  settle(world, runout, progress);
+
+  result.final_state = world.particles();
+  result.geoms = ground;
+  result.sim_time = world.time();
+  FlankFit fit = measure_flank_angle(result.final_state, d);
+  result.repose_angle_deg = fit.angle_deg;
+  result.repose_spread_deg = fit.spread_deg;
+  result.sectors = fit.sectors;
+  result.heap_height = fit.height;
+  return result;
+}
+
+}  // namespace talus

@@ -1,0 +1,163 @@
+#include "terrain/pile.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <random>
+
+#include "host/error.hpp"
+#include "io/data_files.hpp"
+
+namespace talus {
+
+double PileProfile::height_at(double x) const {
+  if (points.empty() || x < points.front().x() || x > rear_wall_x) return 0.0;
+  for (size_t k = 1; k < points.size(); ++k) {
+    const Vec3& p0 = points[k - 1];
+    const Vec3& p1 = points[k];
+    if (x <= p1.x()) {
+      double s = p1.x() > p0.x() ? (x - p0.x()) / (p1.x() - p0.x()) : 1.0;
+      return p0.z() + s * (p1.z() - p0.z());
+    }
+  }
+  return points.back().z();
+}
+
+double PileProfile::cross_section() const {
+  // trapezoids between profile points, then a flat top to the rear wall
+  double area = 0.0;
+  for (size_t k = 1; k < points.size(); ++k)
+    area += 0.5 * (points[k].z() + points[k - 1].z()) * (points[k].x() - points[k - 1].x());
+  if (!points.empty() && rear_wall_x > points.back().x())
+    area += points.back().z() * (rear_wall_x - points.back().x());
+  return area;
+}
+
+PileProfile load_pile_profile(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path + ": cannot open the pile profile file");
+  nlohmann::json j;
+  try {
+    in >> j;
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(path + ": not valid JSON (" + std::string(e.what()) + ")");
+  }
+  auto field = [&](const char* name) -> const nlohmann::json& {
+    if (!j.contains(name))
+      throw InputError(path + ": missing field '" + name + "'; see data/piles/default.json");
+    return j.at(name);
+  };
+  PileProfile p;
+  p.name = j.value("name", path);
+  p.source = j.value("source", "");
+  if (!field("width_m").is_number() || field("width_m").get<double>() <= 0.0)
+    throw InputError(path + ": field 'width_m' must be a positive number [m]");
+  p.width = field("width_m").get<double>();
+  const auto& pts = field("profile_xz_m");
+  if (!pts.is_array() || pts.size() < 2)
+    throw InputError(path + ": field 'profile_xz_m' must list at least two [x, z] points");
+  for (size_t k = 0; k < pts.size(); ++k) {
+    const auto& q = pts[k];
+    if (!q.is_array() || q.size() != 2 || !q[0].is_number() || !q[1].is_number())
+      throw InputError(path + ": field 'profile_xz_m[" + std::to_string(k) +
+                       "]' must be a pair [x, z] of numbers in metres");
+    double x = q[0].get<double>(), z = q[1].get<double>();
+    if (!std::isfinite(x) || !std::isfinite(z) || z < 0.0)
+      throw InputError(path + ": field 'profile_xz_m[" + std::to_string(k) +
+                       "]' must be finite with z >= 0");
+    if (!p.points.empty() && x <= p.points.back().x())
+      throw InputError(path + ": field 'profile_xz_m' must have increasing x (point " +
+                       std::to_string(k) + ")");
+    p.points.emplace_back(x, 0.0, z);
+  }
+  if (!field("rear_wall_x_m").is_number())
+    throw InputError(path + ": field 'rear_wall_x_m' must be a number [m]");
+  p.rear_wall_x = field("rear_wall_x_m").get<double>();
+  if (p.rear_wall_x < p.points.back().x() - 1e-9)
+    throw InputError(path + ": field 'rear_wall_x_m' must not lie in front of the last profile point");
+  return p;
+}
+
+PileProfile default_pile_profile() { return load_pile_profile(find_data_file("piles/default.json")); }
+
+const std::vector<FidelityPreset>& fidelity_presets() {
+  // paper Table 3 (type D): D, timestep, particle count, PGS iterations
+  static const std::vector<FidelityPreset> presets = {
+      {"D50", 0.050, 0.002, 200, 450000},
+      {"D100", 0.100, 0.005, 100, 55000},
+      {"D200", 0.200, 0.010, 500, 6100},
+      {"D400", 0.400, 0.020, 15, 800},
+  };
+  return presets;
+}
+
+const FidelityPreset& fidelity_preset(const std::string& name) {
+  std::string known;
+  for (auto& p : fidelity_presets()) {
+    if (p.name == name) return p;
+    known += " " + p.name;
+  }
+  throw InputError("unknown fidelity level '" + name + "'; known:" + known);
+}
+
+std::vector<StaticGeom> pile_container(const PileProfile& profile) {
+  double half_width = 0.5 * profile.width;
+  return {
+      StaticGeom::plane(Vec3(0, 0, 0), Vec3(0, 0, 1)),                   // ground
+      StaticGeom::plane(Vec3(0, -half_width, 0), Vec3(0, 1, 0)),         // right side wall
+      StaticGeom::plane(Vec3(0, half_width, 0), Vec3(0, -1, 0)),         // left side wall
+      StaticGeom::plane(Vec3(profile.rear_wall_x, 0, 0), Vec3(-1, 0, 0)) // rear wall
+  };
+}
+
+Bounds pile_bounds(const PileProfile& profile, double diameter) {
+  // room in front of the toe for the face to slump and above the top for the loose lattice
+  double top = 0.0;
+  for (auto& p : profile.points) top = std::max(top, p.z());
+  Bounds b;
+  b.lo = Vec3(profile.points.front().x() - 0.5 * top - 4 * diameter, -0.5 * profile.width, 0.0);
+  b.hi = Vec3(profile.rear_wall_x, 0.5 * profile.width, 1.5 * top + 4 * diameter);
+  return b;
+}
+
+Particles emit_pile_particles(const PileProfile& profile, double diameter, const Material& material,
+                              unsigned seed, double loosening) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> size(0.9 * diameter, 1.1 * diameter);
+  // lattice spacing: the largest diameter plus a gap, so no two spheres start overlapping
+  double spacing = 1.1 * diameter * 1.02;
+  double jitter = 0.5 * (spacing - 1.1 * diameter);
+  std::uniform_real_distribution<double> offset(-jitter, jitter);
+  double half_width = 0.5 * profile.width;
+  Particles particles;
+  int ny = static_cast<int>(std::floor((profile.width - spacing) / spacing)) + 1;
+  double y0 = -half_width + 0.5 * spacing + 0.5 * (profile.width - spacing - (ny - 1) * spacing);
+  // columns along x from the rear wall forward, rows along y, layers up to the stretched height
+  for (double x = profile.rear_wall_x - 0.5 * spacing; x > profile.points.front().x(); x -= spacing) {
+    double height = loosening * profile.height_at(x);
+    for (int iy = 0; iy < ny; ++iy) {
+      double y = y0 + iy * spacing;
+      for (double z = 0.5 * spacing; z + 0.5 * spacing <= height; z += spacing) {
+        Vec3 jit(offset(rng), offset(rng), offset(rng));
+        particles.add(Vec3(x, y, z) + jit, 0.5 * size(rng), material.density);
+      }
+    }
+  }
+  return particles;
+}
+
+double bulk_density(const Particles& particles, const Bounds& box, double particle_density) {
+  double solid = 0.0;
+  for (size_t i = 0; i < particles.size(); ++i) {
+    const Vec3& x = particles.position[i];
+    if ((x.array() >= box.lo.array()).all() && (x.array() <= box.hi.array()).all()) {
+      double r = particles.radius[i];
+      solid += 4.0 / 3.0 * M_PI * r * r * r;
+    }
+  }
+  Vec3 e = box.hi - box.lo;
+  return particle_density * solid / (e.x() * e.y() * e.z());
+}
+
+}  // namespace talus

@@ -1,0 +1,127 @@
+// solvers/dem_world: Hertz impact against the analytic solution, determinism, warm start,
+// and the convergence of PGS and Jacobi (printed as a table).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+
+#include "solvers/dem_world.hpp"
+#include "terrain/scenes.hpp"
+
+namespace talus {
+namespace {
+
+// a sphere hits a plane at v0 with no damping and no gravity: the overlap history is Hertz's
+// elastic impact, delta_max = (5 m v0^2 / (4 k_n))^(2/5), t_c = 2.9432 delta_max / v0 (Johnson 1985)
+TEST(DemWorld, HertzImpactMatchesAnalyticOverlapAndDuration) {
+  Device dev;
+  Material m = gravel();
+  m.damping_steps = 0.0;
+  m.friction = 0.0;
+  DemSettings s;
+  s.gravity = Vec3::Zero();
+  s.dt = 1e-5;
+  s.iterations = 10;
+  const double d = 0.1, v0 = 1.0;
+  DemWorld world(dev, m, s, Bounds{Vec3(-0.5, -0.5, -0.5), Vec3(0.5, 0.5, 0.5)},
+                 {StaticGeom::plane(Vec3::Zero(), Vec3::UnitZ())});
+  Particles p;
+  p.add(Vec3(0, 0, 0.5 * d + 2e-5), 0.5 * d, m.density);
+  p.velocity[0] = Vec3(0, 0, -v0);
+  world.set_particles(p);
+  double mass = 1.0 / p.inv_mass[0];
+  double e_star = m.young / (2.0 * (1.0 - m.poisson * m.poisson));
+  double kn = 4.0 / 3.0 * e_star * std::sqrt(0.5 * d);
+  double delta_max = std::pow(5.0 * mass * v0 * v0 / (4.0 * kn), 0.4);
+  double t_contact = 2.9432 * delta_max / v0;
+
+  // step through the impact, measuring the peak overlap and the time in contact
+  double peak = 0.0, in_contact = 0.0;
+  for (int i = 0; i < static_cast<int>(3 * t_contact / s.dt); ++i) {
+    world.step();
+    double overlap = 0.5 * d - world.particles().position[0].z();
+    peak = std::max(peak, overlap);
+    if (overlap > 0) in_contact += s.dt;
+  }
+  std::printf("Hertz impact: peak overlap %.4e m (analytic %.4e, %+.2f%%), contact %.4e s (analytic "
+              "%.4e, %+.2f%%)\n",
+              peak, delta_max, 100 * (peak / delta_max - 1), in_contact, t_contact,
+              100 * (in_contact / t_contact - 1));
+  EXPECT_NEAR(peak, delta_max, 0.05 * delta_max);
+  EXPECT_NEAR(in_contact, t_contact, 0.05 * t_contact);
+}
+
+// a small bed: 6x6x8 spheres of 5 mm settling in a box
+Scene small_bed() {
+  LatticeBox l;
+  l.nx = 6;
+  l.ny = 6;
+  l.nz = 8;
+  l.box = 6 * l.spacing;
+  Scene s = lattice_box_scene(l, settle10k_scene().material, settle10k_scene().settings);
+  return s;
+}
+
+TEST(DemWorld, TwoRunsAreBitIdentical) {
+  Device dev;
+  Scene scene = small_bed();
+  auto run = [&] {
+    DemWorld world(dev, scene.material, scene.settings, scene.bounds, scene.geoms);
+    world.set_particles(scene.particles);
+    for (int i = 0; i < 60; ++i) world.step();
+    auto x = world.buffers().position.download(scene.particles.size());
+    auto v = world.buffers().velocity.download(scene.particles.size());
+    x.insert(x.end(), v.begin(), v.end());
+    return x;
+  };
+  auto a = run();
+  auto b = run();
+  ASSERT_EQ(a.size(), b.size());
+  EXPECT_EQ(0, std::memcmp(a.data(), b.data(), a.size() * sizeof(a[0])));
+}
+
+// two identical worlds (runs are deterministic) settle; the last step of one has warm start off
+std::pair<std::vector<double>, std::vector<double>> last_step_residuals(SweepKind second_sweep,
+                                                                        bool second_warm) {
+  Device dev;
+  Scene scene = small_bed();
+  scene.settings.iterations = 20;
+  DemWorld a(dev, scene.material, scene.settings, scene.bounds, scene.geoms);
+  DemWorld b(dev, scene.material, scene.settings, scene.bounds, scene.geoms);
+  a.set_particles(scene.particles);
+  b.set_particles(scene.particles);
+  for (int i = 0; i < 150; ++i) {
+    a.step();
+    b.step();
+  }
+  a.settings().iterations = 100;
+  b.settings().iterations = 100;
+  b.settings().warm_start = second_warm;
+  b.settings().sweep = second_sweep;
+  return {a.step_recording_residuals(), b.step_recording_residuals()};
+}
+
+TEST(DemWorld, WarmStartLowersTheResidualAtFixedIterations) {
+  auto [warm, cold] = last_step_residuals(SweepKind::Pgs, false);
+  for (int it : {5, 10, 20}) {
+    std::printf("after %3d PGS sweeps: residual warm %.3e m/s, cold %.3e m/s, ratio %.1f\n", it,
+                warm[it], cold[it], cold[it] / warm[it]);
+  }
+  // a settled bed: last step's impulses are nearly this step's solution
+  EXPECT_LT(warm[10], 0.5 * cold[10]);
+}
+
+TEST(DemWorld, ConvergenceTablePgsAndJacobi) {
+  auto [pgs, jacobi] = last_step_residuals(SweepKind::Jacobi, true);
+  std::printf("%10s %16s %16s\n", "iteration", "PGS residual", "Jacobi residual");
+  for (int it : {0, 1, 2, 5, 10, 20, 50, 100})
+    std::printf("%10d %16.4e %16.4e\n", it, pgs[it], jacobi[it]);
+  // both sweeps reduce the residual; PGS (Gauss-Seidel) converges faster per sweep
+  EXPECT_LT(pgs[100], 0.5 * pgs[1]);
+  EXPECT_LT(jacobi[100], jacobi[1]);
+  EXPECT_LT(pgs[20], jacobi[20]);
+}
+
+}  // namespace
+}  // namespace talus
