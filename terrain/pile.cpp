@@ -122,13 +122,16 @@ Bounds pile_bounds(const PileProfile& profile, double diameter) {
 }
 
 Particles emit_pile_particles(const PileProfile& profile, double diameter, const Material& material,
-                              unsigned seed, double loosening) {
+                              unsigned seed, double settled_fraction) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> size(0.9 * diameter, 1.1 * diameter);
   // lattice spacing: the largest diameter plus a gap, so no two spheres start overlapping
   double spacing = 1.1 * diameter * 1.02;
   double jitter = 0.5 * (spacing - 1.1 * diameter);
   std::uniform_real_distribution<double> offset(-jitter, jitter);
+  // the lattice's solid fraction (mean sphere volume is 1.01 D^3 pi/6 for D +- 10%)
+  double lattice_fraction = M_PI / 6.0 * 1.01 * std::pow(diameter / spacing, 3);
+  double loosening = settled_fraction / lattice_fraction;
   double half_width = 0.5 * profile.width;
   Particles particles;
   int ny = static_cast<int>(std::floor((profile.width - spacing) / spacing)) + 1;
@@ -158,6 +161,48 @@ double bulk_density(const Particles& particles, const Bounds& box, double partic
   }
   Vec3 e = box.hi - box.lo;
   return particle_density * solid / (e.x() * e.y() * e.z());
+}
+
+}  // namespace talus
+
+#include "terrain/settle.hpp"
+
+namespace talus {
+
+PileBuild build_pile(Device& dev, const PileProfile& profile, const FidelityPreset& preset,
+                     const Material& material, const PileBuildOptions& options, Progress* progress) {
+  PileBuild out;
+  out.geoms = pile_container(profile);
+  out.bounds = pile_bounds(profile, preset.diameter);
+  DemSettings settings;
+  settings.dt = preset.dt;
+  settings.iterations = std::min(preset.iterations, options.max_settle_iterations);
+  DemWorld world(dev, material, settings, out.bounds, out.geoms);
+  world.set_particles(emit_pile_particles(profile, preset.diameter, material, options.seed));
+  SettleOptions so;
+  so.min_time = options.min_time;
+  so.max_time = options.max_time;
+  so.rest_speed = 0.02;
+  SettleResult r = settle(world, so, progress);
+  out.particles = world.particles();
+  out.settle_time = r.sim_time;
+  out.at_rest = r.at_rest;
+  out.rms_speed = r.rms_speed;
+  // bulk density in the core of the flat top: two diameters from walls, ground and surface
+  double d = preset.diameter;
+  double top = 0.0;
+  for (auto& p : profile.points) top = std::max(top, p.z());
+  // the flat top starts where the profile first reaches its full height
+  double flat_start = profile.points.back().x();
+  for (auto& p : profile.points)
+    if (p.z() >= top) {
+      flat_start = p.x();
+      break;
+    }
+  Bounds core{Vec3(flat_start + 2 * d, -0.5 * profile.width + 2 * d, 2 * d),
+              Vec3(profile.rear_wall_x - 2 * d, 0.5 * profile.width - 2 * d, 0.75 * top)};
+  out.bulk_density = bulk_density(out.particles, core, material.density);
+  return out;
 }
 
 }  // namespace talus

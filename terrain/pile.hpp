@@ -6,7 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "solvers/dem_settings.hpp"
+#include "io/progress.hpp"
+#include "solvers/dem_world.hpp"
 #include "terrain/particles.hpp"
 
 namespace talus {
@@ -46,12 +47,39 @@ std::vector<StaticGeom> pile_container(const PileProfile& profile);
 Bounds pile_bounds(const PileProfile& profile, double diameter);
 
 // particles with diameters uniform in D +- 0.1 D on a jittered lattice filling the profile
-// stretched in height by `loosening` (the lattice is looser than the settled bed)
+// stretched in height so the lattice holds as much solid as the settled bed will
+// (settled_fraction: the solid fraction the bed is expected to settle to)
 Particles emit_pile_particles(const PileProfile& profile, double diameter, const Material& material,
-                              unsigned seed, double loosening = 1.12);
+                              unsigned seed, double settled_fraction = 0.62);
 
 // bulk density [kg/m^3] from particle positions: the solid volume of spheres whose centres lie
 // in the box [lo, hi], over the box volume (a box well inside the bed, away from walls)
 double bulk_density(const Particles& particles, const Bounds& box, double particle_density);
+
+}  // namespace talus
+
+namespace talus {
+
+// a settled pile: emission, then settling with the preset's timestep
+struct PileBuild {
+  Particles particles;
+  std::vector<StaticGeom> geoms;
+  Bounds bounds;
+  double settle_time = 0.0;   // simulated [s]
+  bool at_rest = false;
+  double rms_speed = 0.0;     // at the end [m/s]
+  double bulk_density = 0.0;  // in the flat top's core [kg/m^3]
+};
+
+struct PileBuildOptions {
+  unsigned seed = 1;
+  // sweeps while settling: the preset's N_it capped here (settling needs no precise forces)
+  int max_settle_iterations = 100;
+  double min_time = 1.0;  // [s]
+  double max_time = 4.0;  // [s]
+};
+
+PileBuild build_pile(Device& dev, const PileProfile& profile, const FidelityPreset& preset,
+                     const Material& material, const PileBuildOptions& options, Progress* progress);
 
 }  // namespace talus
