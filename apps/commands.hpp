@@ -13,5 +13,6 @@ void add_pile_command(CLI::App& app);    // build and settle the default pile
 void add_repose_command(CLI::App& app);  // heap test: angle of repose of the gravel
 void add_bench_command(CLI::App& app);   // DEM throughput benchmarks
 void add_run_command(CLI::App& app);     // vehicle scenarios
+void add_compare_command(CLI::App& app); // sim-to-real error rows and tables (compare, table)
 
 }  // namespace talus::app

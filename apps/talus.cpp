@@ -12,11 +12,16 @@ int main(int argc, char** argv) {
   talus::app::add_repose_command(app);
   talus::app::add_bench_command(app);
   talus::app::add_run_command(app);
+  talus::app::add_compare_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     // --help and --version are "errors" with exit code 0 in CLI11
     return app.exit(e) == 0 ? 0 : talus::app::kExitUsage;
+  } catch (const talus::InputError& e) {
+    // bad input file or field: a usage error, not a runtime failure
+    std::cerr << "talus: error: " << e.what() << "\n";
+    return talus::app::kExitUsage;
   } catch (const talus::Error& e) {
     std::cerr << "talus: error: " << e.what() << "\n";
     return talus::app::kExitFailure;

@@ -1,0 +1,88 @@
+// A run's recorded data: the channel-contract time series (CSV, SI units, 100 Hz) and its
+// summary.json. A run directory holds DIR/timeseries.csv and DIR/summary.json; simulated runs and
+// measured (reference) runs use the same layout. Loaders reject malformed files with a
+// talus::InputError naming file, line and field; writers write a temporary file, then rename.
+#pragma once
+#include <array>
+#include <cstddef>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace talus::sim2real {
+
+// the channel contract, in file order (SPEC.md §2.4, paper Table 1), all SI:
+// t [s]; cylinder and traction forces [N]; drive speed [m/s]; cylinder extensions [m];
+// boom, bucket (relative to chassis) and chassis pitch angles [deg]; vehicle position and
+// bucket tip [m]; power [W]
+enum class Channel : std::size_t {
+  t, f_lift, f_tilt, f_traction, v_drive, d_lift, d_tilt, boom_deg, bucket_deg, pitch_deg,
+  x_vehicle, bucket_tip_x, bucket_tip_z, power
+};
+inline constexpr std::size_t kChannelCount = 14;
+inline constexpr std::array<const char*, kChannelCount> kChannelNames = {
+    "t",          "f_lift",    "f_tilt",     "f_traction",   "v_drive",
+    "d_lift",     "d_tilt",    "boom_deg",   "bucket_deg",   "pitch_deg",
+    "x_vehicle",  "bucket_tip_x", "bucket_tip_z", "power"};
+
+// file names inside a run directory
+inline constexpr const char* kTimeseriesFile = "timeseries.csv";
+inline constexpr const char* kSummaryFile = "summary.json";
+
+struct TimeSeries {
+  std::array<std::vector<double>, kChannelCount> columns;
+
+  std::vector<double>& operator[](Channel c) { return columns[static_cast<std::size_t>(c)]; }
+  const std::vector<double>& operator[](Channel c) const {
+    return columns[static_cast<std::size_t>(c)];
+  }
+  std::size_t size() const { return columns[0].size(); }
+};
+
+// summary.json: the scalars of one run
+struct RunSummary {
+  double loaded_mass_kg = 0.0;          // soil mass in the bucket after the cycle [kg]
+  double work_J = 0.0;                  // net mechanical work ∫P dt [J]
+  std::optional<std::string> scenario;  // e.g. "FB35"
+  std::optional<std::string> fidelity;  // e.g. "D50", "G200", "field"
+  std::optional<double> dig_start_s;    // phase marks: start and end of the digging phase [s]
+  std::optional<double> dig_end_s;
+};
+
+struct Run {
+  std::filesystem::path dir;
+  TimeSeries series;
+  RunSummary summary;
+
+  // a row label: "<scenario>-<fidelity>" when both are known, else the directory name
+  std::string label() const;
+};
+
+// strict CSV reader: header must hold every contract column (any order; extra columns are
+// ignored); every cell a finite number; t strictly increasing
+TimeSeries load_timeseries(const std::filesystem::path& file);
+void save_timeseries(const std::filesystem::path& file, const TimeSeries& series);
+
+RunSummary load_summary(const std::filesystem::path& file);
+void save_summary(const std::filesystem::path& file, const RunSummary& summary);
+
+// DIR/timeseries.csv and DIR/summary.json
+Run load_run(const std::filesystem::path& dir);
+
+// the samples with t0 <= t <= t1 (phase selection by phase marks in seconds)
+TimeSeries select_window(const TimeSeries& series, double t0, double t1);
+
+// linear interpolation of (t, f) at times t_new; t strictly increasing; every t_new must lie in
+// [t.front(), t.back()] (no extrapolation: a simulated run that stops early is an input error)
+std::vector<double> interpolate(const std::vector<double>& t, const std::vector<double>& f,
+                                const std::vector<double>& t_new);
+
+// every channel of `series` interpolated onto the time base t_new (which becomes its t)
+TimeSeries resample(const TimeSeries& series, const std::vector<double>& t_new);
+
+// writes text to `file` through a temporary sibling and a rename, so a reader never sees a
+// half-written file and an old file survives a failed write
+void write_file_atomically(const std::filesystem::path& file, const std::string& text);
+
+}  // namespace talus::sim2real
