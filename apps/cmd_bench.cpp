@@ -1,11 +1,141 @@
+// talus bench dem: DEM throughput per fidelity level on the default pile, and the 10k settling
+// case that LIGGGHTS and Bullet were run on (shared/peers). Medians over several steps.
+#include <algorithm>
+#include <chrono>
+#include <iostream>
+#include <sstream>
+
 #include "apps/commands.hpp"
-#include "host/error.hpp"
+#include "host/device.hpp"
+#include "io/output.hpp"
+#include "terrain/pile.hpp"
+#include "terrain/scenes.hpp"
+#include "terrain/settle.hpp"
 
 namespace talus::app {
 
+namespace {
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0.0 : v[v.size() / 2];
+}
+
+std::vector<std::string> split(const std::string& s, char sep) {
+  std::vector<std::string> out;
+  std::stringstream ss(s);
+  for (std::string item; std::getline(ss, item, sep);)
+    if (!item.empty()) out.push_back(item);
+  return out;
+}
+
+// the default pile at a level, settled briefly, then timed with the preset's dt and N_it
+nlohmann::json bench_level(Device& dev, const FidelityPreset& preset, int steps, bool quiet) {
+  PileBuildOptions build;
+  build.min_time = 0.5;
+  build.max_time = 1.0;
+  Progress progress("bench " + preset.name + " (settling)", build.max_time, !quiet);
+  PileBuild pile = build_pile(dev, default_pile_profile(), preset, gravel(), build, &progress);
+  progress.finish();
+  DemSettings settings;
+  settings.dt = preset.dt;
+  settings.iterations = preset.iterations;
+  DemWorld world(dev, gravel(), settings, pile.bounds, pile.geoms);
+  world.set_particles(pile.particles);
+  world.step();  // contacts exist from here on, warm start as in a run
+  std::vector<double> step_s, sweep_s, contacts;
+  for (int i = 0; i < steps; ++i) {
+    auto t0 = std::chrono::steady_clock::now();
+    world.step();
+    dev.finish();
+    step_s.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    sweep_s.push_back(world.stats().sweep_seconds);
+    contacts.push_back(world.stats().contacts);
+  }
+  double ms = 1e3 * median(step_s);
+  double n_contacts = median(contacts);
+  return {{"level", preset.name},
+          {"particles", world.size()},
+          {"contacts", n_contacts},
+          {"colours", world.stats().colours},
+          {"iterations", preset.iterations},
+          {"dt_s", preset.dt},
+          {"steps_timed", steps},
+          {"ms_per_step", ms},
+          {"ms_sweeps_per_step", 1e3 * median(sweep_s)},
+          {"contact_updates_per_s", n_contacts * preset.iterations / median(sweep_s)},
+          {"realtime_factor", preset.dt / median(step_s)}};
+}
+
+nlohmann::json bench_settle10k(Device& dev, bool quiet) {
+  Scene scene = settle10k_scene();
+  DemWorld world(dev, scene.material, scene.settings, scene.bounds, scene.geoms);
+  world.set_particles(scene.particles);
+  const double sim_time = 0.5;  // [s], as the peers
+  int steps = static_cast<int>(std::lround(sim_time / scene.settings.dt));
+  Progress progress("bench settle10k", sim_time, !quiet);
+  std::vector<double> sweep_s, contacts;
+  auto t0 = std::chrono::steady_clock::now();
+  for (int i = 0; i < steps; ++i) {
+    world.step();
+    sweep_s.push_back(world.stats().sweep_seconds);
+    contacts.push_back(world.stats().contacts);
+    progress.update(world.time());
+  }
+  dev.finish();
+  double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  progress.finish();
+  Particles p = world.particles();
+  // bed height: the 99th percentile of particle tops (robust to a few rattlers)
+  std::vector<double> tops;
+  for (size_t i = 0; i < p.size(); ++i) tops.push_back(p.position[i].z() + p.radius[i]);
+  std::sort(tops.begin(), tops.end());
+  double d = 2.0 * p.radius[0];
+  return {{"level", "settle10k"},
+          {"particles", p.size()},
+          {"contacts", contacts.back()},
+          {"iterations", scene.settings.iterations},
+          {"dt_s", scene.settings.dt},
+          {"sim_time_s", sim_time},
+          {"wall_s", wall},
+          {"wall_s_per_sim_s", wall / sim_time},
+          {"ms_per_step", 1e3 * wall / steps},
+          {"contact_updates_per_s", median(contacts) * scene.settings.iterations / median(sweep_s)},
+          {"bed_height_m", tops[static_cast<size_t>(0.99 * (tops.size() - 1))]},
+          {"max_overlap_rel", max_overlap(p, scene.geoms) / d},
+          {"rms_speed_m_s", rms_speed(p)}};
+}
+
+}  // namespace
+
 void add_bench_command(CLI::App& app) {
-  auto* cmd = app.add_subcommand("bench", "not yet implemented");
-  cmd->callback([] { throw Error("'talus bench' is not implemented yet"); });
+  struct Options {
+    std::string levels = "D400,D200,D100";
+    std::string json;
+    int steps = 5;
+    bool no_settle10k = false;
+    bool quiet = false;
+  };
+  auto opt = std::make_shared<Options>();
+  auto* bench = app.add_subcommand("bench", "throughput benchmarks");
+  auto* dem = bench->add_subcommand("dem", "DEM throughput per fidelity level and the 10k settling case");
+  bench->require_subcommand(1);
+  dem->add_option("--levels", opt->levels, "comma-separated levels (D400,D200,D100,D50)")->capture_default_str();
+  dem->add_option("--json", opt->json, "write the results as JSON to this file");
+  dem->add_option("--steps", opt->steps, "timed steps per level (median reported)")->check(CLI::Range(1, 1000));
+  dem->add_flag("--no-settle10k", opt->no_settle10k, "skip the 10k settling case");
+  dem->add_flag("--quiet", opt->quiet, "no progress on stderr");
+  dem->callback([opt] {
+    std::vector<const FidelityPreset*> presets;
+    for (auto& name : split(opt->levels, ',')) presets.push_back(&fidelity_preset(name));
+    Device dev;
+    nlohmann::json results = nlohmann::json::array();
+    for (auto* preset : presets) results.push_back(bench_level(dev, *preset, opt->steps, opt->quiet));
+    if (!opt->no_settle10k) results.push_back(bench_settle10k(dev, opt->quiet));
+    nlohmann::json j = {{"device", dev.description()}, {"results", results}};
+    if (!opt->json.empty()) write_json(opt->json, j);
+    std::cout << j.dump(2) << "\n";
+  });
 }
 
 }  // namespace talus::app

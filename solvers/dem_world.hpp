@@ -5,6 +5,7 @@
 // The stages are public so tests can run them one at a time and compare each with its
 // double-precision twin in solvers/dem_reference.hpp.
 #pragma once
+#include <chrono>
 #include <memory>
 #include <vector>
 
@@ -23,6 +24,7 @@ struct StepStats {
   int colour_rounds = 0;
   int iterations = 0;      // sweeps run (fewer than settings.iterations when tolerance stopped)
   double residual = -1.0;  // RMS row residual after the sweeps [m/s]; -1 when not computed
+  double sweep_seconds = 0.0;  // wall time of the sweeps (queue drained before and after)
 };
 
 class DemWorld {
