@@ -1,0 +1,52 @@
+// The bounded mixed complementarity problem (MCP) that one SPOOK step of the vehicle poses, in
+// Schur-complement form (SPEC §2.3):
+//   w = A λ - b,   lo <= λ <= hi,
+//   lo < λ_i < hi  =>  w_i = 0,   λ_i = lo_i  =>  w_i >= 0,   λ_i = hi_i  =>  w_i <= 0.
+// A = G M⁻¹ Gᵀ + Σ is symmetric positive definite, so this is the optimality system of the convex
+// box-constrained QP  min ½ λᵀ A λ - bᵀ λ  over lo <= λ <= hi, and its solution is unique.
+// Box-linearised friction: a row with normal[i] = k >= 0 has bounds ±mu_i max(λ_k, 0), which the
+// solvers settle by a short fixed-point loop over the normal impulses.
+#pragma once
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+#include <vector>
+
+namespace talus::solvers {
+
+struct BoundedMcp {
+  Eigen::SparseMatrix<double> A;  // n x n, symmetric, both triangles stored
+  Eigen::VectorXd b;
+  Eigen::VectorXd lo;             // -inf allowed
+  Eigen::VectorXd hi;             // +inf allowed
+  std::vector<int> normal;        // empty, or per row: index of the normal row scaling its bounds, or -1
+  Eigen::VectorXd mu;             // friction coefficient per row (used where normal[i] >= 0)
+  int size() const { return static_cast<int>(b.size()); }
+  bool has_friction() const;
+};
+
+// where a row sits in the active set
+enum class RowState : signed char { free = 0, lower = 1, upper = 2 };
+
+struct McpResult {
+  Eigen::VectorXd lambda;
+  std::vector<RowState> state;
+  int iterations = 0;       // active-set (or pivoting) iterations, all friction passes together
+  int factorisations = 0;   // numeric factorisations
+  int friction_passes = 0;  // fixed-point passes over the friction bounds (1 without friction)
+  bool converged = false;
+};
+
+// throws talus::Error when sizes disagree, a bound is NaN, lo > hi, or A is not square
+void check_mcp(const BoundedMcp& p);
+
+// set the bounds of friction rows from the normal impulses in lambda; returns the largest change
+double apply_friction_bounds(BoundedMcp& p, const Eigen::VectorXd& lambda);
+
+// 1 + the largest friction bound: the scale for the friction fixed-point tolerance
+double friction_bound_scale(const BoundedMcp& p);
+
+// natural-map residual |λ - clamp(λ - w, lo, hi)|∞ with w = Aλ - b: zero exactly at a solution
+// (friction rows use the bounds that the normal impulses in lambda give)
+double mcp_residual(const BoundedMcp& p, const Eigen::VectorXd& lambda);
+
+}  // namespace talus::solvers

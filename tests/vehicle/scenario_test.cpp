@@ -1,0 +1,52 @@
+// Feedforward scenario files and the piecewise-linear target speeds.
+#include "vehicle/scenario.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "host/error.hpp"
+
+namespace talus::vehicle {
+namespace {
+
+TEST(ScenarioTest, PiecewiseLinearInterpolatesAndHolds) {
+  const PiecewiseLinear f({{1.0, 0.0}, {2.0, 2.0}, {4.0, -2.0}});
+  EXPECT_DOUBLE_EQ(f(0.0), 0.0);
+  EXPECT_DOUBLE_EQ(f(1.5), 1.0);
+  EXPECT_DOUBLE_EQ(f(3.0), 0.0);
+  EXPECT_DOUBLE_EQ(f(9.0), -2.0);
+}
+
+TEST(ScenarioTest, ShippedFlatLiftLoads) {
+  const Scenario s = load_scenario("flat-lift");
+  EXPECT_EQ(s.name, "flat-lift");
+  EXPECT_FALSE(s.pile);
+  EXPECT_EQ(s.machine, "wa320");
+  EXPECT_GT(s.duration, 0.0);
+  EXPECT_GT(s.payload, 0.0);
+  EXPECT_GT(s.drive(2.0), 0.0);  // it drives
+  EXPECT_GT(s.lift(7.0), 0.0);   // and lifts
+}
+
+TEST(ScenarioTest, MalformedScenarioNamesFileAndField) {
+  const auto path = (std::filesystem::temp_directory_path() / "talus_bad_scenario.json").string();
+  std::ofstream(path) << R"({"name": "x", "machine": "wa320", "duration": 5, "timestep": 0.005,
+                           "drive": [[0, 0], [1, "fast"]], "lift": [[0, 0]], "tilt": [[0, 0]]})";
+  try {
+    load_scenario(path);
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find(path), std::string::npos) << m;
+    EXPECT_NE(m.find("drive[1]"), std::string::npos) << m;
+  }
+  std::ofstream(path) << R"({"name": "x", "machine": "wa320", "duration": 5, "timestep": 0.003,
+                           "drive": [[0, 0]], "lift": [[0, 0]], "tilt": [[0, 0]]})";
+  EXPECT_THROW(load_scenario(path), InputError);  // 3 ms does not divide the 10 ms sensor period
+  EXPECT_THROW(load_scenario("no-such-scenario"), InputError);
+}
+
+}  // namespace
+}  // namespace talus::vehicle

@@ -1,0 +1,197 @@
+// The wheel loader built from data/machines/wa320.json, held to the issue's physical anchors.
+#include "vehicle/wheel_loader.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <iostream>
+
+#include "vehicle/data_file.hpp"
+#include "vehicle/sensors.hpp"
+
+namespace talus::vehicle {
+namespace {
+
+constexpr double kG = 9.81;
+constexpr double kH = 0.005;  // s, the scenarios' timestep
+
+std::string machine() { return find_data_file("wa320", "machines"); }
+
+double normal_sum(const WheelLoader& w) {
+  double n = 0.0;
+  for (const auto* t : w.tyres()) n += t->normal_force();
+  return n;
+}
+
+TEST(WheelLoaderTest, ModelHasTheIssuesBodiesAndJoints) {
+  WheelLoader w(machine());
+  EXPECT_EQ(w.bodies().size(), 10u);
+  int hinges = 0, cylinders = 0;
+  for (auto* j : w.joints()) {
+    hinges += dynamic_cast<HingeJoint*>(j) != nullptr;
+    cylinders += dynamic_cast<CylinderJoint*>(j) != nullptr;
+  }
+  EXPECT_EQ(hinges, 10);
+  EXPECT_EQ(cylinders, 3);
+  EXPECT_NEAR(w.operating_mass(), 15175.0, 1e-9);  // paper: operating mass 15.175 t
+}
+
+// at rest on flat ground: tyre normal forces sum to m g within 0.5 %, creep below 1 mm in 10 s
+TEST(WheelLoaderTest, AtRestCarriesItsWeightWithoutCreep) {
+  WheelLoader w(machine());
+  const Vec3 start = w.bodies()[w.front_frame()].position;
+  // settle onto the tyres for 2 s, then measure over 10 s
+  for (int k = 0; k < 400; ++k) w.step(kH);
+  const Vec3 settled = w.bodies()[w.front_frame()].position;
+  double worst_force = 0.0, worst_joint = 0.0;
+  for (int k = 0; k < 2000; ++k) {
+    w.step(kH);
+    const double weight = w.operating_mass() * kG;
+    worst_force = std::max(worst_force, std::abs(normal_sum(w) - weight) / weight);
+    worst_joint = std::max(worst_joint, w.system().max_joint_position_violation());
+  }
+  const Vec3 end = w.bodies()[w.front_frame()].position;
+  const double creep = std::hypot(end.x() - settled.x(), end.y() - settled.y());
+  std::cout << "[ measured ] normal-force error " << worst_force * 100 << " %, creep " << creep * 1e3
+            << " mm, joint violation " << worst_joint * 1e3 << " mm, sink " << (start.z() - end.z()) * 1e3 << " mm\n";
+  EXPECT_LT(worst_force, 0.005);
+  EXPECT_LT(creep, 1e-3);
+  EXPECT_LT(worst_joint, 1e-3);
+}
+
+
+// driving at full command: tractive power never above 127 kW; top speed as the data file states
+TEST(DrivelineTest, PowerLimitAndTopSpeed) {
+  WheelLoader w(machine());
+  for (int k = 0; k < 200; ++k) w.step(kH);  // settle on the tyres
+  w.set_drive_speed(10.0);                    // more than the machine can: clipped to top speed
+  double peak_power = 0.0;
+  for (int k = 0; k < 1600; ++k) {
+    w.step(kH);
+    const auto s = read_sensors(w, w.system().time());
+    peak_power = std::max(peak_power, s.f_traction * s.v_drive);
+    // the engine's own power: torque times motor speed
+    const double engine = w.driveline().motor_torque() * w.driveline().motor_speed(w.bodies());
+    ASSERT_LE(engine, w.max_power() * (1 + 1e-9)) << "t = " << w.system().time();
+  }
+  const double v = w.driveline().drive_speed(w.bodies());
+  std::cout << "[ measured ] peak tractive power " << peak_power / 1e3 << " kW, speed after 8 s " << v << " m/s\n";
+  EXPECT_LE(peak_power, w.max_power() * (1 + 1e-6));
+  EXPECT_GT(peak_power, 0.9 * w.max_power());  // the limit was reached, so the test says something
+  EXPECT_NEAR(v, w.top_speed(), 0.01 * w.top_speed());
+}
+
+// against a fixed rig the engine stalls at its torque limit: traction = the data file's limit
+TEST(DrivelineTest, TractionLimitAgainstFixedRig) {
+  WheelLoader w(machine());
+  auto& sys = w.system();
+  for (int k = 0; k < 200; ++k) w.step(kH);
+  sys.add_constraint(std::make_unique<LockJoint>(sys.bodies(), kWorld, w.front_frame(),
+                                                 sys.body(w.front_frame()).position));
+  w.set_drive_speed(w.top_speed());
+  for (int k = 0; k < 200; ++k) w.step(kH);
+  const auto s = read_sensors(w, sys.time());
+  std::cout << "[ measured ] traction against the rig " << s.f_traction / 1e3 << " kN\n";
+  EXPECT_NEAR(s.f_traction, w.traction_limit(), 0.01 * w.traction_limit());
+}
+
+// a 3.5 t payload lifted from the ground to full height at full cylinder speed: the time matches
+// stroke / cylinder speed, and the lift force stays in its range
+TEST(WheelLoaderTest, LoadedLiftTimeMatchesCylinderSpeed) {
+  WheelLoader w(machine(), 3500.0);
+  for (int k = 0; k < 200; ++k) w.step(kH);
+  const double d0 = read_sensors(w, 0).d_lift;
+  const double stroke = w.lift_spec().length_max - w.lift_spec().length_min;
+  const double expected = (stroke - d0) / w.lift_spec().max_speed;
+  w.set_lift_speed(w.lift_spec().max_speed);
+  const double t0 = w.system().time();
+  double t_full = -1.0;
+  for (int k = 0; k < 3000 && t_full < 0; ++k) {
+    w.step(kH);
+    for (const auto* c : w.lift_cylinders()) {
+      ASSERT_LE(c->motor_force(), w.lift_spec().force_push * (1 + 1e-9));
+      ASSERT_GE(c->motor_force(), -w.lift_spec().force_pull * (1 + 1e-9));
+    }
+    if (read_sensors(w, 0).d_lift >= stroke - 1e-3) t_full = w.system().time() - t0;
+  }
+  const auto s = read_sensors(w, 0);
+  std::cout << "[ measured ] lift time " << t_full << " s (stroke/speed " << expected << " s), boom " << s.boom_deg
+            << " deg, bucket " << s.bucket_deg << " deg, tip z " << s.bucket_tip_z << " m, f_lift " << s.f_lift / 1e3
+            << " kN\n";
+  ASSERT_GT(t_full, 0.0);
+  EXPECT_NEAR(t_full, expected, 0.03 * expected + 0.05);
+  EXPECT_GT(s.bucket_tip_z, 3.5);  // full height: class data hinge-pin height about 3.9 m
+}
+
+// overload on a fixed rig: the lift cylinders stall at their force limit and do not extend
+TEST(MotorTest, OverloadedLiftStallsAtForceLimit) {
+  WheelLoader w(machine(), 60000.0);
+  auto& sys = w.system();
+  sys.add_constraint(std::make_unique<LockJoint>(sys.bodies(), kWorld, w.front_frame(),
+                                                 sys.body(w.front_frame()).position));
+  for (int k = 0; k < 100; ++k) w.step(kH);
+  const double d0 = read_sensors(w, 0).d_lift;
+  w.set_lift_speed(w.lift_spec().max_speed);
+  for (int k = 0; k < 400; ++k) w.step(kH);
+  const auto s = read_sensors(w, 0);
+  for (const auto* c : w.lift_cylinders()) {
+    EXPECT_NEAR(c->motor_force(), w.lift_spec().force_push, 1e-6 * w.lift_spec().force_push);
+  }
+  std::cout << "[ measured ] overload: lift motor force " << w.lift_cylinders()[0]->motor_force() / 1e3
+            << " kN per cylinder (limit " << w.lift_spec().force_push / 1e3 << " kN), extension change "
+            << (s.d_lift - d0) * 1e3 << " mm\n";
+  EXPECT_LE(s.d_lift, d0 + 1e-3);
+}
+
+// cylinders at full force against a fixed obstacle: every joint stays within 1 mm
+TEST(JointTest, ViolationBelow1mmWithCylindersAtFullForce) {
+  WheelLoader w(machine());
+  auto& sys = w.system();
+  for (int k = 0; k < 200; ++k) w.step(kH);
+  sys.add_constraint(std::make_unique<LockJoint>(sys.bodies(), kWorld, w.front_frame(),
+                                                 sys.body(w.front_frame()).position));
+  sys.add_constraint(std::make_unique<LockJoint>(sys.bodies(), kWorld, w.bucket_body(),
+                                                 sys.body(w.bucket_body()).position));
+  w.set_lift_speed(w.lift_spec().max_speed);
+  w.set_tilt_speed(w.tilt_spec().max_speed);
+  double worst = 0.0;
+  for (int k = 0; k < 400; ++k) {
+    w.step(kH);
+    worst = std::max(worst, sys.max_joint_position_violation());
+  }
+  sys.assemble(kH);  // violation at the final state
+  worst = std::max(worst, sys.max_joint_position_violation());
+  std::cout << "[ measured ] full-force joint violation " << worst * 1e3 << " mm, f_lift "
+            << w.lift_cylinders()[0]->motor_force() / 1e3 << " kN per cylinder, f_tilt "
+            << w.tilt_cylinder().motor_force() / 1e3 << " kN\n";
+  EXPECT_NEAR(w.lift_cylinders()[0]->motor_force(), w.lift_spec().force_push, 1e-6 * w.lift_spec().force_push);
+  EXPECT_NEAR(w.tilt_cylinder().motor_force(), w.tilt_spec().force_push, 1e-6 * w.tilt_spec().force_push);
+  EXPECT_LT(worst, 1e-3);
+}
+
+// the bucket's articulated mobility matches re-solving the step with a small impulse on the bucket
+TEST(WheelLoaderTest, BucketMobilityMatchesFiniteDifference) {
+  WheelLoader w(machine(), 1000.0);
+  for (int k = 0; k < 300; ++k) w.step(kH);
+  w.set_lift_speed(0.1);
+  auto& sys = w.system();
+  sys.assemble(kH);
+  sys.solve();
+  const Mat6 W = w.bucket_mobility();
+  const Vec6 v0 = sys.solved_twist(w.bucket_body());
+  const double p = 1.0;  // N s: small against the bucket's 2 t and the solver's force ranges
+  Mat6 fd;
+  for (int k = 0; k < 6; ++k) {
+    w.set_bucket_wrench(Vec6::Unit(k) * (p / kH));
+    sys.solve();
+    fd.col(k) = (sys.solved_twist(w.bucket_body()) - v0) / p;
+  }
+  const double err = (W - fd).cwiseAbs().maxCoeff() / W.cwiseAbs().maxCoeff();
+  std::cout << "[ measured ] bucket mobility vs finite difference: relative error " << err << "\n";
+  EXPECT_LT(err, 1e-6);
+  // the articulated bucket is far less mobile than a free one (1/m) along x
+  EXPECT_LT(W(0, 0), 1.0 / sys.body(w.bucket_body()).mass);
+}
+
+}  // namespace
+}  // namespace talus::vehicle

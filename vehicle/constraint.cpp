@@ -1,0 +1,78 @@
+#include "vehicle/constraint.hpp"
+
+namespace talus::vehicle {
+
+void Constraint::store_forces(const double* impulse, int count, double h) {
+  forces_.assign(count, 0.0);
+  for (int i = 0; i < count; ++i) forces_[i] = impulse[i] / h;
+}
+
+BodyFrame BodyFrame::from_world(const std::vector<RigidBody>& bodies, int body, const Vec3& world_anchor,
+                                const Mat3& world_axes) {
+  BodyFrame f;
+  f.body = body;
+  if (body == kWorld) {
+    f.anchor = world_anchor;
+    f.axes = world_axes;
+  } else {
+    const RigidBody& b = bodies.at(body);
+    f.anchor = b.point_to_local(world_anchor);
+    f.axes = b.rotation().transpose() * world_axes;
+  }
+  return f;
+}
+
+Vec3 BodyFrame::world_anchor(const std::vector<RigidBody>& bodies) const {
+  return body == kWorld ? anchor : bodies[body].point_to_world(anchor);
+}
+
+Mat3 BodyFrame::world_axes(const std::vector<RigidBody>& bodies) const {
+  return body == kWorld ? axes : Mat3(bodies[body].rotation() * axes);
+}
+
+Vec3 BodyFrame::lever(const std::vector<RigidBody>& bodies, const Vec3& world_point) const {
+  return body == kWorld ? Vec3::Zero() : Vec3(world_point - bodies[body].position);
+}
+
+Mat3 frame_from_axis(const Vec3& axis) {
+  const Vec3 z = axis.normalized();
+  // any vector not parallel to z gives x; prefer world x, then world y
+  const Vec3 seed = std::abs(z.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY();
+  const Vec3 y = z.cross(seed).normalized();
+  const Vec3 x = y.cross(z);
+  Mat3 m;
+  m << x, y, z;
+  return m;
+}
+
+ConstraintRow point_row(const std::vector<RigidBody>& bodies, const BodyFrame& a, const BodyFrame& b,
+                        const Vec3& point_a, const Vec3& point_b, const Vec3& n) {
+  ConstraintRow r;
+  // d/dt n·(p_b - p_a) with n held: n·(v_b + ω_b × r_b - v_a - ω_a × r_a)
+  if (a.body != kWorld) {
+    JacobianBlock ja;
+    ja.body = a.body;
+    ja.jacobian << -n, -a.lever(bodies, point_a).cross(n);
+    r.blocks.push_back(ja);
+  }
+  if (b.body != kWorld) {
+    JacobianBlock jb;
+    jb.body = b.body;
+    jb.jacobian << n, b.lever(bodies, point_b).cross(n);
+    r.blocks.push_back(jb);
+  }
+  return r;
+}
+
+ConstraintRow angular_row(const BodyFrame& a, const BodyFrame& b, const Vec3& n) {
+  ConstraintRow r;
+  if (a.body != kWorld) r.blocks.push_back({a.body, (Vec6() << Vec3::Zero(), -n).finished()});
+  if (b.body != kWorld) r.blocks.push_back({b.body, (Vec6() << Vec3::Zero(), n).finished()});
+  return r;
+}
+
+ConstraintRow dot_row(const BodyFrame& a, const BodyFrame& b, const Vec3& u, const Vec3& w) {
+  return angular_row(a, b, w.cross(u));
+}
+
+}  // namespace talus::vehicle

@@ -1,0 +1,227 @@
+#include "vehicle/multibody.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "host/error.hpp"
+#include "solvers/spook.hpp"
+
+namespace talus::vehicle {
+
+namespace {
+// passes over speed-dependent bounds (engine power limit) per solve; each pass is a warm re-solve
+constexpr int kMaxBoundPasses = 6;
+}  // namespace
+
+MultibodySystem::MultibodySystem() = default;
+
+int MultibodySystem::add_body(RigidBody body) {
+  if (!(body.mass > 0.0) && !body.fixed) throw Error("body '" + body.name + "': mass must be > 0");
+  bodies_.push_back(std::move(body));
+  external_.push_back(Vec6::Zero());
+  return static_cast<int>(bodies_.size()) - 1;
+}
+
+int MultibodySystem::body_index(const std::string& name) const {
+  for (int i = 0; i < static_cast<int>(bodies_.size()); ++i) {
+    if (bodies_[i].name == name) return i;
+  }
+  throw Error("multibody system: no body named '" + name + "'");
+}
+
+void MultibodySystem::set_external_wrench(int body, const Vec6& wrench) {
+  external_.at(body) = wrench;
+  solved_ = false;
+}
+
+void MultibodySystem::assemble(double h) {
+  if (!(h > 0.0)) throw Error("multibody step: timestep must be > 0");
+  h_ = h;
+  // velocity columns: six per moving body
+  column_.assign(bodies_.size(), -1);
+  columns_ = 0;
+  for (size_t i = 0; i < bodies_.size(); ++i) {
+    if (!bodies_[i].fixed) {
+      column_[i] = columns_;
+      columns_ += 6;
+    }
+  }
+  // rows of every constraint, in order
+  rows_.clear();
+  constraint_offset_.clear();
+  for (auto& c : constraints_) {
+    constraint_offset_.push_back(static_cast<int>(rows_.size()));
+    c->add_rows(bodies_, rows_);
+  }
+  const int m = static_cast<int>(rows_.size());
+  // Jacobian G, block-diagonal M⁻¹
+  std::vector<Eigen::Triplet<double>> t;
+  for (int r = 0; r < m; ++r) {
+    for (const auto& blk : rows_[r].blocks) {
+      const int c0 = column_.at(blk.body);
+      if (c0 < 0) continue;  // fixed bodies are part of the world
+      for (int k = 0; k < 6; ++k) {
+        if (blk.jacobian[k] != 0.0) t.emplace_back(r, c0 + k, blk.jacobian[k]);
+      }
+    }
+  }
+  G_.resize(m, columns_);
+  G_.setFromTriplets(t.begin(), t.end());
+  t.clear();
+  for (size_t i = 0; i < bodies_.size(); ++i) {
+    const int c0 = column_[i];
+    if (c0 < 0) continue;
+    for (int k = 0; k < 3; ++k) t.emplace_back(c0 + k, c0 + k, 1.0 / bodies_[i].mass);
+    const Mat3 iinv = bodies_[i].inverse_inertia_world();
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) t.emplace_back(c0 + 3 + r, c0 + 3 + c, iinv(r, c));
+    }
+  }
+  minv_.resize(columns_, columns_);
+  minv_.setFromTriplets(t.begin(), t.end());
+  // SPOOK: Σ per row and the constraint right-hand side
+  Eigen::VectorXd v(columns_);
+  for (size_t i = 0; i < bodies_.size(); ++i) {
+    if (column_[i] >= 0) v.segment<6>(column_[i]) = bodies_[i].twist();
+  }
+  const Eigen::VectorXd gv = G_ * v;
+  sigma_.resize(m);
+  rhs_.resize(m);
+  mcp_.lo.resize(m);
+  mcp_.hi.resize(m);
+  mcp_.normal.assign(m, -1);
+  mcp_.mu = Eigen::VectorXd::Zero(m);
+  for (size_t c = 0; c < constraints_.size(); ++c) {
+    const int end = c + 1 < constraints_.size() ? constraint_offset_[c + 1] : m;
+    for (int r = constraint_offset_[c]; r < end; ++r) {
+      const ConstraintRow& row = rows_[r];
+      if (row.kind == RowKind::holonomic) {
+        const auto k = spook::holonomic_row(h, row.compliance, row.damping_time);
+        sigma_[r] = k.sigma;
+        rhs_[r] = spook::holonomic_rhs(h, k, row.violation, gv[r]);
+      } else {
+        sigma_[r] = spook::velocity_row_sigma(h, row.compliance);
+        rhs_[r] = row.target_speed;
+      }
+      mcp_.lo[r] = h * row.force_min;
+      mcp_.hi[r] = h * row.force_max;
+      if (row.friction_normal >= 0) {
+        mcp_.normal[r] = constraint_offset_[c] + row.friction_normal;
+        mcp_.mu[r] = row.friction_coefficient;
+      }
+    }
+  }
+  // the Schur complement A = G M⁻¹ Gᵀ + Σ
+  Eigen::SparseMatrix<double> A = G_ * minv_ * Eigen::SparseMatrix<double>(G_.transpose());
+  for (int r = 0; r < m; ++r) A.coeffRef(r, r) += sigma_[r];
+  A.makeCompressed();
+  mcp_.A = std::move(A);
+  if (warm_lambda_.size() != m) {
+    warm_lambda_ = Eigen::VectorXd::Zero(m);
+    warm_state_.assign(m, solvers::RowState::free);
+  }
+  assembled_ = true;
+  solved_ = false;
+}
+
+void MultibodySystem::solve() {
+  if (!assembled_) throw Error("multibody system: solve() before assemble()");
+  const int m = static_cast<int>(rows_.size());
+  // free velocity v* = v + h M⁻¹ f (gravity and external wrenches)
+  Eigen::VectorXd v(columns_), f(columns_);
+  for (size_t i = 0; i < bodies_.size(); ++i) {
+    const int c0 = column_[i];
+    if (c0 < 0) continue;
+    v.segment<6>(c0) = bodies_[i].twist();
+    f.segment<6>(c0) = external_[i];
+    f.segment<3>(c0) += bodies_[i].mass * gravity_;
+  }
+  const Eigen::VectorXd vstar = v + h_ * (minv_ * f);
+  mcp_.b = rhs_ - G_ * vstar;
+  // solve, then let constraints with speed-dependent bounds correct them and solve again
+  bound_passes_ = 0;
+  for (int pass = 0; pass < kMaxBoundPasses; ++pass) {
+    result_ = solver_.solve(mcp_, &warm_lambda_, &warm_state_);
+    ++bound_passes_;
+    if (!result_.converged) {
+      throw Error("multibody step at t = " + std::to_string(time_) +
+                  " s: the direct solver did not converge (" + std::to_string(result_.iterations) + " iterations)");
+    }
+    warm_lambda_ = result_.lambda;
+    warm_state_ = result_.state;
+    velocity_after_ = vstar + minv_ * (G_.transpose() * result_.lambda);
+    const Eigen::VectorXd gv = G_ * velocity_after_;
+    bool changed = false;
+    for (size_t c = 0; c < constraints_.size(); ++c) {
+      const int r0 = constraint_offset_[c];
+      const int end = c + 1 < constraints_.size() ? constraint_offset_[c + 1] : m;
+      if (end == r0) continue;
+      if (constraints_[c]->update_bounds(gv.data() + r0, result_.lambda.data() + r0, rows_.data() + r0, end - r0)) {
+        changed = true;
+        for (int r = r0; r < end; ++r) {
+          mcp_.lo[r] = h_ * rows_[r].force_min;
+          mcp_.hi[r] = h_ * rows_[r].force_max;
+        }
+      }
+    }
+    if (!changed) break;
+  }
+  // forces of every constraint from its impulses
+  for (size_t c = 0; c < constraints_.size(); ++c) {
+    const int r0 = constraint_offset_[c];
+    const int end = c + 1 < constraints_.size() ? constraint_offset_[c + 1] : m;
+    constraints_[c]->store_forces(result_.lambda.data() + r0, end - r0, h_);
+  }
+  solved_ = true;
+}
+
+void MultibodySystem::integrate() {
+  if (!solved_) throw Error("multibody system: integrate() before solve()");
+  for (size_t i = 0; i < bodies_.size(); ++i) {
+    const int c0 = column_[i];
+    if (c0 < 0) continue;
+    bodies_[i].velocity = velocity_after_.segment<3>(c0);
+    bodies_[i].angular_velocity = velocity_after_.segment<3>(c0 + 3);
+    bodies_[i].integrate(h_);
+  }
+  for (auto& w : external_) w.setZero();
+  time_ += h_;
+  assembled_ = solved_ = false;
+}
+
+Vec6 MultibodySystem::solved_twist(int body) const {
+  if (!solved_) throw Error("multibody system: solved_twist() needs solve() first");
+  const int c0 = column_.at(body);
+  return c0 < 0 ? Vec6::Zero() : Vec6(velocity_after_.segment<6>(c0));
+}
+
+Mat6 MultibodySystem::mobility(int body) const {
+  if (!solved_) throw Error("multibody system: mobility() needs solve() first");
+  const int c0 = column_.at(body);
+  if (c0 < 0) return Mat6::Zero();
+  // Y = G_b M_b⁻¹ (rows x 6); W = M_b⁻¹ - Yᵀ A_FF⁻¹ Y with the final active set
+  const Eigen::MatrixXd mb = Eigen::MatrixXd(minv_.block(c0, c0, 6, 6));
+  const Eigen::MatrixXd gb = Eigen::MatrixXd(G_.middleCols(c0, 6));
+  const Eigen::MatrixXd Y = gb * mb;
+  const Eigen::MatrixXd X = solver_.solve_free(Y);
+  Mat6 W = mb - Y.transpose() * X;
+  return W;
+}
+
+double MultibodySystem::max_joint_position_violation() const {
+  double v = 0.0;
+  for (const auto& r : rows_) {
+    if (r.joint && r.unit == RowUnit::length) v = std::max(v, std::abs(r.violation));
+  }
+  return v;
+}
+
+double MultibodySystem::max_joint_angle_violation() const {
+  double v = 0.0;
+  for (const auto& r : rows_) {
+    if (r.joint && r.unit == RowUnit::angle) v = std::max(v, std::abs(r.violation));
+  }
+  return v;
+}
+
+}  // namespace talus::vehicle

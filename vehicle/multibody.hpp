@@ -1,0 +1,92 @@
+// The multibody system and its SPOOK stepper, solved directly (SPEC §2.1, §2.3).
+// One step, in stages so that a later particle coupling can sit between them:
+//   assemble(h)   rows of all constraints from the start-of-step state: G, Σ, right-hand sides
+//   solve()       the bounded MCP  (G M⁻¹ Gᵀ + Σ) λ = rhs - G v*,  v* = v + h M⁻¹ f,  with the
+//                 direct solver; v⁺ = v* + M⁻¹ Gᵀ λ (not yet committed); may be called again
+//                 after set_external_wrench to re-solve with a new wrench, warm started
+//   integrate()   commit v⁺, then positions q⁺ = q + h v⁺ (quaternions exactly)
+// Coupling hooks:
+//   set_external_wrench(body, wrench) adds a wrench [force at COM; torque] (world, N, N m) that
+//   acts over the current step only (cleared by integrate());
+//   mobility(body) is the 6x6 map from an impulse wrench on that body to the change of its twist
+//   [v; ω] with all joints, motors and contacts of the last solve active: the Schur complement
+//   M_b⁻¹ - M_b⁻¹ G_bᵀ A_FF⁻¹ G_b M_b⁻¹ from the direct solver's factor.
+#pragma once
+#include <memory>
+#include <vector>
+
+#include "solvers/direct_solver.hpp"
+#include "vehicle/constraint.hpp"
+#include "vehicle/rigid_body.hpp"
+
+namespace talus::vehicle {
+
+class MultibodySystem {
+ public:
+  MultibodySystem();
+  int add_body(RigidBody body);
+  template <class C>
+  C& add_constraint(std::unique_ptr<C> c) {
+    C& ref = *c;
+    constraints_.push_back(std::move(c));
+    return ref;
+  }
+  std::vector<RigidBody>& bodies() { return bodies_; }
+  const std::vector<RigidBody>& bodies() const { return bodies_; }
+  RigidBody& body(int i) { return bodies_.at(i); }
+  const RigidBody& body(int i) const { return bodies_.at(i); }
+  int body_index(const std::string& name) const;  // throws talus::Error if absent
+  void set_gravity(const Vec3& g) { gravity_ = g; }
+  const Vec3& gravity() const { return gravity_; }
+
+  // coupling hook (a): an extra wrench on a body for the current step
+  void set_external_wrench(int body, const Vec6& wrench);
+
+  void assemble(double h);
+  void solve();
+  void integrate();
+  void step(double h) {
+    assemble(h);
+    solve();
+    integrate();
+  }
+
+  // coupling hook (b): the body's effective mobility [m/s per N s, rad/s per N m s] after solve()
+  Mat6 mobility(int body) const;
+  // the twist [v; ω] the last solve gives the body (before integrate commits it)
+  Vec6 solved_twist(int body) const;
+
+  double timestep() const { return h_; }
+  double time() const { return time_; }
+  int row_count() const { return static_cast<int>(rows_.size()); }
+  const solvers::McpResult& last_result() const { return result_; }
+  int bound_passes() const { return bound_passes_; }
+  // largest violation of bilateral joint rows at the start of the last step: length [m], angle [rad]
+  double max_joint_position_violation() const;
+  double max_joint_angle_violation() const;
+
+ private:
+  std::vector<RigidBody> bodies_;
+  std::vector<std::unique_ptr<Constraint>> constraints_;
+  Vec3 gravity_ = Vec3(0.0, 0.0, -9.81);
+  std::vector<Vec6> external_;  // per body, this step
+  solvers::DirectSolver solver_;
+  double h_ = 0.0, time_ = 0.0;
+  // this step's assembly
+  std::vector<ConstraintRow> rows_;
+  std::vector<int> constraint_offset_;  // first row of each constraint
+  std::vector<int> column_;             // first velocity column of each body, -1 if fixed
+  int columns_ = 0;
+  Eigen::SparseMatrix<double> G_;
+  Eigen::SparseMatrix<double> minv_;
+  Eigen::VectorXd sigma_, rhs_;
+  solvers::BoundedMcp mcp_;
+  solvers::McpResult result_;
+  Eigen::VectorXd velocity_after_;  // v⁺ of the last solve
+  Eigen::VectorXd warm_lambda_;
+  std::vector<solvers::RowState> warm_state_;
+  int bound_passes_ = 0;
+  bool assembled_ = false, solved_ = false;
+};
+
+}  // namespace talus::vehicle

@@ -1,0 +1,79 @@
+#include "vehicle/scenario.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "host/error.hpp"
+#include "vehicle/data_file.hpp"
+
+namespace talus::vehicle {
+
+PiecewiseLinear::PiecewiseLinear(std::vector<std::pair<double, double>> points) : points_(std::move(points)) {}
+
+double PiecewiseLinear::operator()(double t) const {
+  if (points_.empty()) return 0.0;
+  if (t <= points_.front().first) return points_.front().second;
+  if (t >= points_.back().first) return points_.back().second;
+  const auto it = std::upper_bound(points_.begin(), points_.end(), t,
+                                   [](double x, const std::pair<double, double>& p) { return x < p.first; });
+  const auto& [t1, v1] = *it;
+  const auto& [t0, v0] = *(it - 1);
+  return t1 > t0 ? v0 + (v1 - v0) * (t - t0) / (t1 - t0) : v1;
+}
+
+namespace {
+
+PiecewiseLinear series(const DataFile& f, const std::string& key) {
+  const auto& j = f.member(f.root(), "", key);
+  if (!j.is_array() || j.empty()) f.fail(key, "is not a non-empty array", "give [[t, v], ...] with t in s and v in m/s");
+  std::vector<std::pair<double, double>> pts;
+  for (size_t i = 0; i < j.size(); ++i) {
+    const std::string where = key + "[" + std::to_string(i) + "]";
+    const auto& p = j[i];
+    if (!p.is_array() || p.size() != 2 || !p[0].is_number() || !p[1].is_number() ||
+        !std::isfinite(p[0].get<double>()) || !std::isfinite(p[1].get<double>())) {
+      f.fail(where, "is not a pair of finite numbers", "write [t, v]");
+    }
+    if (!pts.empty() && p[0].get<double>() < pts.back().first) {
+      f.fail(where, "goes back in time", "sort the points by time");
+    }
+    pts.emplace_back(p[0].get<double>(), p[1].get<double>());
+  }
+  return PiecewiseLinear(std::move(pts));
+}
+
+}  // namespace
+
+Scenario load_scenario(const std::string& name_or_path) {
+  const std::string path = find_data_file(name_or_path, "scenarios");
+  if (path.empty()) {
+    throw InputError("scenario '" + name_or_path + "': no such file, and no data/scenarios/" + name_or_path +
+                     ".json under " + TALUS_SOURCE_DIR + " or the current directory; give a path or a shipped name");
+  }
+  const DataFile f(path);
+  const auto& root = f.root();
+  Scenario s;
+  s.path = path;
+  s.name = f.text(root, "", "name");
+  s.description = root.contains("description") && root["description"].is_string() ? root["description"].get<std::string>() : "";
+  s.pile = root.contains("pile") && root["pile"].is_boolean() && root["pile"].get<bool>();
+  if (root.contains("pile") && !root["pile"].is_boolean()) f.fail("pile", "is not true or false", "write true or false");
+  if (s.pile) return s;  // the rest is for the particle pile's issue to define
+  s.machine = f.text(root, "", "machine");
+  s.duration = f.plain_number(root, "", "duration");
+  s.timestep = f.plain_number(root, "", "timestep");
+  s.payload = root.contains("payload") ? f.plain_number(root, "", "payload") : 0.0;
+  if (!(s.duration > 0)) f.fail("duration", "is not > 0", "give the simulated time in s");
+  if (!(s.timestep > 0) || s.timestep > 0.01) f.fail("timestep", "is not in (0, 0.01] s", "use e.g. 0.005 (sensors run at 100 Hz)");
+  const double per_sample = 0.01 / s.timestep;
+  if (std::abs(per_sample - std::round(per_sample)) > 1e-9) {
+    f.fail("timestep", "does not divide the 10 ms sensor period", "use 0.01, 0.005, 0.0025, 0.002 or 0.001");
+  }
+  if (!(s.payload >= 0)) f.fail("payload", "is negative", "give the payload in kg (0 for an empty bucket)");
+  s.drive = series(f, "drive");
+  s.lift = series(f, "lift");
+  s.tilt = series(f, "tilt");
+  return s;
+}
+
+}  // namespace talus::vehicle

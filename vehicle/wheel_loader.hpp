@@ -1,0 +1,89 @@
+// The wheel loader (SPEC §2.4, paper §4.2), built from one data file (data/machines/*.json):
+// 10 rigid bodies, 10 hinges, 3 cylinders (prismatic pairs pinned at both ends, with linear motors
+// and stroke limits), the driveline (engine hinge motor with a speed-dependent torque limit, open
+// differentials, rigid transfer case) and four tyre contacts on flat ground.
+// Controls are target speeds: drive [m/s], lift and tilt cylinders [m/s], clipped to the data file's
+// maxima. The bucket is exposed for a later particle coupling: bucket_body(), set_bucket_wrench()
+// and bucket_mobility() (the articulated 6x6 mobility from the direct solver's factor).
+#pragma once
+#include <array>
+#include <memory>
+#include <string>
+
+#include "vehicle/bucket_mesh.hpp"
+#include "vehicle/driveline.hpp"
+#include "vehicle/joints.hpp"
+#include "vehicle/multibody.hpp"
+#include "vehicle/tyre_contact.hpp"
+
+namespace talus::vehicle {
+
+struct CylinderSpec {
+  double force_push = 0.0;   // N, relief pressure x piston area
+  double force_pull = 0.0;   // N, relief pressure x annulus area
+  double max_speed = 0.0;    // m/s
+  double length_min = 0.0, length_max = 0.0;  // m
+};
+
+class WheelLoader {
+ public:
+  // build from a machine data file; payload_kg is a point mass at the bucket's struck-volume
+  // centroid (a loaded bucket without particles). InputError for a malformed file.
+  explicit WheelLoader(const std::string& machine_file, double payload_kg = 0.0);
+
+  MultibodySystem& system() { return system_; }
+  const MultibodySystem& system() const { return system_; }
+  const std::vector<RigidBody>& bodies() const { return system_.bodies(); }
+
+  // feedforward controls (target speeds; clipped to the machine's limits)
+  void set_drive_speed(double v);
+  void set_lift_speed(double v);
+  void set_tilt_speed(double v);
+  void step(double h) { system_.step(h); }
+
+  // coupling hooks
+  int bucket_body() const { return bucket_; }
+  void set_bucket_wrench(const Vec6& wrench) { system_.set_external_wrench(bucket_, wrench); }
+  Mat6 bucket_mobility() const { return system_.mobility(bucket_); }
+  // bucket mesh (profile frame) and the pose that places it: world = body pose * profile_to_body
+  const BucketMesh& bucket_mesh() const { return mesh_; }
+  Vec3 bucket_mesh_vertex_world(int i) const;
+  Vec3 bucket_tip_world() const;
+
+  // parts, for sensors and tests
+  const std::array<CylinderJoint*, 2>& lift_cylinders() const { return lift_; }
+  CylinderJoint& tilt_cylinder() const { return *tilt_; }
+  const Driveline& driveline() const { return *driveline_; }
+  const std::array<TyreContact*, 4>& tyres() const { return tyres_; }
+  const CylinderSpec& lift_spec() const { return lift_spec_; }
+  const CylinderSpec& tilt_spec() const { return tilt_spec_; }
+  HingeJoint& hinge(const std::string& name) const;
+  std::vector<Joint*> joints() const { return joints_; }
+  int front_frame() const { return front_frame_; }
+  int body(const std::string& name) const { return system_.body_index(name); }
+  double operating_mass() const;  // kg, all bodies (payload included)
+  double payload() const { return payload_; }
+  double top_speed() const { return top_speed_; }
+  double traction_limit() const { return traction_limit_; }
+  double max_power() const { return driveline_->parameters().max_power; }
+  double rated_bucket_volume() const { return rated_volume_; }
+  const std::string& name() const { return name_; }
+
+ private:
+  MultibodySystem system_;
+  std::string name_;
+  std::array<CylinderJoint*, 2> lift_{};
+  CylinderJoint* tilt_ = nullptr;
+  Driveline* driveline_ = nullptr;
+  std::array<TyreContact*, 4> tyres_{};
+  std::vector<Joint*> joints_;
+  std::vector<std::pair<std::string, HingeJoint*>> hinges_;
+  CylinderSpec lift_spec_, tilt_spec_;
+  BucketMesh mesh_;
+  Vec3 tip_local_ = Vec3::Zero();           // cutting-edge tip in bucket body coordinates
+  Eigen::Isometry3d profile_to_body_ = Eigen::Isometry3d::Identity();
+  int bucket_ = -1, front_frame_ = -1;
+  double payload_ = 0.0, top_speed_ = 0.0, traction_limit_ = 0.0, rated_volume_ = 0.0;
+};
+
+}  // namespace talus::vehicle
