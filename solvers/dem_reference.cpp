@@ -1,0 +1,736 @@
+#include "solvers/dem_reference.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <string>
+
+#include "host/error.hpp"
+
+namespace talus::reference {
+
+namespace {
+
+Vec3 xyz(const cl_float4& f) { return Vec3(f.s[0], f.s[1], f.s[2]); }
+
+// the margin below which a pair becomes a (possibly speculative) contact
+double contact_margin(double ra, double rb, const StepParams& p) {
+  return p.margin_rel * std::min(ra, rb);
+}
+
+// the contact index where the previous step stored the pair (a, b); -1 when it is new
+int find_previous(int a, int b, const ContactSet& previous) {
+  for (int k = previous.owner_offsets[a]; k < previous.owner_offsets[a + 1]; ++k)
+    if (previous.contacts[k].b == b) return k;
+  return -1;
+}
+
+// a fresh contact, carrying over last step's impulses when the pair persists
+Contact make_contact(int a, int b, const Vec3& normal, double gap, const Vec3& arm_a,
+                     const Vec3& arm_b, double reduced_radius, const StepParams& p,
+                     const ContactSet* previous) {
+  Contact c;
+  c.normal = normal;
+  c.gap = gap;
+  c.arm_a = arm_a;
+  c.arm_b = arm_b;
+  c.reduced_radius = reduced_radius;
+  c.stiffness = hertz_stiffness(reduced_radius, p);
+  c.a = a;
+  c.b = b;
+  if (previous != nullptr) {
+    int k = find_previous(a, b, *previous);
+    if (k >= 0) {
+      const Contact& old = previous->contacts[k];
+      c.impulse_n = old.impulse_n;
+      c.impulse_t = old.impulse_t;
+      c.impulse_r = old.impulse_r;
+    }
+  }
+  return c;
+}
+
+// a body's velocities, or zeros for static geometry
+struct BodyVelocity {
+  Vec3 v = Vec3::Zero();
+  Vec3 w = Vec3::Zero();
+  double inv_mass = 0.0;
+  double inv_inertia = 0.0;
+};
+
+BodyVelocity body_velocity(const Particles& bodies, int i) {
+  BodyVelocity out;
+  if (i < 0) return out;
+  out.v = bodies.velocity[i];
+  out.w = bodies.omega[i];
+  out.inv_mass = bodies.inv_mass[i];
+  out.inv_inertia = bodies.inv_inertia[i];
+  return out;
+}
+
+// scales `impulse` back onto the disc of radius `limit` (a zero vector stays zero)
+void clamp_to_disc(Vec3& impulse, double limit) {
+  double magnitude = impulse.norm();
+  if (magnitude > limit) impulse *= magnitude > 0.0 ? limit / magnitude : 0.0;
+}
+
+// the inverse masses and effective masses one contact is solved with (kernels/solver.cl
+// solve_contact): the bodies' own in PGS, split ones in jacobi
+struct SolveMasses {
+  double inv_ma, inv_ia, inv_mb, inv_ib;
+  double inv_dn, inv_dt, inv_dr;
+};
+
+// one contact's rows in sequence (normal, friction, rolling) against local copies of the two
+// bodies' velocities; updates the row's impulses and returns the impulse changes
+void solve_contact(Row& row, Vec3& va, Vec3& wa, Vec3& vb, Vec3& wb, const SolveMasses& m,
+                   Vec3* d_lin, Vec3* d_ang) {
+  const Vec3& n = row.normal;
+  double ln = row.impulse_n;
+
+  // normal: SPOOK row with compliance, lambda_n >= 0
+  double un = n.dot(vb - va);
+  double ln_new = std::max(0.0, ln + (row.rhs - un - row.sigma * ln) * m.inv_dn);
+  double dln = ln_new - ln;
+  va -= m.inv_ma * dln * n;
+  vb += m.inv_mb * dln * n;
+  ln = ln_new;
+
+  // friction: tangential relative velocity at the contact point, impulse on the disc mu lambda_n
+  Vec3 u = (vb + wb.cross(row.arm_b)) - (va + wa.cross(row.arm_a));
+  Vec3 ut = u - u.dot(n) * n;
+  Vec3 lt = row.impulse_t;
+  Vec3 lt_new = lt - ut * m.inv_dt;
+  clamp_to_disc(lt_new, row.friction * ln);
+  Vec3 dlt = lt_new - lt;
+  va -= m.inv_ma * dlt;
+  wa -= m.inv_ia * row.arm_a.cross(dlt);
+  vb += m.inv_mb * dlt;
+  wb += m.inv_ib * row.arm_b.cross(dlt);
+
+  // rolling (tangential, on the disc) and twisting (about n), both bounded by mu_r R* lambda_n
+  Vec3 wrel = wb - wa;
+  Vec3 lr = row.impulse_r;
+  double rmax = row.rolling_limit * ln;
+  Vec3 lr_t = lr - lr.dot(n) * n;
+  Vec3 lr_t_new = lr_t - (wrel - wrel.dot(n) * n) * m.inv_dr;
+  clamp_to_disc(lr_t_new, rmax);
+  double twist = std::clamp(lr.dot(n) - wrel.dot(n) * m.inv_dr, -rmax, rmax);
+  Vec3 lr_new = lr_t_new + twist * n;
+  Vec3 dlr = lr_new - lr;
+  wa -= m.inv_ia * dlr;
+  wb += m.inv_ib * dlr;
+
+  row.impulse_n = ln;
+  row.impulse_t = lt_new;
+  row.impulse_r = lr_new;
+  *d_lin = dln * n + dlt;
+  *d_ang = dlr;
+}
+
+}  // namespace
+
+// ---- conversions from the device layouts ----
+
+StepParams from_device(const TlStepParams& p) {
+  StepParams out;
+  out.gravity = xyz(p.gravity);
+  out.grid_origin = xyz(p.grid_origin);
+  out.cell_size = p.cell_size;
+  out.grid_nx = p.grid_nx;
+  out.grid_ny = p.grid_ny;
+  out.grid_nz = p.grid_nz;
+  out.dt = p.dt;
+  out.young = p.young;
+  out.poisson = p.poisson;
+  out.friction = p.friction;
+  out.rolling = p.rolling;
+  out.damping_tau = p.damping_tau;
+  out.margin_rel = p.margin_rel;
+  out.overlap_floor_rel = p.overlap_floor_rel;
+  out.particles = p.particles;
+  out.geoms = p.geoms;
+  return out;
+}
+
+StaticGeom from_device(const TlGeom& g) {
+  StaticGeom out;
+  out.type = g.type == TL_GEOM_PLANE ? StaticGeom::Type::Plane : StaticGeom::Type::Box;
+  out.centre = xyz(g.centre);
+  out.axes.col(0) = xyz(g.axis_x);
+  out.axes.col(1) = xyz(g.axis_y);
+  out.axes.col(2) = xyz(g.axis_z);
+  out.half = xyz(g.half_extent);
+  return out;
+}
+
+Contact from_device(const TlContact& c) {
+  Contact out;
+  out.normal = xyz(c.normal);
+  out.gap = c.normal.s[3];
+  out.arm_a = xyz(c.arm_a);
+  out.reduced_radius = c.arm_a.s[3];
+  out.arm_b = xyz(c.arm_b);
+  out.stiffness = c.arm_b.s[3];
+  out.impulse_t = xyz(c.impulse_t);
+  out.impulse_n = c.impulse_t.s[3];
+  out.impulse_r = xyz(c.impulse_r);
+  out.a = c.a;
+  out.b = c.b;
+  return out;
+}
+
+Row from_device(const TlRow& r) {
+  Row out;
+  out.normal = xyz(r.normal);
+  out.rhs = r.normal.s[3];
+  out.arm_a = xyz(r.arm_a);
+  out.inv_dn = r.arm_a.s[3];
+  out.arm_b = xyz(r.arm_b);
+  out.sigma = r.arm_b.s[3];
+  out.impulse_t = xyz(r.impulse_t);
+  out.impulse_n = r.impulse_t.s[3];
+  out.impulse_r = xyz(r.impulse_r);
+  out.inv_dt = r.impulse_r.s[3];
+  out.friction = r.coef.s[0];
+  out.rolling_limit = r.coef.s[1];
+  out.inv_dr = r.coef.s[2];
+  out.a = r.a;
+  out.b = r.b;
+  out.contact = r.contact;
+  return out;
+}
+
+Particles particles_from_device(const std::vector<cl_float4>& position,
+                                const std::vector<cl_float4>& velocity,
+                                const std::vector<cl_float4>& omega,
+                                const std::vector<cl_float4>& rotation) {
+  Particles out;
+  for (size_t i = 0; i < position.size(); ++i) {
+    out.position.push_back(xyz(position[i]));
+    out.radius.push_back(position[i].s[3]);
+    out.velocity.push_back(xyz(velocity[i]));
+    out.inv_mass.push_back(velocity[i].s[3]);
+    out.omega.push_back(xyz(omega[i]));
+    out.inv_inertia.push_back(omega[i].s[3]);
+    const cl_float4& q = rotation[i];
+    out.rotation.emplace_back(q.s[0], q.s[1], q.s[2], q.s[3]);
+  }
+  return out;
+}
+
+// ---- scan and broad phase ----
+
+std::vector<int> exclusive_scan(const std::vector<int>& values) {
+  std::vector<int> out(values.size() + 1);
+  int sum = 0;
+  for (size_t i = 0; i < values.size(); ++i) {
+    out[i] = sum;
+    sum += values[i];
+  }
+  out[values.size()] = sum;
+  return out;
+}
+
+int cell_of(const Vec3& x, const StepParams& p) {
+  // floor of the position in cell units, clamped into the grid
+  Vec3 rel = (x - p.grid_origin) / p.cell_size;
+  int cx = std::clamp(static_cast<int>(std::floor(rel.x())), 0, p.grid_nx - 1);
+  int cy = std::clamp(static_cast<int>(std::floor(rel.y())), 0, p.grid_ny - 1);
+  int cz = std::clamp(static_cast<int>(std::floor(rel.z())), 0, p.grid_nz - 1);
+  return (cz * p.grid_ny + cy) * p.grid_nx + cx;
+}
+
+CellLists cell_lists(const Particles& particles, const StepParams& p) {
+  CellLists out;
+  int n = static_cast<int>(particles.size());
+  // count particles per cell, then starts by prefix sum
+  std::vector<int> counts(p.cells(), 0);
+  for (int i = 0; i < n; ++i) {
+    int cell = cell_of(particles.position[i], p);
+    out.particle_cell.push_back(cell);
+    counts[cell]++;
+  }
+  out.cell_start = exclusive_scan(counts);
+  // place particles in index order (what the kernel's sort restores)
+  std::vector<int> next(out.cell_start.begin(), out.cell_start.end() - 1);
+  out.cell_particles.assign(n, 0);
+  for (int i = 0; i < n; ++i) out.cell_particles[next[out.particle_cell[i]]++] = i;
+  return out;
+}
+
+// ---- narrow phase ----
+
+double hertz_stiffness(double reduced_radius, const StepParams& p) {
+  double e_star = p.young / (2.0 * (1.0 - p.poisson * p.poisson));
+  return (4.0 / 3.0) * e_star * std::sqrt(reduced_radius);
+}
+
+double sphere_geom(const Vec3& x, double r, const StaticGeom& g, Vec3* normal) {
+  const Vec3& c = g.centre;
+  Vec3 ax = g.axes.col(0), ay = g.axes.col(1), az = g.axes.col(2);
+  if (g.type == StaticGeom::Type::Plane) {
+    *normal = -ax;
+    return (x - c).dot(ax) - r;
+  }
+  // box: closest point in the box frame
+  Vec3 d = x - c;
+  Vec3 p_box(d.dot(ax), d.dot(ay), d.dot(az));
+  const Vec3& h = g.half;
+  Vec3 q = p_box.cwiseMax(-h).cwiseMin(h);
+  Vec3 diff = p_box - q;
+  double dist2 = diff.dot(diff);
+  if (dist2 > 0.0) {
+    double dist = std::sqrt(dist2);
+    Vec3 nl = -diff / dist;
+    *normal = nl.x() * ax + nl.y() * ay + nl.z() * az;
+    return dist - r;
+  }
+  // centre inside: leave through the nearest face (ties to the lower axis, as the kernel)
+  Vec3 depth = h - p_box.cwiseAbs();
+  int k = depth.x() <= depth.y() ? (depth.x() <= depth.z() ? 0 : 2)
+                                 : (depth.y() <= depth.z() ? 1 : 2);
+  double s = p_box[k] >= 0.0 ? 1.0 : -1.0;
+  *normal = -s * g.axes.col(k);
+  return -depth[k] - r;
+}
+
+unsigned contact_priority(unsigned c) {
+  uint32_t x = c;
+  x ^= x >> 16;
+  x *= 0x7feb352du;
+  x ^= x >> 15;
+  x *= 0x846ca68bu;
+  x ^= x >> 16;
+  return x;
+}
+
+ContactSet find_contacts(const Particles& particles, const std::vector<StaticGeom>& geoms,
+                         const CellLists& cells, const StepParams& p, const ContactSet* previous) {
+  ContactSet out;
+  int n = static_cast<int>(particles.size());
+  out.owner_offsets.push_back(0);
+  for (int i = 0; i < n; ++i) {
+    const Vec3& xi = particles.position[i];
+    double ri = particles.radius[i];
+    int home = cell_of(xi, p);
+    int hx = home % p.grid_nx;
+    int hy = (home / p.grid_nx) % p.grid_ny;
+    int hz = home / (p.grid_nx * p.grid_ny);
+    // particle pairs (i, j > i) in the 27 surrounding cells, z then y then x, index order
+    for (int z = hz - 1; z <= hz + 1; ++z) {
+      if (z < 0 || z >= p.grid_nz) continue;
+      for (int y = hy - 1; y <= hy + 1; ++y) {
+        if (y < 0 || y >= p.grid_ny) continue;
+        for (int x = hx - 1; x <= hx + 1; ++x) {
+          if (x < 0 || x >= p.grid_nx) continue;
+          int cell = (z * p.grid_ny + y) * p.grid_nx + x;
+          for (int k = cells.cell_start[cell]; k < cells.cell_start[cell + 1]; ++k) {
+            int j = cells.cell_particles[k];
+            if (j <= i) continue;
+            double rj = particles.radius[j];
+            Vec3 d = particles.position[j] - xi;
+            double dist = d.norm();
+            double gap = dist - ri - rj;
+            if (gap >= contact_margin(ri, rj, p)) continue;
+            Vec3 normal = dist > 0.0 ? Vec3(d / dist) : Vec3(0.0, 0.0, 1.0);
+            double reduced = ri * rj / (ri + rj);
+            out.contacts.push_back(make_contact(i, j, normal, gap, normal * (ri + 0.5 * gap),
+                                                -normal * (rj + 0.5 * gap), reduced, p, previous));
+          }
+        }
+      }
+    }
+    // static geometry (walls, ground) in index order; a wall's radius is infinite, R* = r
+    for (int g = 0; g < p.geoms; ++g) {
+      Vec3 normal;
+      double gap = sphere_geom(xi, ri, geoms[g], &normal);
+      if (gap >= contact_margin(ri, ri, p)) continue;
+      out.contacts.push_back(make_contact(i, TL_STATIC_BODY(g), normal, gap,
+                                          normal * (ri + 0.5 * gap), Vec3::Zero(), ri, p,
+                                          previous));
+    }
+    out.owner_offsets.push_back(static_cast<int>(out.contacts.size()));
+  }
+  return out;
+}
+
+Adjacency adjacency(const std::vector<Contact>& contacts, int particles) {
+  Adjacency out;
+  // degrees (both sides of a particle pair), offsets, then lists filled in contact order
+  std::vector<int> degree(particles, 0);
+  for (const Contact& c : contacts) {
+    degree[c.a]++;
+    if (c.b >= 0) degree[c.b]++;
+  }
+  out.offsets = exclusive_scan(degree);
+  out.contacts.assign(out.offsets.back(), 0);
+  std::vector<int> next(out.offsets.begin(), out.offsets.end() - 1);
+  for (int c = 0; c < static_cast<int>(contacts.size()); ++c) {
+    out.contacts[next[contacts[c].a]++] = c;
+    if (contacts[c].b >= 0) out.contacts[next[contacts[c].b]++] = c;
+  }
+  return out;
+}
+
+// ---- colouring ----
+
+std::vector<int> colour_contacts(const std::vector<Contact>& contacts, const Adjacency& adjacency,
+                                 int* rounds) {
+  int n = static_cast<int>(contacts.size());
+  std::vector<int> colour(n, -1);
+  int round = 0;
+  for (int remaining = n; remaining > 0; ++round) {
+    // every round reads the colours as they were when it began
+    std::vector<int> before = colour;
+    int uncoloured = 0;
+    for (int c = 0; c < n; ++c) {
+      if (before[c] >= 0) continue;
+      unsigned priority = contact_priority(static_cast<unsigned>(c));
+      uint64_t used = 0;
+      bool outranked = false;
+      // neighbours through both dynamic bodies: an uncoloured one of higher priority goes
+      // first; coloured ones take their colour off the table
+      for (int body : {contacts[c].a, contacts[c].b}) {
+        if (body < 0 || outranked) continue;
+        for (int k = adjacency.offsets[body]; k < adjacency.offsets[body + 1]; ++k) {
+          int d = adjacency.contacts[k];
+          if (d == c) continue;
+          if (before[d] < 0) {
+            if (contact_priority(static_cast<unsigned>(d)) > priority) {
+              outranked = true;
+              break;
+            }
+          } else {
+            used |= uint64_t(1) << before[d];
+          }
+        }
+      }
+      if (outranked) {
+        ++uncoloured;
+        continue;
+      }
+      // smallest free colour
+      int k = 0;
+      while (k < TL_MAX_COLOURS && ((used >> k) & 1u)) ++k;
+      if (k == TL_MAX_COLOURS)
+        throw Error("reference colouring: contact " + std::to_string(c) + " needs more than " +
+                    std::to_string(TL_MAX_COLOURS) + " colours");
+      colour[c] = k;
+    }
+    if (uncoloured >= remaining)
+      throw Error("reference colouring made no progress in round " + std::to_string(round));
+    remaining = uncoloured;
+  }
+  if (rounds != nullptr) *rounds = round;
+  return colour;
+}
+
+Partition partition_by_colour(const std::vector<int>& colours) {
+  Partition out;
+  int n = static_cast<int>(colours.size());
+  // count each colour, starts by prefix sum, then place contacts in index order
+  std::vector<int> counts(TL_MAX_COLOURS, 0);
+  for (int k : colours) counts[k]++;
+  out.colour_start = exclusive_scan(counts);
+  std::vector<int> next(out.colour_start.begin(), out.colour_start.end() - 1);
+  out.order.assign(n, 0);
+  out.row_of_contact.assign(n, 0);
+  for (int c = 0; c < n; ++c) {
+    int row = next[colours[c]]++;
+    out.order[row] = c;
+    out.row_of_contact[c] = row;
+  }
+  // trimmed to the colours in use (the last entry stays the total)
+  while (out.colour_start.size() > 2 && out.colour_start[out.colour_start.size() - 2] == n)
+    out.colour_start.pop_back();
+  return out;
+}
+
+Partition identity_partition(int n_contacts) {
+  Partition out;
+  for (int c = 0; c < n_contacts; ++c) {
+    out.order.push_back(c);
+    out.row_of_contact.push_back(c);
+  }
+  out.colour_start = {0, n_contacts};
+  return out;
+}
+
+// ---- rows ----
+
+std::vector<Row> prepare_rows(const std::vector<Contact>& contacts, const std::vector<int>& order,
+                              const Particles& bodies, const StepParams& p, bool warm_start) {
+  std::vector<Row> rows;
+  rows.reserve(order.size());
+  double h = p.dt;
+  for (int c : order) {
+    const Contact& con = contacts[c];
+    const Vec3& n = con.normal;
+    BodyVelocity a = body_velocity(bodies, con.a);
+    BodyVelocity b = body_velocity(bodies, con.b);
+
+    // normal velocity before the step, and the overlap predicted at its end
+    double un = n.dot(b.v - a.v);
+    double overlap = std::max(std::max(-con.gap, -con.gap - h * un),
+                              p.overlap_floor_rel * con.reduced_radius);
+    // secant hertz compliance epsilon = 1 / (k_n sqrt(overlap)), SPOOK coefficients
+    double compliance = 1.0 / (con.stiffness * std::sqrt(overlap));
+    double upsilon = 1.0 / (1.0 + 4.0 * p.damping_tau / h);
+    double sigma = 4.0 * compliance * upsilon / (h * h);
+    double rhs = -(4.0 / h) * upsilon * con.gap + upsilon * un;
+
+    // effective masses: lever arms are parallel to n, so normal rows see no rotation
+    double inv_m = a.inv_mass + b.inv_mass;
+    double d_t = inv_m + a.inv_inertia * con.arm_a.squaredNorm() +
+                 b.inv_inertia * con.arm_b.squaredNorm();
+    double d_r = a.inv_inertia + b.inv_inertia;
+
+    // warm start: last step's impulses carried into the new frame, within the new cones
+    double ln = 0.0;
+    Vec3 lt = Vec3::Zero();
+    Vec3 lr = Vec3::Zero();
+    if (warm_start) {
+      ln = con.impulse_n;
+      const Vec3& old_t = con.impulse_t;
+      Vec3 projected = old_t - old_t.dot(n) * n;
+      double pm = projected.norm();
+      lt = pm > 0.0 ? Vec3(projected * (std::min(old_t.norm(), p.friction * ln) / pm))
+                    : Vec3::Zero();
+      lr = con.impulse_r;
+      double rmax = p.rolling * con.reduced_radius * ln;
+      double lm = lr.norm();
+      if (lm > rmax) lr *= rmax / lm;
+    }
+
+    Row row;
+    row.normal = n;
+    row.rhs = rhs;
+    row.arm_a = con.arm_a;
+    row.inv_dn = 1.0 / (inv_m + sigma);
+    row.arm_b = con.arm_b;
+    row.sigma = sigma;
+    row.impulse_n = ln;
+    row.impulse_t = lt;
+    row.impulse_r = lr;
+    row.inv_dt = d_t > 0.0 ? 1.0 / d_t : 0.0;
+    row.friction = p.friction;
+    row.rolling_limit = p.rolling * con.reduced_radius;
+    row.inv_dr = d_r > 0.0 ? 1.0 / d_r : 0.0;
+    row.a = con.a;
+    row.b = con.b;
+    row.contact = c;
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+// ---- velocities ----
+
+void apply_gravity(Particles& bodies, const StepParams& p) {
+  for (size_t i = 0; i < bodies.size(); ++i)
+    if (bodies.inv_mass[i] > 0.0) bodies.velocity[i] += p.dt * p.gravity;
+}
+
+void apply_row_impulses(const std::vector<Row>& rows, const Adjacency& adjacency,
+                        const std::vector<int>& row_of_contact, Particles& bodies) {
+  for (int i = 0; i < static_cast<int>(bodies.size()); ++i) {
+    // sum the impulses of body i's rows in contact order: -P on a, +P on b
+    Vec3 dv = Vec3::Zero();
+    Vec3 dw = Vec3::Zero();
+    for (int k = adjacency.offsets[i]; k < adjacency.offsets[i + 1]; ++k) {
+      const Row& row = rows[row_of_contact[adjacency.contacts[k]]];
+      bool is_a = row.a == i;
+      double s = is_a ? -1.0 : 1.0;
+      const Vec3& arm = is_a ? row.arm_a : row.arm_b;
+      Vec3 impulse = row.impulse_n * row.normal + row.impulse_t;
+      dv += s * impulse;
+      dw += s * (arm.cross(impulse) + row.impulse_r);
+    }
+    bodies.velocity[i] += bodies.inv_mass[i] * dv;
+    bodies.omega[i] += bodies.inv_inertia[i] * dw;
+  }
+}
+
+void pgs_colour(std::vector<Row>& rows, int begin, int end, Particles& bodies) {
+  // rows of one colour share no dynamic body, so solving them in turn equals the parallel kernel
+  for (int k = begin; k < end; ++k) {
+    Row& row = rows[k];
+    BodyVelocity a = body_velocity(bodies, row.a);
+    BodyVelocity b = body_velocity(bodies, row.b);
+    SolveMasses m{a.inv_mass, a.inv_inertia, b.inv_mass, b.inv_inertia,
+                  row.inv_dn,  row.inv_dt,    row.inv_dr};
+    Vec3 d_lin, d_ang;
+    solve_contact(row, a.v, a.w, b.v, b.w, m, &d_lin, &d_ang);
+    bodies.velocity[row.a] = a.v;
+    bodies.omega[row.a] = a.w;
+    if (row.b >= 0) {
+      bodies.velocity[row.b] = b.v;
+      bodies.omega[row.b] = b.w;
+    }
+  }
+}
+
+void pgs_sweep(std::vector<Row>& rows, const std::vector<int>& colour_start, Particles& bodies) {
+  for (size_t k = 0; k + 1 < colour_start.size(); ++k)
+    pgs_colour(rows, colour_start[k], colour_start[k + 1], bodies);
+}
+
+void jacobi_iteration(std::vector<Row>& rows, const Adjacency& adjacency,
+                      const std::vector<int>& row_of_contact, Particles& bodies) {
+  int n_rows = static_cast<int>(rows.size());
+  std::vector<Vec3> delta_lin(n_rows), delta_ang(n_rows);
+  // every row against the same velocities, each body's mass split among its contacts
+  for (int k = 0; k < n_rows; ++k) {
+    Row& row = rows[k];
+    BodyVelocity a = body_velocity(bodies, row.a);
+    BodyVelocity b = body_velocity(bodies, row.b);
+    double na = adjacency.degree(row.a);
+    double nb = row.b >= 0 ? adjacency.degree(row.b) : 0.0;
+    double ima = na * a.inv_mass, iia = na * a.inv_inertia;
+    double imb = nb * b.inv_mass, iib = nb * b.inv_inertia;
+    double d_t = ima + iia * row.arm_a.squaredNorm() + imb + iib * row.arm_b.squaredNorm();
+    double d_r = iia + iib;
+    SolveMasses m{ima, iia, imb, iib, 1.0 / (ima + imb + row.sigma), d_t > 0.0 ? 1.0 / d_t : 0.0,
+                  d_r > 0.0 ? 1.0 / d_r : 0.0};
+    solve_contact(row, a.v, a.w, b.v, b.w, m, &delta_lin[k], &delta_ang[k]);
+  }
+  // each body gathers its rows' impulse changes in contact order
+  for (int i = 0; i < static_cast<int>(bodies.size()); ++i) {
+    Vec3 dv = Vec3::Zero();
+    Vec3 dw = Vec3::Zero();
+    for (int k = adjacency.offsets[i]; k < adjacency.offsets[i + 1]; ++k) {
+      int r = row_of_contact[adjacency.contacts[k]];
+      bool is_a = rows[r].a == i;
+      double s = is_a ? -1.0 : 1.0;
+      const Vec3& arm = is_a ? rows[r].arm_a : rows[r].arm_b;
+      dv += s * delta_lin[r];
+      dw += s * (arm.cross(delta_lin[r]) + delta_ang[r]);
+    }
+    bodies.velocity[i] += bodies.inv_mass[i] * dv;
+    bodies.omega[i] += bodies.inv_inertia[i] * dw;
+  }
+}
+
+std::vector<double> row_residuals(const std::vector<Row>& rows, const Particles& bodies) {
+  std::vector<double> out;
+  out.reserve(rows.size());
+  for (const Row& row : rows) {
+    BodyVelocity a = body_velocity(bodies, row.a);
+    BodyVelocity b = body_velocity(bodies, row.b);
+    const Vec3& n = row.normal;
+    double ln = row.impulse_n;
+    // normal: one projection step, times the effective mass
+    double dn = 1.0 / row.inv_dn;
+    double un = n.dot(b.v - a.v);
+    double rn = (std::max(0.0, ln + (row.rhs - un - row.sigma * ln) / dn) - ln) * dn;
+    // friction: the same for the tangential impulse (rows with an effective mass only)
+    Vec3 u = (b.v + b.w.cross(row.arm_b)) - (a.v + a.w.cross(row.arm_a));
+    Vec3 ut = u - u.dot(n) * n;
+    double rt = 0.0;
+    if (row.inv_dt > 0.0) {
+      double dt = 1.0 / row.inv_dt;
+      Vec3 lt_new = row.impulse_t - ut / dt;
+      clamp_to_disc(lt_new, row.friction * ln);
+      rt = (lt_new - row.impulse_t).norm() * dt;
+    }
+    out.push_back(rn * rn + rt * rt);
+  }
+  return out;
+}
+
+double residual(const std::vector<Row>& rows, const Particles& bodies) {
+  if (rows.empty()) return 0.0;
+  double sum = 0.0;
+  for (double r : row_residuals(rows, bodies)) sum += r;
+  return std::sqrt(sum / static_cast<double>(rows.size()));
+}
+
+void store_impulses(const std::vector<Row>& rows, std::vector<Contact>& contacts) {
+  for (const Row& row : rows) {
+    Contact& c = contacts[row.contact];
+    c.impulse_n = row.impulse_n;
+    c.impulse_t = row.impulse_t;
+    c.impulse_r = row.impulse_r;
+  }
+}
+
+// ---- positions ----
+
+void integrate(Particles& bodies, const StepParams& p) {
+  for (size_t i = 0; i < bodies.size(); ++i) {
+    if (bodies.inv_mass[i] <= 0.0) continue;  // fixed particles neither move nor turn
+    bodies.position[i] += p.dt * bodies.velocity[i];
+    // q += h/2 (omega, 0) q with q stored (x, y, z, w), then renormalised
+    const Vec3& w = bodies.omega[i];
+    Eigen::Vector4d& q = bodies.rotation[i];
+    Eigen::Vector4d dq(w.x() * q.w() + w.y() * q.z() - w.z() * q.y(),
+                       -w.x() * q.z() + w.y() * q.w() + w.z() * q.x(),
+                       w.x() * q.y() - w.y() * q.x() + w.z() * q.w(),
+                       -w.x() * q.x() - w.y() * q.y() - w.z() * q.z());
+    q += 0.5 * p.dt * dq;
+    q /= q.norm();
+  }
+}
+
+// ---- one time step ----
+
+namespace {
+// the residual check interval when a tolerance is set (DemWorld::sweep)
+constexpr int kToleranceCheckEvery = 10;
+
+void sweeps(ReferenceWorld& world, int count) {
+  for (int it = 0; it < count; ++it) {
+    if (world.settings.sweep == SweepKind::Pgs)
+      pgs_sweep(world.rows, world.partition.colour_start, world.particles);
+    else
+      jacobi_iteration(world.rows, world.adjacency, world.partition.row_of_contact,
+                       world.particles);
+  }
+}
+}  // namespace
+
+void step(ReferenceWorld& world) {
+  const StepParams& p = world.params;
+  const DemSettings& s = world.settings;
+  if (world.particles.size() == 0) return;
+  // contacts, colours and rows of this step
+  world.cells = cell_lists(world.particles, p);
+  world.current = find_contacts(world.particles, world.geoms, world.cells, p,
+                                world.has_previous ? &world.previous : nullptr);
+  const std::vector<Contact>& contacts = world.current.contacts;
+  world.adjacency = adjacency(contacts, static_cast<int>(world.particles.size()));
+  world.colour_rounds = 0;
+  if (s.sweep == SweepKind::Pgs)
+    world.partition = partition_by_colour(colour_contacts(contacts, world.adjacency,
+                                                          &world.colour_rounds));
+  else
+    world.partition = identity_partition(static_cast<int>(contacts.size()));
+  world.rows = prepare_rows(contacts, world.partition.order, world.particles, p, s.warm_start);
+  // velocities: external forces, warm start, then the sweeps (in chunks with a tolerance)
+  apply_gravity(world.particles, p);
+  if (s.warm_start)
+    apply_row_impulses(world.rows, world.adjacency, world.partition.row_of_contact,
+                       world.particles);
+  world.iterations = 0;
+  if (!contacts.empty()) {
+    if (s.tolerance <= 0.0) {
+      sweeps(world, s.iterations);
+      world.iterations = s.iterations;
+    } else {
+      while (world.iterations < s.iterations) {
+        int chunk = std::min(kToleranceCheckEvery, s.iterations - world.iterations);
+        sweeps(world, chunk);
+        world.iterations += chunk;
+        if (residual(world.rows, world.particles) < s.tolerance) break;
+      }
+    }
+  }
+  // keep the impulses for the next warm start, move the particles
+  store_impulses(world.rows, world.current.contacts);
+  integrate(world.particles, p);
+  world.previous = world.current;
+  world.has_previous = true;
+}
+
+}  // namespace talus::reference
