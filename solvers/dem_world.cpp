@@ -74,13 +74,18 @@ DemWorld::DemWorld(Device& dev, const Material& material, const DemSettings& set
   set_geoms(geoms_);
 }
 
-void DemWorld::set_geoms(std::vector<StaticGeom> geoms) {
+void DemWorld::set_material(const Material& material) {
+  material_ = material;
+  update_params();
+}
+
+void DemWorld::set_geoms(std::vector<StaticGeom> geoms, bool same_layout) {
   geoms_ = std::move(geoms);
   std::vector<TlGeom> g;
   for (auto& s : geoms_) g.push_back(to_device(s));
   if (g.empty()) g.push_back(TlGeom{});  // keep the buffer non-empty; params.geoms stays 0
   buffers_.geoms.upload(g);
-  buffers_.has_previous = false;  // static contacts are matched by geometry index
+  if (!same_layout) buffers_.has_previous = false;  // static contacts match by geometry index
   update_params();
 }
 

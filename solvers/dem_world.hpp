@@ -34,8 +34,13 @@ class DemWorld {
 
   // replaces the particles (contacts start fresh: no warm start on the next step)
   void set_particles(const Particles& particles);
-  // replaces the static geometry (e.g. walls removed); contacts start fresh
-  void set_geoms(std::vector<StaticGeom> geoms);
+  // replaces the static geometry (e.g. walls removed or moved). Contacts with static geometry
+  // are matched by its index, so warm starting goes on only when `same_layout` says the
+  // geometries kept their order (moved, not added or removed)
+  void set_geoms(std::vector<StaticGeom> geoms, bool same_layout = false);
+  // replaces the contact material (e.g. friction switched on after a dense fill)
+  void set_material(const Material& material);
+  const Material& material() const { return material_; }
   // the particles as they are on the device now
   Particles particles() const;
   size_t size() const { return particle_count_; }

@@ -111,7 +111,12 @@ HeapResult run_heap_test(Device& dev, const Material& material, const HeapOption
   DemSettings settings;
   settings.dt = o.dt;
   settings.iterations = o.iterations;
-  DemWorld world(dev, material, settings, bounds, walled);
+  Material fill_material = material;
+  if (o.dense_fill) {
+    fill_material.friction = 0.0;
+    fill_material.rolling = 0.0;
+  }
+  DemWorld world(dev, fill_material, settings, bounds, walled);
   world.set_particles(particles);
 
   // fill: settle inside the walls, then measure the bulk density away from walls and surfaces
@@ -127,7 +132,22 @@ HeapResult run_heap_test(Device& dev, const Material& material, const HeapOption
   Bounds core{Vec3(-half + margin, -half + margin, d + margin), Vec3(half - margin, half - margin, top - margin)};
   result.bulk_density = bulk_density(settled, core, material.density);
 
-  // lift: remove the walls and let the column run out into a heap
+  // the gravel's own friction on; the walls retreat slowly, then go
+  world.set_material(material);
+  if (o.wall_speed > 0.0) {
+    int steps = static_cast<int>(std::lround(o.wall_travel / (o.wall_speed * o.dt)));
+    for (int k = 1; k <= steps; ++k) {
+      double w = half + k * o.wall_speed * o.dt;
+      std::vector<StaticGeom> moving = ground;
+      moving.push_back(StaticGeom::plane(Vec3(-w, 0, 0), Vec3::UnitX()));
+      moving.push_back(StaticGeom::plane(Vec3(w, 0, 0), -Vec3::UnitX()));
+      moving.push_back(StaticGeom::plane(Vec3(0, -w, 0), Vec3::UnitY()));
+      moving.push_back(StaticGeom::plane(Vec3(0, w, 0), -Vec3::UnitY()));
+      world.set_geoms(moving, true);
+      world.step();
+      if (progress) progress->update(world.time(), "walls retreating");
+    }
+  }
   world.set_geoms(ground);
   SettleOptions runout;
   runout.min_time = 1.0;

@@ -16,6 +16,13 @@ struct HeapOptions {
   unsigned seed = 1;
   double max_fill_time = 2.0;      // settling inside the walls [s]
   double max_runout_time = 5.0;    // after the walls are removed [s]
+  // fill the column with friction and rolling resistance off (a dense fill, like gravel
+  // compacted by dumping), then switch them on before the walls go: see docs/dem.md
+  bool dense_fill = true;
+  // the walls retreat outward at this speed before they are removed, so the column fails
+  // slowly into a heap instead of collapsing (0: removed at once) [m/s]
+  double wall_speed = 0.2;
+  double wall_travel = 1.0;  // how far each wall retreats before removal [m]
 };
 
 struct HeapResult {
