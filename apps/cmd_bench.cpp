@@ -67,8 +67,10 @@ nlohmann::json bench_level(Device& dev, const FidelityPreset& preset, int steps,
           {"realtime_factor", preset.dt / median(step_s)}};
 }
 
-nlohmann::json bench_settle10k(Device& dev, bool quiet) {
+nlohmann::json bench_settle10k(Device& dev, double dt, int iterations, bool quiet) {
   Scene scene = settle10k_scene();
+  if (dt > 0) scene.settings.dt = dt;
+  if (iterations > 0) scene.settings.iterations = iterations;
   DemWorld world(dev, scene.material, scene.settings, scene.bounds, scene.geoms);
   world.set_particles(scene.particles);
   const double sim_time = 0.5;  // [s], as the peers
@@ -114,6 +116,8 @@ void add_bench_command(CLI::App& app) {
     std::string json;
     int steps = 5;
     bool no_settle10k = false;
+    double settle_dt = 0.0;      // 0: the scene's own (terrain/scenes.cpp)
+    int settle_iterations = 0;
     bool quiet = false;
   };
   auto opt = std::make_shared<Options>();
@@ -124,6 +128,10 @@ void add_bench_command(CLI::App& app) {
   dem->add_option("--json", opt->json, "write the results as JSON to this file");
   dem->add_option("--steps", opt->steps, "timed steps per level (median reported)")->check(CLI::Range(1, 1000));
   dem->add_flag("--no-settle10k", opt->no_settle10k, "skip the 10k settling case");
+  dem->add_option("--settle-dt", opt->settle_dt, "timestep of the 10k settling case [s] (default 4e-3)")
+      ->check(CLI::PositiveNumber);
+  dem->add_option("--settle-iterations", opt->settle_iterations, "PGS sweeps of the 10k settling case (default 40)")
+      ->check(CLI::Range(1, 100000));
   dem->add_flag("--quiet", opt->quiet, "no progress on stderr");
   dem->callback([opt] {
     std::vector<const FidelityPreset*> presets;
@@ -131,7 +139,7 @@ void add_bench_command(CLI::App& app) {
     Device dev;
     nlohmann::json results = nlohmann::json::array();
     for (auto* preset : presets) results.push_back(bench_level(dev, *preset, opt->steps, opt->quiet));
-    if (!opt->no_settle10k) results.push_back(bench_settle10k(dev, opt->quiet));
+    if (!opt->no_settle10k) results.push_back(bench_settle10k(dev, opt->settle_dt, opt->settle_iterations, opt->quiet));
     nlohmann::json j = {{"device", dev.description()}, {"results", results}};
     if (!opt->json.empty()) write_json(opt->json, j);
     std::cout << j.dump(2) << "\n";

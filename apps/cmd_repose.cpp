@@ -13,6 +13,7 @@ void add_repose_command(CLI::App& app) {
   struct Options {
     std::string out;
     HeapOptions heap;
+    Material material = gravel();
     bool quiet = false;
   };
   auto opt = std::make_shared<Options>();
@@ -24,13 +25,19 @@ void add_repose_command(CLI::App& app) {
   cmd->add_option("--iterations", opt->heap.iterations, "PGS sweeps per step")->check(CLI::Range(1, 100000));
   cmd->add_option("--dt", opt->heap.dt, "timestep [s]")->check(CLI::PositiveNumber);
   cmd->add_option("--seed", opt->heap.seed, "random seed of the particle sizes and jitter");
+  cmd->add_option("--friction", opt->material.friction, "Coulomb friction (default: the gravel's 0.3)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--rolling", opt->material.rolling, "rolling resistance mu_r (default: the gravel's 0.02)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--wall-speed", opt->heap.wall_speed, "speed the walls retreat at before removal, 0 = at once [m/s]")
+      ->check(CLI::NonNegativeNumber);
   cmd->add_flag("--quiet", opt->quiet, "no progress on stderr");
   cmd->callback([opt] {
     make_output_dir(opt->out);
     auto t0 = std::chrono::steady_clock::now();
     Device dev;
     Progress progress("repose", opt->heap.max_fill_time + opt->heap.max_runout_time, !opt->quiet);
-    HeapResult r = run_heap_test(dev, gravel(), opt->heap, &progress);
+    HeapResult r = run_heap_test(dev, opt->material, opt->heap, &progress);
     double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     progress.finish();
     write_file_atomically(opt->out + "/particles.csv", particles_csv(r.final_state));
@@ -42,6 +49,9 @@ void add_repose_command(CLI::App& app) {
                         {"heap_height_m", r.heap_height},
                         {"particles", r.particles},
                         {"diameter_m", opt->heap.diameter},
+                        {"friction", opt->material.friction},
+                        {"rolling_resistance", opt->material.rolling},
+                        {"wall_speed_m_s", opt->heap.wall_speed},
                         {"sim_time_s", r.sim_time},
                         {"wall_s", wall},
                         {"device", dev.description()},

@@ -48,7 +48,8 @@ typedef struct {
   tl_float overlap_floor_rel;  // smallest overlap (fraction of R*) used for the secant compliance
   tl_int particles;       // number of particles
   tl_int geoms;           // number of static geometries
-  tl_int pad0, pad1;
+  tl_float speculative;   // extra contact distance for fast approach, 2 h v_max [m]
+  tl_int pad1;
 } TlStepParams;
 
 // a contact as found by the narrow phase, grouped by its owner particle a (b > a, or static).

@@ -5,7 +5,7 @@
 
 // the margin below which a pair becomes a (possibly speculative) contact
 float contact_margin(float ra, float rb, const TlStepParams p) {
-  return p.margin_rel * min(ra, rb);
+  return p.margin_rel * min(ra, rb) + p.speculative;
 }
 
 // finds where the previous step stored the pair (a, b); -1 when it is new

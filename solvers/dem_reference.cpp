@@ -15,7 +15,7 @@ Vec3 xyz(const cl_float4& f) { return Vec3(f.s[0], f.s[1], f.s[2]); }
 
 // the margin below which a pair becomes a (possibly speculative) contact
 double contact_margin(double ra, double rb, const StepParams& p) {
-  return p.margin_rel * std::min(ra, rb);
+  return p.margin_rel * std::min(ra, rb) + p.speculative;
 }
 
 // the contact index where the previous step stored the pair (a, b); -1 when it is new
@@ -148,6 +148,7 @@ StepParams from_device(const TlStepParams& p) {
   out.damping_tau = p.damping_tau;
   out.margin_rel = p.margin_rel;
   out.overlap_floor_rel = p.overlap_floor_rel;
+  out.speculative = p.speculative;
   out.particles = p.particles;
   out.geoms = p.geoms;
   return out;

@@ -31,6 +31,7 @@ struct StepParams {
   double damping_tau = 0.0;
   double margin_rel = 0.0;
   double overlap_floor_rel = 0.0;
+  double speculative = 0.0;  // extra contact distance 2 h v_max [m]
   int particles = 0;
   int geoms = 0;
 

@@ -28,6 +28,10 @@ struct DemSettings {
   // smallest overlap used in the secant Hertz compliance, as a fraction of R*: a new contact
   // is stiff from its first step instead of infinitely soft (SPEC §2.2 "guard delta -> 0")
   double overlap_floor_rel = 1.0e-4;
+  // the fastest particle speed to expect [m/s]: pairs within 2 h max_speed of touching get a
+  // speculative row, so particles moving more than the margin in one step cannot tunnel into
+  // each other (large steps, fast bucket). 0: off (the margin alone)
+  double max_speed = 0.0;
 };
 
 }  // namespace talus

@@ -96,7 +96,8 @@ void DemWorld::update_params() {
   // grid cells hold the largest pair within the contact margin
   // (before particles arrive, one cell spans the bounds)
   Vec3 extent = bounds_.hi - bounds_.lo;
-  double cell = particle_count_ > 0 ? 2.0 * max_radius_ * (1.0 + settings_.margin_rel)
+  double speculative = 2.0 * settings_.dt * settings_.max_speed;
+  double cell = particle_count_ > 0 ? 2.0 * max_radius_ * (1.0 + settings_.margin_rel) + speculative
                                     : extent.maxCoeff();
   Eigen::Vector3i dims = (extent / cell).array().ceil().cast<int>().cwiseMax(1);
   double cells = double(dims.x()) * dims.y() * dims.z();
@@ -118,6 +119,7 @@ void DemWorld::update_params() {
   p.overlap_floor_rel = static_cast<float>(settings_.overlap_floor_rel);
   p.particles = static_cast<int>(particle_count_);
   p.geoms = static_cast<int>(geoms_.size());
+  p.speculative = static_cast<float>(speculative);
   if (!sweep_ || sweep_kind_ != settings_.sweep) {
     sweep_kind_ = settings_.sweep;
     sweep_ = make_sweep(sweep_kind_, dev_, p.particles);

@@ -34,8 +34,8 @@ Scene settle10k_scene() {
   m.poisson = 0.45;  // as the LIGGGHTS input
   m.rolling = 0.0;
   DemSettings s;
-  s.dt = 2.0e-3;
-  s.iterations = 20;
+  s.dt = 4.0e-3;
+  s.iterations = 40;
   return lattice_box_scene(LatticeBox{}, m, s);
 }
 
