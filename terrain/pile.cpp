@@ -111,13 +111,60 @@ std::vector<StaticGeom> pile_container(const PileProfile& profile) {
   };
 }
 
+// rising segments of the profile: (start, end) in the x-z plane
+std::vector<std::pair<Vec3, Vec3>> rising_segments(const PileProfile& profile) {
+  std::vector<std::pair<Vec3, Vec3>> out;
+  for (size_t k = 1; k < profile.points.size(); ++k)
+    if (profile.points[k].z() > profile.points[k - 1].z()) out.emplace_back(profile.points[k - 1], profile.points[k]);
+  return out;
+}
+
+bool behind_faces(const PileProfile& profile, double x, double z) {
+  if (x < profile.points.front().x() || x > profile.rear_wall_x || z < 0.0) return false;
+  for (auto& [p0, p1] : rising_segments(profile)) {
+    // above the face's top the formwork is vertical
+    if (z > p1.z()) {
+      if (x < p1.x()) return false;
+      continue;
+    }
+    // outward normal of a rising face points up and forward: (-dz, dx) in (x, z)
+    Vec3 t = p1 - p0;
+    double out_x = -t.z(), out_z = t.x();
+    if ((x - p0.x()) * out_x + (z - p0.z()) * out_z > 0.0) return false;
+  }
+  return true;
+}
+
+std::vector<StaticGeom> pile_forms(const PileProfile& profile) {
+  // per rising face: a 2 m thick box in front of it (extended 1 m below the toe), and a
+  // vertical plate above its top holding the taller loose lattice (behind_faces agrees)
+  const double thickness = 2.0, below = 1.0, plate_height = 6.0;
+  double half_y = 0.5 * profile.width + 1.0;
+  std::vector<StaticGeom> forms;
+  for (auto& [p0, p1] : rising_segments(profile)) {
+    Vec3 t = (p1 - p0).normalized();
+    Vec3 out(-t.z(), 0.0, t.x());
+    double length = (p1 - p0).norm() + below;
+    Vec3 mid = p0 - below * t + 0.5 * length * t + 0.5 * thickness * out;
+    Eigen::Matrix3d axes;
+    axes.col(0) = t;
+    axes.col(1) = Vec3::UnitY();
+    axes.col(2) = out;
+    forms.push_back(StaticGeom::box(mid, Vec3(0.5 * length, half_y, 0.5 * thickness), axes));
+    Vec3 plate(p1.x() - 0.5 * thickness, 0.0, p1.z() + 0.5 * plate_height);
+    forms.push_back(StaticGeom::box(plate, Vec3(0.5 * thickness, half_y, 0.5 * plate_height),
+                                    Eigen::Matrix3d::Identity()));
+  }
+  return forms;
+}
+
 Bounds pile_bounds(const PileProfile& profile, double diameter) {
   // room in front of the toe for the face to slump and above the top for the loose lattice
   double top = 0.0;
   for (auto& p : profile.points) top = std::max(top, p.z());
   Bounds b;
-  b.lo = Vec3(profile.points.front().x() - 0.5 * top - 4 * diameter, -0.5 * profile.width, 0.0);
-  b.hi = Vec3(profile.rear_wall_x, 0.5 * profile.width, 1.5 * top + 4 * diameter);
+  b.lo = Vec3(profile.points.front().x() - 2.0 * top - 4 * diameter, -0.5 * profile.width, 0.0);
+  b.hi = Vec3(profile.rear_wall_x, 0.5 * profile.width, 3.5 * top + 4 * diameter);
   return b;
 }
 
@@ -129,21 +176,23 @@ Particles emit_pile_particles(const PileProfile& profile, double diameter, const
   double spacing = 1.1 * diameter * 1.02;
   double jitter = 0.5 * (spacing - 1.1 * diameter);
   std::uniform_real_distribution<double> offset(-jitter, jitter);
-  // the lattice's solid fraction (mean sphere volume is 1.01 D^3 pi/6 for D +- 10%)
-  double lattice_fraction = M_PI / 6.0 * 1.01 * std::pow(diameter / spacing, 3);
-  double loosening = settled_fraction / lattice_fraction;
+  double target = settled_fraction * profile.volume();
   double half_width = 0.5 * profile.width;
   Particles particles;
   int ny = static_cast<int>(std::floor((profile.width - spacing) / spacing)) + 1;
   double y0 = -half_width + 0.5 * spacing + 0.5 * (profile.width - spacing - (ny - 1) * spacing);
-  // columns along x from the rear wall forward, rows along y, layers up to the stretched height
-  for (double x = profile.rear_wall_x - 0.5 * spacing; x > profile.points.front().x(); x -= spacing) {
-    double height = loosening * profile.height_at(x);
-    for (int iy = 0; iy < ny; ++iy) {
-      double y = y0 + iy * spacing;
-      for (double z = 0.5 * spacing; z + 0.5 * spacing <= height; z += spacing) {
+  // layers from the ground up; in each, columns from the rear wall forward, rows along y
+  double solid = 0.0;
+  double z_max = 10.0 * profile.height_at(profile.rear_wall_x) + 10.0 * spacing;
+  for (double z = 0.5 * spacing; solid < target && z < z_max; z += spacing) {
+    for (double x = profile.rear_wall_x - 0.5 * spacing; x > profile.points.front().x() && solid < target;
+         x -= spacing) {
+      if (!behind_faces(profile, x, z)) continue;
+      for (int iy = 0; iy < ny && solid < target; ++iy) {
         Vec3 jit(offset(rng), offset(rng), offset(rng));
-        particles.add(Vec3(x, y, z) + jit, 0.5 * size(rng), material.density);
+        double r = 0.5 * size(rng);
+        particles.add(Vec3(x, y0 + iy * spacing, z) + jit, r, material.density);
+        solid += 4.0 / 3.0 * M_PI * r * r * r;
       }
     }
   }
@@ -177,12 +226,24 @@ PileBuild build_pile(Device& dev, const PileProfile& profile, const FidelityPres
   DemSettings settings;
   settings.dt = preset.dt;
   settings.iterations = std::min(preset.iterations, options.max_settle_iterations);
-  DemWorld world(dev, material, settings, out.bounds, out.geoms);
+  // dense fill: friction off, the faces held by formwork (as gravel dumped and compacted)
+  Material fill = material;
+  fill.friction = 0.0;
+  fill.rolling = 0.0;
+  std::vector<StaticGeom> formed = out.geoms;
+  for (auto& f : pile_forms(profile)) formed.push_back(f);
+  DemWorld world(dev, fill, settings, out.bounds, formed);
   world.set_particles(emit_pile_particles(profile, preset.diameter, material, options.seed));
   SettleOptions so;
+  so.min_time = 0.5 * options.min_time;
+  so.max_time = 0.5 * options.max_time;
+  so.rest_speed = 0.02;
+  settle(world, so, progress);
+  // the gravel's friction on, formwork off: the pile settles into its own shape
+  world.set_material(material);
+  world.set_geoms(out.geoms);
   so.min_time = options.min_time;
   so.max_time = options.max_time;
-  so.rest_speed = 0.02;
   SettleResult r = settle(world, so, progress);
   out.particles = world.particles();
   out.settle_time = r.sim_time;

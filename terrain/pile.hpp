@@ -44,11 +44,16 @@ const FidelityPreset& fidelity_preset(const std::string& name);
 
 // the container: ground, side walls, rear wall (open front)
 std::vector<StaticGeom> pile_container(const PileProfile& profile);
+// formwork along the rising segments of the profile (boxes in front of the face), held while
+// the pile is filled densely and removed before it settles with the gravel's friction
+std::vector<StaticGeom> pile_forms(const PileProfile& profile);
+// is (x, z) behind every rising face segment (extended upward) and inside the container?
+bool behind_faces(const PileProfile& profile, double x, double z);
 Bounds pile_bounds(const PileProfile& profile, double diameter);
 
-// particles with diameters uniform in D +- 0.1 D on a jittered lattice filling the profile
-// stretched in height so the lattice holds as much solid as the settled bed will
-// (settled_fraction: the solid fraction the bed is expected to settle to)
+// particles with diameters uniform in D +- 0.1 D on a jittered lattice behind the faces,
+// filled layer by layer from the ground until the solid volume is settled_fraction times the
+// profile's volume (the lattice is looser than the bed, so it starts taller than the pile)
 Particles emit_pile_particles(const PileProfile& profile, double diameter, const Material& material,
                               unsigned seed, double settled_fraction = 0.62);
 

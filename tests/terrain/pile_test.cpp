@@ -62,16 +62,49 @@ TEST(Pile, BulkDensityOfASimpleCubicLatticeIsPiOverSix) {
   EXPECT_NEAR(measured, rho * M_PI / 6.0, 1e-9 * rho);
 }
 
-TEST(Pile, EmittedSolidVolumeMatchesTheProfileAtTheSettledFraction) {
+// the emitted lattice holds the settled bed's solid, behind the faces, with no overlaps,
+// and the particle counts of paper Table 3 follow (within 15%)
+TEST(Pile, EmissionFillsBehindTheFacesWithoutOverlap) {
   PileProfile profile = default_pile_profile();
-  const FidelityPreset& preset = fidelity_preset("D200");
-  Particles p = emit_pile_particles(profile, preset.diameter, gravel(), 7);
-  double solid = 0.0;
-  for (double r : p.radius) solid += 4.0 / 3.0 * M_PI * r * r * r;
-  std::printf("D200: %zu particles (paper %d), solid %.2f m^3 = %.3f of the profile volume\n", p.size(),
-              preset.paper_particles, solid, solid / profile.volume());
-  // lattice truncation at the sloped face and walls loses a little: within 10% of 0.62
-  EXPECT_NEAR(solid / profile.volume(), 0.62, 0.062);
+  for (const char* level : {"D400", "D200", "D100"}) {
+    const FidelityPreset& preset = fidelity_preset(level);
+    Particles p = emit_pile_particles(profile, preset.diameter, gravel(), 7);
+    double solid = 0.0;
+    for (size_t i = 0; i < p.size(); ++i) {
+      double r = p.radius[i];
+      solid += 4.0 / 3.0 * M_PI * r * r * r;
+      ASSERT_TRUE(behind_faces(profile, p.position[i].x(), p.position[i].z())) << level << " particle " << i;
+      ASSERT_GE(r, 0.45 * preset.diameter - 1e-12);
+      ASSERT_LE(r, 0.55 * preset.diameter + 1e-12);
+    }
+    // lattice neighbours are one spacing apart: check the nearest in the same column
+    for (size_t i = 1; i < p.size(); ++i) {
+      double d = (p.position[i] - p.position[i - 1]).norm();
+      if (d < 2 * preset.diameter) {
+        ASSERT_GT(d, p.radius[i] + p.radius[i - 1]);
+      }
+    }
+    std::printf("%s: %zu particles (paper %d, %+.1f%%), solid %.2f m^3 = %.3f of the profile\n", level,
+                p.size(), preset.paper_particles, 100.0 * (double(p.size()) / preset.paper_particles - 1),
+                solid, solid / profile.volume());
+    EXPECT_NEAR(solid / profile.volume(), 0.62, 0.01);
+    EXPECT_NEAR(double(p.size()), preset.paper_particles, 0.15 * preset.paper_particles);
+  }
+}
+
+TEST(Pile, FormworkCoversTheFace) {
+  PileProfile profile = default_pile_profile();
+  auto forms = pile_forms(profile);
+  ASSERT_EQ(forms.size(), 2u);  // the face's box and the plate above its top
+  // a point just in front of the face's middle lies inside the box, one just behind does not
+  Vec3 mid = 0.5 * (profile.points[0] + profile.points[1]);
+  Vec3 out = Vec3(-(profile.points[1] - profile.points[0]).z(), 0, (profile.points[1] - profile.points[0]).x()).normalized();
+  auto inside = [&](const Vec3& q) {
+    Vec3 local = forms[0].axes.transpose() * (q - forms[0].centre);
+    return (local.cwiseAbs().array() <= forms[0].half.array()).all();
+  };
+  EXPECT_TRUE(inside(mid + 0.05 * out));
+  EXPECT_FALSE(inside(mid - 0.05 * out));
 }
 
 }  // namespace
