@@ -163,6 +163,16 @@ void solve_contact(TlRow* row, float3* va, float3* wa, float3* vb, float3* wb, f
   *d_ang = dlr;
 }
 
+// the velocity and angular velocity (w: inverse mass / inertia) of a row's two bodies;
+// static geometry (b < 0) reads as zero velocity with zero inverse mass
+void load_bodies(const TlRow* row, __global const float4* velocity, __global const float4* omega,
+                 float4* va, float4* wa, float4* vb, float4* wb) {
+  *va = velocity[row->a];
+  *wa = omega[row->a];
+  *vb = row->b >= 0 ? velocity[row->b] : (float4)(0.0f);
+  *wb = row->b >= 0 ? omega[row->b] : (float4)(0.0f);
+}
+
 // projected Gauss-Seidel over one colour: rows [begin, end) share no dynamic body
 __kernel void pgs_colour(__global TlRow* rows, int begin, int end, __global float4* velocity,
                          __global float4* omega) {
@@ -171,10 +181,8 @@ __kernel void pgs_colour(__global TlRow* rows, int begin, int end, __global floa
   TlRow row = rows[k];
   int a = row.a;
   int b = row.b;
-  float4 va4 = velocity[a];
-  float4 wa4 = omega[a];
-  float4 vb4 = b >= 0 ? velocity[b] : (float4)(0.0f);
-  float4 wb4 = b >= 0 ? omega[b] : (float4)(0.0f);
+  float4 va4, wa4, vb4, wb4;
+  load_bodies(&row, velocity, omega, &va4, &wa4, &vb4, &wb4);
   float3 va = va4.xyz, wa = wa4.xyz, vb = vb4.xyz, wb = wb4.xyz;
   float3 d_lin, d_ang;
   solve_contact(&row, &va, &wa, &vb, &wb, va4.w, wa4.w, vb4.w, wb4.w, row.arm_a.w, row.impulse_r.w,
@@ -199,10 +207,8 @@ __kernel void jacobi_rows(__global TlRow* rows, int n_rows, __global const float
   TlRow row = rows[k];
   int a = row.a;
   int b = row.b;
-  float4 va4 = velocity[a];
-  float4 wa4 = omega[a];
-  float4 vb4 = b >= 0 ? velocity[b] : (float4)(0.0f);
-  float4 wb4 = b >= 0 ? omega[b] : (float4)(0.0f);
+  float4 va4, wa4, vb4, wb4;
+  load_bodies(&row, velocity, omega, &va4, &wa4, &vb4, &wb4);
   // split inverse masses: n_body copies, each with 1/n_body of the mass
   float na = (float)(adj_offsets[a + 1] - adj_offsets[a]);
   float nb = b >= 0 ? (float)(adj_offsets[b + 1] - adj_offsets[b]) : 0.0f;
@@ -253,10 +259,8 @@ __kernel void row_residual(__global const TlRow* rows, int n_rows, __global cons
   int k = get_global_id(0);
   if (k >= n_rows) return;
   TlRow row = rows[k];
-  float4 va4 = velocity[row.a];
-  float4 wa4 = omega[row.a];
-  float4 vb4 = row.b >= 0 ? velocity[row.b] : (float4)(0.0f);
-  float4 wb4 = row.b >= 0 ? omega[row.b] : (float4)(0.0f);
+  float4 va4, wa4, vb4, wb4;
+  load_bodies(&row, velocity, omega, &va4, &wa4, &vb4, &wb4);
   float3 n = row.normal.xyz;
   float ln = row.impulse_t.w;
   float dn = 1.0f / row.arm_a.w;
