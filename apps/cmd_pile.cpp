@@ -4,6 +4,7 @@
 
 #include "apps/commands.hpp"
 #include "host/device.hpp"
+#include "io/image.hpp"
 #include "io/output.hpp"
 #include "terrain/pile.hpp"
 #include "terrain/settle.hpp"
@@ -22,7 +23,7 @@ void add_pile_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("pile", "build and settle the gravel pile in its container");
   cmd->add_option("--level", opt->level, "fidelity level: D400, D200, D100, D50 (paper Table 3)")
       ->capture_default_str();
-  cmd->add_option("--out", opt->out, "output folder (particles.csv, particles.vtp, summary.json)")->required();
+  cmd->add_option("--out", opt->out, "output folder (particles.csv, particles.vtp, side.png, summary.json)")->required();
   cmd->add_option("--profile", opt->profile, "pile profile JSON (default: data/piles/default.json)");
   cmd->add_option("--seed", opt->build.seed, "random seed of sizes and jitter");
   cmd->add_option("--max-time", opt->build.max_time, "longest settling time [s]")->check(CLI::PositiveNumber);
@@ -39,6 +40,7 @@ void add_pile_command(CLI::App& app) {
     progress.finish(std::to_string(pile.particles.size()) + " particles");
     write_file_atomically(opt->out + "/particles.csv", particles_csv(pile.particles));
     write_file_atomically(opt->out + "/particles.vtp", particles_vtp(pile.particles));
+    side_view(pile.particles).write_png(opt->out + "/side.png");
     int n = static_cast<int>(pile.particles.size());
     nlohmann::json j = {
         {"level", preset.name},

@@ -4,6 +4,7 @@
 
 #include "apps/commands.hpp"
 #include "host/device.hpp"
+#include "io/image.hpp"
 #include "io/output.hpp"
 #include "terrain/heap.hpp"
 
@@ -18,7 +19,7 @@ void add_repose_command(CLI::App& app) {
   };
   auto opt = std::make_shared<Options>();
   auto* cmd = app.add_subcommand("repose", "heap test: angle of repose and bulk density of the gravel");
-  cmd->add_option("--out", opt->out, "output folder (particles.csv, particles.vtp, summary.json)")->required();
+  cmd->add_option("--out", opt->out, "output folder (particles.csv, particles.vtp, side.png, summary.json)")->required();
   cmd->add_option("--diameter", opt->heap.diameter, "mean particle diameter D [m]")->check(CLI::PositiveNumber);
   cmd->add_option("--columns", opt->heap.columns, "column width in particles")->check(CLI::Range(4, 200));
   cmd->add_option("--layers", opt->heap.layers, "column height in particles")->check(CLI::Range(4, 400));
@@ -42,6 +43,7 @@ void add_repose_command(CLI::App& app) {
     progress.finish();
     write_file_atomically(opt->out + "/particles.csv", particles_csv(r.final_state));
     write_file_atomically(opt->out + "/particles.vtp", particles_vtp(r.final_state));
+    side_view(r.final_state).write_png(opt->out + "/side.png");
     nlohmann::json j = {{"repose_angle_deg", r.repose_angle_deg},
                         {"repose_spread_deg", r.repose_spread_deg},
                         {"sectors", r.sectors},

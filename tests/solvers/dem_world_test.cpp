@@ -128,3 +128,34 @@ TEST(DemWorld, ConvergenceTablePgsAndJacobi) {
 
 }  // namespace
 }  // namespace talus
+
+namespace talus {
+namespace {
+
+// with a tolerance the sweeps stop early, in whole chunks of ten, once the residual is below it
+TEST(DemWorld, ToleranceStopsTheSweepsEarly) {
+  Device dev;
+  Scene scene = small_bed();
+  DemWorld world(dev, scene.material, scene.settings, scene.bounds, scene.geoms);
+  world.set_particles(scene.particles);
+  for (int i = 0; i < 150; ++i) world.step();
+  // a tolerance between the residual after 10 and after 200 sweeps of the same step
+  DemWorld probe(dev, scene.material, scene.settings, scene.bounds, scene.geoms);
+  probe.set_particles(scene.particles);
+  for (int i = 0; i < 150; ++i) probe.step();
+  probe.settings().iterations = 200;
+  auto history = probe.step_recording_residuals();
+  double tolerance = std::sqrt(history[10] * history[200]);
+  world.settings().iterations = 200;
+  world.settings().tolerance = tolerance;
+  world.step();
+  std::printf("tolerance %.3e m/s: stopped after %d sweeps at residual %.3e\n", tolerance,
+              world.stats().iterations, world.stats().residual);
+  EXPECT_LT(world.stats().iterations, 200);
+  EXPECT_GT(world.stats().iterations, 10);
+  EXPECT_EQ(world.stats().iterations % 10, 0);
+  EXPECT_LT(world.stats().residual, tolerance);
+}
+
+}  // namespace
+}  // namespace talus

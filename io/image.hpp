@@ -1,0 +1,33 @@
+// Pictures of results: an RGB canvas written as PNG with libpng, and a side view of particles
+// (what a user looks at before reading numbers).
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "terrain/particles.hpp"
+
+namespace talus {
+
+class Image {
+ public:
+  Image(int width, int height, uint8_t grey = 255);
+  int width() const { return width_; }
+  int height() const { return height_; }
+  void set(int x, int y, uint8_t r, uint8_t g, uint8_t b);
+  const uint8_t* pixel(int x, int y) const { return &rgb_[3 * (size_t(y) * width_ + x)]; }
+  // a filled disc, clipped to the canvas
+  void disc(double cx, double cy, double radius, uint8_t r, uint8_t g, uint8_t b);
+  // writes an 8-bit RGB PNG (to a temporary name, then renamed)
+  void write_png(const std::string& path) const;
+
+ private:
+  int width_, height_;
+  std::vector<uint8_t> rgb_;
+};
+
+// orthographic side view (looking along +y): x to the right, z up, particles drawn far to near
+// and shaded by depth; the view fits the particles with a margin, `width` pixels across
+Image side_view(const Particles& particles, int width = 1200);
+
+}  // namespace talus
