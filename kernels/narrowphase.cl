@@ -43,13 +43,15 @@ void emit_contact(__global TlContact* out, int a, int b, float3 n, float gap, fl
 
 // visits particle i's contacts; writes them when `write` is set, returns their number
 int visit_contacts(int i, int write, __global const float4* position,
-                   __global const int* cell_start, __global const int* cell_particles,
+                   __global const float4* velocity, __global const int* cell_start, __global const int* cell_particles,
                    __global const TlGeom* geoms, const TlStepParams p, __global TlContact* out,
                    __global const int* prev_offsets, __global const TlContact* prev, int has_prev) {
   float4 pi = position[i];
   float3 xi = pi.xyz;
   float ri = pi.w;
   int3 ci = cell_of(xi, p);
+  // fixed particles (zero inverse mass) need no rows among themselves or with static geometry
+  int fixed_i = velocity[i].w == 0.0f;
   int count = 0;
   // particle pairs (i, j) with j > i in the 27 surrounding cells
   for (int dz = -1; dz <= 1; ++dz) {
@@ -65,7 +67,7 @@ int visit_contacts(int i, int write, __global const float4* position,
         int end = cell_start[cell + 1];
         for (int k = cell_start[cell]; k < end; ++k) {
           int j = cell_particles[k];
-          if (j <= i) continue;
+          if (j <= i || (fixed_i && velocity[j].w == 0.0f)) continue;
           float4 pj = position[j];
           float3 d = pj.xyz - xi;
           float dist = length(d);
@@ -83,7 +85,7 @@ int visit_contacts(int i, int write, __global const float4* position,
     }
   }
   // static geometry (walls, ground) in index order
-  for (int g = 0; g < p.geoms; ++g) {
+  for (int g = 0; g < (fixed_i ? 0 : p.geoms); ++g) {
     float3 n;
     float gap = sphere_geom(xi, ri, geoms + g, &n);
     if (gap >= contact_margin(ri, ri, p)) continue;
@@ -95,25 +97,27 @@ int visit_contacts(int i, int write, __global const float4* position,
   return count;
 }
 
-__kernel void contact_count(__global const float4* position, __global const int* cell_start,
+__kernel void contact_count(__global const float4* position, __global const float4* velocity,
+                            __global const int* cell_start,
                             __global const int* cell_particles, __global const TlGeom* geoms,
                             __global int* counts, __global TlContact* unused_out,
                             __global const int* prev_offsets, __global const TlContact* prev,
                             const TlStepParams p) {
   int i = get_global_id(0);
   if (i >= p.particles) return;
-  counts[i] = visit_contacts(i, 0, position, cell_start, cell_particles, geoms, p, unused_out,
+  counts[i] = visit_contacts(i, 0, position, velocity, cell_start, cell_particles, geoms, p, unused_out,
                              prev_offsets, prev, 0);
 }
 
-__kernel void contact_write(__global const float4* position, __global const int* cell_start,
+__kernel void contact_write(__global const float4* position, __global const float4* velocity,
+                            __global const int* cell_start,
                             __global const int* cell_particles, __global const TlGeom* geoms,
                             __global const int* offsets, __global TlContact* contacts,
                             __global const int* prev_offsets, __global const TlContact* prev,
                             const TlStepParams p, int has_prev) {
   int i = get_global_id(0);
   if (i >= p.particles) return;
-  visit_contacts(i, 1, position, cell_start, cell_particles, geoms, p, contacts + offsets[i],
+  visit_contacts(i, 1, position, velocity, cell_start, cell_particles, geoms, p, contacts + offsets[i],
                  prev_offsets, prev, has_prev);
 }
 

@@ -328,7 +328,8 @@ ContactSet find_contacts(const Particles& particles, const std::vector<StaticGeo
           int cell = (z * p.grid_ny + y) * p.grid_nx + x;
           for (int k = cells.cell_start[cell]; k < cells.cell_start[cell + 1]; ++k) {
             int j = cells.cell_particles[k];
-            if (j <= i) continue;
+            // fixed particles need no rows among themselves (kernels/narrowphase.cl)
+            if (j <= i || (particles.inv_mass[i] == 0.0 && particles.inv_mass[j] == 0.0)) continue;
             double rj = particles.radius[j];
             Vec3 d = particles.position[j] - xi;
             double dist = d.norm();
@@ -343,7 +344,7 @@ ContactSet find_contacts(const Particles& particles, const std::vector<StaticGeo
       }
     }
     // static geometry (walls, ground) in index order; a wall's radius is infinite, R* = r
-    for (int g = 0; g < p.geoms; ++g) {
+    for (int g = 0; g < (particles.inv_mass[i] == 0.0 ? 0 : p.geoms); ++g) {
       Vec3 normal;
       double gap = sphere_geom(xi, ri, geoms[g], &normal);
       if (gap >= contact_margin(ri, ri, p)) continue;

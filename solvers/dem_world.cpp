@@ -200,13 +200,13 @@ void DemWorld::narrow_phase() {
     b.owner_offsets[prev].resize(n + 1);
     b.owner_offsets[prev].fill(0);
   }
-  set_args(k_contact_count_, b.position, b.cell_start, b.cell_particles, b.geoms, b.contact_counts,
+  set_args(k_contact_count_, b.position, b.velocity, b.cell_start, b.cell_particles, b.geoms, b.contact_counts,
            b.contacts[cur], b.owner_offsets[prev], b.contacts[prev], p);
   launch(dev_, k_contact_count_, n, "contact_count");
   scan_.exclusive(b.contact_counts, b.owner_offsets[cur], n);
   b.n_contacts = b.owner_offsets[cur].read_one(n);
   b.contacts[cur].resize(std::max(b.n_contacts, 1));
-  set_args(k_contact_write_, b.position, b.cell_start, b.cell_particles, b.geoms, b.owner_offsets[cur],
+  set_args(k_contact_write_, b.position, b.velocity, b.cell_start, b.cell_particles, b.geoms, b.owner_offsets[cur],
            b.contacts[cur], b.owner_offsets[prev], b.contacts[prev], p, b.has_previous ? 1 : 0);
   launch(dev_, k_contact_write_, n, "contact_write");
 }
