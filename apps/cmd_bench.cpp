@@ -74,7 +74,7 @@ nlohmann::json bench_settle10k(Device& dev, double dt, int iterations, bool quie
   DemWorld world(dev, scene.material, scene.settings, scene.bounds, scene.geoms);
   world.set_particles(scene.particles);
   const double sim_time = 0.5;  // [s], as the peers
-  int steps = static_cast<int>(std::lround(sim_time / scene.settings.dt));
+  int steps = std::max(1, static_cast<int>(std::lround(sim_time / scene.settings.dt)));
   Progress progress("bench settle10k", sim_time, !quiet);
   std::vector<double> sweep_s, contacts;
   auto t0 = std::chrono::steady_clock::now();

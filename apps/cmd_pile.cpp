@@ -34,7 +34,8 @@ void add_pile_command(CLI::App& app) {
     make_output_dir(opt->out);
     auto t0 = std::chrono::steady_clock::now();
     Device dev;
-    Progress progress("pile " + preset.name, opt->build.max_time, !opt->quiet);
+    // the fill settles for half the time, then the pile for the whole (terrain/pile.cpp)
+    Progress progress("pile " + preset.name, 1.5 * opt->build.max_time, !opt->quiet);
     PileBuild pile = build_pile(dev, profile, preset, gravel(), opt->build, &progress);
     double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     progress.finish(std::to_string(pile.particles.size()) + " particles");

@@ -37,7 +37,8 @@ void add_repose_command(CLI::App& app) {
     make_output_dir(opt->out);
     auto t0 = std::chrono::steady_clock::now();
     Device dev;
-    Progress progress("repose", opt->heap.max_fill_time + opt->heap.max_runout_time, !opt->quiet);
+    double wall_time = opt->heap.wall_speed > 0 ? opt->heap.wall_travel / opt->heap.wall_speed : 0.0;
+    Progress progress("repose", opt->heap.max_fill_time + wall_time + opt->heap.max_runout_time, !opt->quiet);
     HeapResult r = run_heap_test(dev, opt->material, opt->heap, &progress);
     double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     progress.finish();

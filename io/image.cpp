@@ -9,6 +9,7 @@
 #include <numeric>
 
 #include "host/error.hpp"
+#include "io/output.hpp"
 
 namespace talus {
 
@@ -34,7 +35,7 @@ void Image::disc(double cx, double cy, double radius, uint8_t r, uint8_t g, uint
 }
 
 void Image::write_png(const std::string& path) const {
-  std::string tmp = path + ".tmp";
+  std::string tmp = temporary_name(path);
   FILE* f = std::fopen(tmp.c_str(), "wb");
   if (!f) throw Error(path + ": cannot write the image (check the folder exists and is writable)");
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
@@ -42,6 +43,8 @@ void Image::write_png(const std::string& path) const {
   if (!png || !info || setjmp(png_jmpbuf(png))) {
     png_destroy_write_struct(&png, &info);
     std::fclose(f);
+    std::error_code ec;
+    std::filesystem::remove(tmp, ec);
     throw Error(path + ": libpng failed while writing the image");
   }
   png_init_io(png, f);
@@ -52,10 +55,16 @@ void Image::write_png(const std::string& path) const {
     png_write_row(png, const_cast<png_bytep>(&rgb_[3 * size_t(y) * width_]));
   png_write_end(png, nullptr);
   png_destroy_write_struct(&png, &info);
-  std::fclose(f);
   std::error_code ec;
+  if (std::fclose(f) != 0) {
+    std::filesystem::remove(tmp, ec);
+    throw Error(path + ": write failed (disk full?); the previous image, if any, is untouched");
+  }
   std::filesystem::rename(tmp, path, ec);
-  if (ec) throw Error(path + ": cannot move the finished image into place (" + ec.message() + ")");
+  if (ec) {
+    std::filesystem::remove(tmp, ec);
+    throw Error(path + ": cannot move the finished image into place (" + ec.message() + ")");
+  }
 }
 
 Image side_view(const Particles& p, int width) {

@@ -10,7 +10,9 @@ namespace talus {
 
 // creates the folder (and parents); InputError naming it when impossible
 void make_output_dir(const std::string& dir);
-// writes `content` to path.tmp, then renames it to path
+// a temporary name next to `path`, unique to this process
+std::string temporary_name(const std::string& path);
+// writes `content` to a temporary name, then renames it to path
 void write_file_atomically(const std::string& path, const std::string& content);
 void write_json(const std::string& path, const nlohmann::json& j);
 

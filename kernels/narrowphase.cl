@@ -42,7 +42,9 @@ void emit_contact(__global TlContact* out, int a, int b, float3 n, float gap, fl
 }
 
 // visits particle i's contacts; writes them when `write` is set, returns their number
-int visit_contacts(int i, int write, __global const float4* position,
+// write mode stops at `limit` contacts (the count pass's number), so a pair that rounds
+// differently between the passes can never write into the next particle's slots
+int visit_contacts(int i, int write, int limit, __global const float4* position,
                    __global const float4* velocity, __global const int* cell_start, __global const int* cell_particles,
                    __global const TlGeom* geoms, const TlStepParams p, __global TlContact* out,
                    __global const int* prev_offsets, __global const TlContact* prev, int has_prev) {
@@ -73,6 +75,7 @@ int visit_contacts(int i, int write, __global const float4* position,
           float dist = length(d);
           float gap = dist - ri - pj.w;
           if (gap >= contact_margin(ri, pj.w, p)) continue;
+          if (write && count >= limit) return count;
           if (write) {
             float3 n = dist > 0.0f ? d / dist : (float3)(0.0f, 0.0f, 1.0f);
             float reduced = ri * pj.w / (ri + pj.w);
@@ -89,6 +92,7 @@ int visit_contacts(int i, int write, __global const float4* position,
     float3 n;
     float gap = sphere_geom(xi, ri, geoms + g, &n);
     if (gap >= contact_margin(ri, ri, p)) continue;
+    if (write && count >= limit) return count;
     if (write)
       emit_contact(out + count, i, TL_STATIC_BODY(g), n, gap, n * (ri + 0.5f * gap),
                    (float3)(0.0f), ri, p, prev_offsets, prev, has_prev);
@@ -105,7 +109,7 @@ __kernel void contact_count(__global const float4* position, __global const floa
                             const TlStepParams p) {
   int i = get_global_id(0);
   if (i >= p.particles) return;
-  counts[i] = visit_contacts(i, 0, position, velocity, cell_start, cell_particles, geoms, p, unused_out,
+  counts[i] = visit_contacts(i, 0, 0, position, velocity, cell_start, cell_particles, geoms, p, unused_out,
                              prev_offsets, prev, 0);
 }
 
@@ -117,7 +121,7 @@ __kernel void contact_write(__global const float4* position, __global const floa
                             const TlStepParams p, int has_prev) {
   int i = get_global_id(0);
   if (i >= p.particles) return;
-  visit_contacts(i, 1, position, velocity, cell_start, cell_particles, geoms, p, contacts + offsets[i],
+  visit_contacts(i, 1, offsets[i + 1] - offsets[i], position, velocity, cell_start, cell_particles, geoms, p, contacts + offsets[i],
                  prev_offsets, prev, has_prev);
 }
 

@@ -24,7 +24,11 @@ __kernel void prepare_rows(__global const TlContact* contacts, __global const in
   // normal velocity before the step, and the overlap predicted at its end
   float un = dot(n, vb.xyz - va.xyz);
   float overlap = fmax(fmax(-gap, -gap - h * un), p.overlap_floor_rel * reduced);
-  // secant Hertz compliance epsilon = 1 / (k_n sqrt(overlap)), SPOOK coefficients
+  // secant Hertz compliance epsilon = 1 / (k_n sqrt(overlap)), SPOOK coefficients. The same
+  // row serves speculative contacts (gap > 0): with damping (tau > 0) it brakes an approach
+  // that would close more than about half the gap within the step, which loses impact energy
+  // before touch; the gravel has zero restitution, and a rigid G v+ >= -g/h row instead would
+  // stop every approach dead at touch (no elastic impact at all, see docs/dem.md)
   float compliance = 1.0f / (kn * sqrt(overlap));
   float upsilon = 1.0f / (1.0f + 4.0f * p.damping_tau / h);
   float sigma = 4.0f * compliance * upsilon / (h * h);
@@ -48,10 +52,14 @@ __kernel void prepare_rows(__global const TlContact* contacts, __global const in
     float3 proj = old_t - dot(old_t, n) * n;
     float pm = length(proj);
     lt = pm > 0.0f ? proj * (fmin(mag, p.friction * ln) / pm) : (float3)(0.0f);
-    lr = con.impulse_r.xyz;
+    // rolling: the tangential part onto the new disc, the twist about the new normal clamped
+    float3 old_r = con.impulse_r.xyz;
     float rmax = p.rolling * reduced * ln;
-    float lm = length(lr);
-    if (lm > rmax) lr *= rmax / lm;
+    float twist = clamp(dot(old_r, n), -rmax, rmax);
+    float3 roll = old_r - dot(old_r, n) * n;
+    float rm = length(roll);
+    if (rm > rmax) roll *= rmax / rm;
+    lr = roll + twist * n;
   }
 
   TlRow row;
@@ -252,8 +260,9 @@ __kernel void jacobi_bodies(__global const TlRow* rows, __global const float4* d
   omega[i] = (float4)(w.xyz + w.w * dw, w.w);
 }
 
-// the natural-map residual of each row (velocity units): how far one more projection step
-// would move the impulses, times the effective mass; zero at the exact solution
+// the natural-map residual of each contact (velocity units): how far one more projection step
+// would move the normal, friction and rolling impulses, times their effective masses (rolling
+// times the lever arm's length); zero at the exact solution
 __kernel void row_residual(__global const TlRow* rows, int n_rows, __global const float4* velocity,
                            __global const float4* omega, __global float* residual) {
   int k = get_global_id(0);
@@ -278,7 +287,21 @@ __kernel void row_residual(__global const TlRow* rows, int n_rows, __global cons
     if (tm > tmax) lt_new *= tm > 0.0f ? tmax / tm : 0.0f;
     rt = length(lt_new - lt) * dt_;
   }
-  residual[k] = rn * rn + rt * rt;
+  // rolling and twist: the same, turned into a velocity by the lever arm's length
+  float rr = 0.0f;
+  if (row.coef.z > 0.0f) {
+    float dr = 1.0f / row.coef.z;
+    float3 wrel = wb4.xyz - wa4.xyz;
+    float3 lr = row.impulse_r.xyz;
+    float rmax = row.coef.y * ln;
+    float3 lr_t = lr - dot(lr, n) * n;
+    float3 lr_t_new = lr_t - (wrel - dot(wrel, n) * n) / dr;
+    float rm = length(lr_t_new);
+    if (rm > rmax) lr_t_new *= rm > 0.0f ? rmax / rm : 0.0f;
+    float twist = clamp(dot(lr, n) - dot(wrel, n) / dr, -rmax, rmax);
+    rr = length(lr_t_new + twist * n - lr) * dr * length(row.arm_a.xyz);
+  }
+  residual[k] = rn * rn + rt * rt + rr * rr;
 }
 
 // copies the solved impulses back to the contacts for the next step's warm start

@@ -476,7 +476,8 @@ std::vector<Row> prepare_rows(const std::vector<Contact>& contacts, const std::v
     double un = n.dot(b.v - a.v);
     double overlap = std::max(std::max(-con.gap, -con.gap - h * un),
                               p.overlap_floor_rel * con.reduced_radius);
-    // secant hertz compliance epsilon = 1 / (k_n sqrt(overlap)), SPOOK coefficients
+    // secant hertz compliance epsilon = 1 / (k_n sqrt(overlap)), SPOOK coefficients (the same
+    // row for speculative contacts, as kernels/solver.cl explains)
     double compliance = 1.0 / (con.stiffness * std::sqrt(overlap));
     double upsilon = 1.0 / (1.0 + 4.0 * p.damping_tau / h);
     double sigma = 4.0 * compliance * upsilon / (h * h);
@@ -499,10 +500,13 @@ std::vector<Row> prepare_rows(const std::vector<Contact>& contacts, const std::v
       double pm = projected.norm();
       lt = pm > 0.0 ? Vec3(projected * (std::min(old_t.norm(), p.friction * ln) / pm))
                     : Vec3::Zero();
-      lr = con.impulse_r;
+      // rolling onto the new disc, twist about the new normal clamped
       double rmax = p.rolling * con.reduced_radius * ln;
-      double lm = lr.norm();
-      if (lm > rmax) lr *= rmax / lm;
+      double twist = std::clamp(con.impulse_r.dot(n), -rmax, rmax);
+      Vec3 roll = con.impulse_r - con.impulse_r.dot(n) * n;
+      double rm = roll.norm();
+      if (rm > rmax) roll *= rmax / rm;
+      lr = roll + twist * n;
     }
 
     Row row;
@@ -636,7 +640,19 @@ std::vector<double> row_residuals(const std::vector<Row>& rows, const Particles&
       clamp_to_disc(lt_new, row.friction * ln);
       rt = (lt_new - row.impulse_t).norm() * dt;
     }
-    out.push_back(rn * rn + rt * rt);
+    // rolling and twist, turned into a velocity by the lever arm's length
+    double rr = 0.0;
+    if (row.inv_dr > 0.0) {
+      double dr = 1.0 / row.inv_dr;
+      Vec3 wrel = b.w - a.w;
+      const Vec3& lr = row.impulse_r;
+      double rmax = row.rolling_limit * ln;
+      Vec3 lr_t_new = (lr - lr.dot(n) * n) - (wrel - wrel.dot(n) * n) / dr;
+      clamp_to_disc(lr_t_new, rmax);
+      double twist = std::clamp(lr.dot(n) - wrel.dot(n) / dr, -rmax, rmax);
+      rr = (lr_t_new + twist * n - lr).norm() * dr * row.arm_a.norm();
+    }
+    out.push_back(rn * rn + rt * rt + rr * rr);
   }
   return out;
 }

@@ -22,8 +22,9 @@ struct DemSettings {
   double tolerance = 0.0;
   SweepKind sweep = SweepKind::Pgs;
   Vec3 gravity = Vec3(0.0, 0.0, -9.81);  // [m/s^2]
-  // pairs closer than margin_rel * min(r_a, r_b) get a (speculative) contact row: SPOOK lets
-  // them close within the step but never pulls them together
+  // pairs closer than margin_rel * min(r_a, r_b) get a (speculative) contact row: it never
+  // pulls them together, and with damping it brakes an approach that would close more than
+  // about half the gap within one step (kernels/solver.cl prepare_rows)
   double margin_rel = 0.05;
   // smallest overlap used in the secant Hertz compliance, as a fraction of R*: a new contact
   // is stiff from its first step instead of infinitely soft (SPEC §2.2 "guard delta -> 0")

@@ -40,6 +40,11 @@ DemWorld::DemWorld(Device& dev, const Material& material, const DemSettings& set
     : dev_(dev), material_(material), settings_(settings), bounds_(bounds), geoms_(std::move(geoms)),
       buffers_(dev), scan_(dev), sweep_kind_(settings.sweep) {
   if (!(settings.dt > 0.0)) throw InputError("DemSettings.dt: the timestep must be positive");
+  if (!(settings.overlap_floor_rel > 0.0))
+    throw InputError("DemSettings.overlap_floor_rel: must be positive (it keeps the compliance finite)");
+  if (!(settings.margin_rel >= 0.0)) throw InputError("DemSettings.margin_rel: must not be negative");
+  if (!(material.poisson >= 0.0 && material.poisson < 0.5))
+    throw InputError("Material.poisson: must lie in [0, 0.5)");
   if (settings.iterations < 1) throw InputError("DemSettings.iterations: must be at least 1");
   if (!(material.young > 0.0) || !(material.density > 0.0))
     throw InputError("Material: young and density must be positive");
@@ -351,7 +356,8 @@ std::vector<double> DemWorld::step_recording_residuals() {
 }
 
 void DemWorld::step_impl(std::vector<double>* history) {
-  if (sweep_kind_ != settings_.sweep) update_params();
+  // settings changed through settings() take effect here (the params are a few numbers)
+  update_params();
   stats_ = StepStats{};
   if (particle_count_ > 0) {
     // contacts, colours and rows of this step

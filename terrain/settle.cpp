@@ -32,7 +32,7 @@ SettleResult settle(DemWorld& world, const SettleOptions& o, Progress* progress)
       char note[96];
       std::snprintf(note, sizeof note, "t=%.2f s, rms speed %.3f m/s, %d contacts", elapsed,
                     r.rms_speed, world.stats().contacts);
-      progress->update(elapsed, note);
+      progress->update(world.time(), note);
     }
     if (elapsed >= o.min_time && r.rms_speed < o.rest_speed) {
       r.at_rest = true;
