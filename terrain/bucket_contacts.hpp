@@ -28,6 +28,7 @@
 // (pose.position - body.position) to arm_bucket for the arm about the centre of mass.
 #pragma once
 #include <Eigen/Geometry>
+#include <array>
 #include <vector>
 
 #include "terrain/embree.hpp"
