@@ -5,6 +5,7 @@
 #include <fstream>
 
 #include "host/error.hpp"
+#include "io/data_files.hpp"
 
 namespace talus::vehicle {
 
@@ -72,12 +73,8 @@ double DataFile::plain_number(const nlohmann::json& j, const std::string& where,
 std::string find_data_file(const std::string& name_or_path, const std::string& subdir) {
   namespace fs = std::filesystem;
   if (fs::exists(name_or_path) && fs::is_regular_file(name_or_path)) return name_or_path;
-  const std::string file = name_or_path + ".json";
-  for (const fs::path& base : {fs::path(TALUS_SOURCE_DIR), fs::current_path()}) {
-    const fs::path p = base / "data" / subdir / file;
-    if (fs::exists(p)) return p.string();
-  }
-  return {};
+  // a shipped name: data/<subdir>/<name>.json where io/data_files looks for data
+  return locate_data_file(subdir + "/" + name_or_path + ".json");
 }
 
 }  // namespace talus::vehicle
