@@ -72,7 +72,8 @@ std::string particles_vtp(const Particles& p) {
   for (size_t i = 0; i < n; ++i)
     os << p.position[i].x() << ' ' << p.position[i].y() << ' ' << p.position[i].z() << '\n';
   os << "</DataArray></Points>\n";
-  // per-particle data: radius (scale the Point Gaussian by it), velocity, speed
+  // per-particle data: radius (scale the Point Gaussian by it), velocity, speed, fixed (1 for
+  // particles with zero inverse mass, e.g. the heap test's rough base)
   os << "<PointData Scalars=\"radius\" Vectors=\"velocity\">\n"
      << "<DataArray type=\"Float32\" Name=\"radius\" format=\"ascii\">\n";
   for (size_t i = 0; i < n; ++i) os << p.radius[i] << '\n';
@@ -82,6 +83,8 @@ std::string particles_vtp(const Particles& p) {
     os << p.velocity[i].x() << ' ' << p.velocity[i].y() << ' ' << p.velocity[i].z() << '\n';
   os << "</DataArray>\n<DataArray type=\"Float32\" Name=\"speed\" format=\"ascii\">\n";
   for (size_t i = 0; i < n; ++i) os << p.velocity[i].norm() << '\n';
+  os << "</DataArray>\n<DataArray type=\"UInt8\" Name=\"fixed\" format=\"ascii\">\n";
+  for (size_t i = 0; i < n; ++i) os << (p.inv_mass[i] > 0.0 ? 0 : 1) << '\n';
   os << "</DataArray>\n</PointData>\n";
   // one vertex cell per particle
   os << "<Verts><DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";

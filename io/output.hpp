@@ -18,8 +18,8 @@ void write_json(const std::string& path, const nlohmann::json& j);
 
 // particles as CSV with header x,y,z,r,vx,vy,vz (SI units)
 std::string particles_csv(const Particles& particles);
-// particles as VTK XML PolyData (.vtp, readable by ParaView): points with radius, velocity
-// and speed arrays; one vertex cell per particle (use the Point Gaussian representation)
+// particles as VTK XML PolyData (.vtp, readable by ParaView): points with radius, velocity,
+// speed and fixed arrays; one vertex cell per particle (use the Point Gaussian representation)
 std::string particles_vtp(const Particles& particles);
 
 }  // namespace talus

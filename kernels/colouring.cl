@@ -3,15 +3,16 @@
 // an uncoloured contact that outranks all its uncoloured neighbours takes the smallest colour
 // its neighbours do not use. The result depends only on the contact list (deterministic).
 //
-// colour[c] packs (round * TL_MAX_COLOURS + colour), or -1 while uncoloured; a neighbour
-// coloured in the current round is read as still uncoloured (it necessarily outranks c), so
-// the outcome does not depend on the order in which work-items run.
+// A round reads the colours of earlier rounds (colour_in, -1 while uncoloured) and writes this
+// round's into a copy (colour_out), so no work-item reads what another writes in the same
+// launch and the outcome does not depend on the order in which work-items run.
 
 __kernel void colour_round(__global const TlContact* contacts, int n_contacts,
                            __global const int* adj_offsets, __global const int* adjacency,
-                           __global int* colour, int round, __global int* status) {
+                           __global const int* colour_in, __global int* colour_out,
+                           __global int* status) {
   int c = get_global_id(0);
-  if (c >= n_contacts || colour[c] >= 0) return;
+  if (c >= n_contacts || colour_in[c] >= 0) return;
   uint priority = contact_priority((uint)c);
   ulong used = 0;
   int bodies[2] = {contacts[c].a, contacts[c].b};
@@ -23,14 +24,14 @@ __kernel void colour_round(__global const TlContact* contacts, int n_contacts,
     for (int k = adj_offsets[body]; k < end; ++k) {
       int d = adjacency[k];
       if (d == c) continue;
-      int packed = colour[d];
-      if (packed < 0 || packed / TL_MAX_COLOURS == round) {
+      int cd = colour_in[d];
+      if (cd < 0) {
         if (contact_priority((uint)d) > priority) {
           atomic_inc(&status[0]);  // still uncoloured after this round
           return;
         }
       } else {
-        used |= 1ul << (packed % TL_MAX_COLOURS);
+        used |= 1ul << cd;
       }
     }
   }
@@ -42,12 +43,12 @@ __kernel void colour_round(__global const TlContact* contacts, int n_contacts,
     atomic_inc(&status[0]);
     return;
   }
-  colour[c] = round * TL_MAX_COLOURS + k;
+  colour_out[c] = k;
 }
 
 // stable partition by colour, step 1: per block of COLOUR_BLOCK contacts, count each colour
 #define COLOUR_BLOCK 256
-__kernel void colour_histogram(__global int* colour, int n_contacts, int blocks,
+__kernel void colour_histogram(__global const int* colour, int n_contacts, int blocks,
                                __global int* histogram) {
   int blk = get_global_id(0);
   if (blk >= blocks) return;
@@ -55,9 +56,7 @@ __kernel void colour_histogram(__global int* colour, int n_contacts, int blocks,
   for (int k = 0; k < TL_MAX_COLOURS; ++k) counts[k] = 0;
   int end = min(n_contacts, (blk + 1) * COLOUR_BLOCK);
   for (int c = blk * COLOUR_BLOCK; c < end; ++c) {
-    int k = colour[c] % TL_MAX_COLOURS;  // unpack the round
-    colour[c] = k;
-    counts[k]++;
+    counts[colour[c]]++;
   }
   // colour-major layout, so one exclusive scan gives every (colour, block) start
   for (int k = 0; k < TL_MAX_COLOURS; ++k) histogram[k * blocks + blk] = counts[k];

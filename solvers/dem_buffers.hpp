@@ -30,8 +30,8 @@ struct DemBuffers {
   // body -> contact adjacency (CSR, each list in contact order)
   Buffer<int> degree, adjacency_offsets, adjacency_fill, adjacency;
 
-  // colouring: packed colour per contact, partition into rows
-  Buffer<int> colour, colour_status, colour_histogram, colour_offsets, colour_start_dev;
+  // colouring: colour per contact (-1 uncoloured) and the next round's copy; partition into rows
+  Buffer<int> colour, colour_next, colour_status, colour_histogram, colour_offsets, colour_start_dev;
   Buffer<int> order, row_of_contact;
   std::vector<int> colour_start;  // host copy: rows of colour k are [start[k], start[k+1])
   int colour_rounds = 0;

@@ -251,12 +251,16 @@ void DemWorld::colour_contacts() {
   const Buffer<TlContact>& contacts = b.contacts[b.current];
   b.colour.resize(std::max(nc, 1));
   b.colour.fill(-1);
+  b.colour_next.resize(std::max(nc, 1));
   int round = 0;
   for (int remaining = nc; remaining > 0; ++round) {
     b.colour_status.fill(0);
-    set_args(k_colour_round_, contacts, nc, b.adjacency_offsets, b.adjacency, b.colour, round,
-             b.colour_status);
+    // this round writes into a copy of the earlier rounds' colours, then the copy is current
+    b.colour_next.copy_from(b.colour);
+    set_args(k_colour_round_, contacts, nc, b.adjacency_offsets, b.adjacency, b.colour,
+             b.colour_next, b.colour_status);
     launch(dev_, k_colour_round_, nc, "colour_round");
+    std::swap(b.colour, b.colour_next);
     auto status = b.colour_status.download(2);
     if (status[1] > 0)
       throw Error("contact colouring needs more than " + std::to_string(TL_MAX_COLOURS) +
