@@ -3,16 +3,19 @@
 // an uncoloured contact that outranks all its uncoloured neighbours takes the smallest colour
 // its neighbours do not use. The result depends only on the contact list (deterministic).
 //
-// A round reads the colours of earlier rounds (colour_in, -1 while uncoloured) and writes this
-// round's into a copy (colour_out), so no work-item reads what another writes in the same
-// launch and the outcome does not depend on the order in which work-items run.
+// A round reads the colours of earlier rounds (colour_in, -1 while uncoloured) and writes every
+// contact's colour after it (colour_out; the host swaps the two), so no work-item reads what
+// another writes in the same launch and the outcome does not depend on their order.
 
 __kernel void colour_round(__global const TlContact* contacts, int n_contacts,
                            __global const int* adj_offsets, __global const int* adjacency,
                            __global const int* colour_in, __global int* colour_out,
                            __global int* status) {
   int c = get_global_id(0);
-  if (c >= n_contacts || colour_in[c] >= 0) return;
+  if (c >= n_contacts) return;
+  int mine = colour_in[c];
+  colour_out[c] = mine;  // coloured earlier, or uncoloured until shown otherwise below
+  if (mine >= 0) return;
   uint priority = contact_priority((uint)c);
   ulong used = 0;
   int bodies[2] = {contacts[c].a, contacts[c].b};

@@ -255,8 +255,7 @@ void DemWorld::colour_contacts() {
   int round = 0;
   for (int remaining = nc; remaining > 0; ++round) {
     b.colour_status.fill(0);
-    // this round writes into a copy of the earlier rounds' colours, then the copy is current
-    b.colour_next.copy_from(b.colour);
+    // this round reads the earlier rounds' colours and writes all colours into the other buffer
     set_args(k_colour_round_, contacts, nc, b.adjacency_offsets, b.adjacency, b.colour,
              b.colour_next, b.colour_status);
     launch(dev_, k_colour_round_, nc, "colour_round");
