@@ -178,6 +178,14 @@ BucketScene::BucketScene(const vehicle::BucketMesh& mesh, const embree::Device& 
   scene_.commit();
 }
 
+Aabb candidate_box(const Aabb& bucket_bounds, double r_max, double margin_rel) {
+  Aabb box = bucket_bounds;
+  const Vec3 grow = Vec3::Constant(r_max * (1.0 + margin_rel));
+  box.lo -= grow;
+  box.hi += grow;
+  return box;
+}
+
 Aabb BucketScene::world_bounds(const BucketPose& pose) const {
   Aabb box;
   box.lo = Vec3::Constant(std::numeric_limits<double>::infinity());
@@ -195,10 +203,7 @@ std::vector<int> BucketScene::select_candidates(const Particles& particles, cons
   std::vector<int> out;
   if (particles.size() == 0) return out;
   const double r_max = *std::max_element(particles.radius.begin(), particles.radius.end());
-  Aabb box = world_bounds(pose);
-  const Vec3 grow = Vec3::Constant(r_max * (1.0 + margin_rel));
-  box.lo -= grow;
-  box.hi += grow;
+  const Aabb box = candidate_box(world_bounds(pose), r_max, margin_rel);
   for (size_t i = 0; i < particles.size(); ++i)
     if (box.contains(particles.position[i])) out.push_back(static_cast<int>(i));
   return out;

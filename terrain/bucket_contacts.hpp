@@ -60,6 +60,10 @@ struct Aabb {
   }
 };
 
+// the box where particles can touch the bucket: its world bounds grown by r_max (1 + margin_rel);
+// BucketScene::select_candidates and DeviceBoxSelection (terrain/bucket_selection.hpp) search it
+Aabb candidate_box(const Aabb& bucket_bounds, double r_max, double margin_rel);
+
 // which part of the triangle the closest point lies on
 enum class TriangleFeature { Face, Edge, Vertex };
 
