@@ -23,7 +23,7 @@ void add_pile_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("pile", "build and settle the gravel pile in its container");
   cmd->add_option("--level", opt->level, "fidelity level: D400, D200, D100, D50 (paper Table 3)")
       ->capture_default_str();
-  cmd->add_option("--out", opt->out, "output folder (particles.csv, particles.vtp, side.png, summary.json)")->required();
+  cmd->add_option("--out", opt->out, "output folder (particles.csv, particles.vtp, side.png, scan.csv, summary.json)")->required();
   cmd->add_option("--profile", opt->profile, "pile profile JSON (default: data/piles/default.json)");
   cmd->add_option("--seed", opt->build.seed, "random seed of sizes and jitter");
   cmd->add_option("--max-time", opt->build.max_time, "longest settling time [s]")->check(CLI::PositiveNumber);
@@ -42,6 +42,11 @@ void add_pile_command(CLI::App& app) {
     write_file_atomically(opt->out + "/particles.csv", particles_csv(pile.particles));
     write_file_atomically(opt->out + "/particles.vtp", particles_vtp(pile.particles));
     side_view(pile.particles).write_png(opt->out + "/side.png");
+    // the laser scan of the settled surface, as measured in the field before loading
+    PileScan scan = scan_pile(pile.particles, profile, preset.diameter);
+    std::string scan_csv = "x,z\n";
+    for (auto& q : scan.points) scan_csv += std::to_string(q.x()) + "," + std::to_string(q.y()) + "\n";
+    write_file_atomically(opt->out + "/scan.csv", scan_csv);
     int n = static_cast<int>(pile.particles.size());
     nlohmann::json j = {
         {"level", preset.name},
@@ -54,6 +59,8 @@ void add_pile_command(CLI::App& app) {
         {"at_rest", pile.at_rest},
         {"rms_speed_m_s", pile.rms_speed},
         {"max_overlap_rel", max_overlap(pile.particles, pile.geoms) / preset.diameter},
+        {"scan_points", scan.points.size()},
+        {"scan_face_angle_deg", scan.face_angle_deg},
         {"profile", profile.name},
         {"profile_volume_m3", profile.volume()},
         {"wall_s", wall},

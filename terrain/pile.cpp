@@ -214,9 +214,47 @@ double bulk_density(const Particles& particles, const Bounds& box, double partic
 
 }  // namespace talus
 
+#include "terrain/heightmap.hpp"
 #include "terrain/settle.hpp"
 
 namespace talus {
+
+PileScan scan_pile(const Particles& particles, const PileProfile& profile, double diameter) {
+  // heightmap over the container and the run-out in front of it
+  double top = 0.0;
+  for (auto& p : profile.points) top = std::max(top, p.z());
+  double x0 = profile.points.front().x() - 2.0 * top;
+  int nx = static_cast<int>(std::ceil((profile.rear_wall_x - x0) / diameter)) + 1;
+  int ny = static_cast<int>(std::ceil(profile.width / diameter)) + 1;
+  // the ground (z = 0) under every node, so bins without particles read as ground, not as holes
+  // filled from their neighbours (the heightmap reads positions and radii only)
+  Particles surface = particles;
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      surface.position.emplace_back(x0 + i * diameter, -0.5 * profile.width + j * diameter, 0.0);
+      surface.radius.push_back(0.0);
+    }
+  Heightmap map = Heightmap::from_particles(surface, x0, -0.5 * profile.width, diameter, nx, ny);
+  // the laser: 400 rays in the mid plane from in front of the toe towards the rear wall
+  const double sensor_back = 3.0, sensor_up = 3.0;  // [m] a scanner on a tripod in front
+  Eigen::Vector3d sensor(profile.points.front().x() - sensor_back, 0.0, sensor_up);
+  PileScan scan;
+  scan.points = map.scan_profile(0.0, x0, profile.rear_wall_x - 0.5 * diameter, 400, sensor);
+  // the face: a line through the points between 20% and 80% of the highest
+  double zmax = 0.0;
+  for (auto& q : scan.points) zmax = std::max(zmax, q.y());
+  double n = 0, sx = 0, sz = 0, sxx = 0, sxz = 0;
+  for (auto& q : scan.points) {
+    if (q.y() < 0.2 * zmax || q.y() > 0.8 * zmax) continue;
+    n += 1;
+    sx += q.x();
+    sz += q.y();
+    sxx += q.x() * q.x();
+    sxz += q.x() * q.y();
+  }
+  if (n >= 3) scan.face_angle_deg = std::atan((n * sxz - sx * sz) / (n * sxx - sx * sx)) * 180.0 / M_PI;
+  return scan;
+}
 
 PileBuild build_pile(Device& dev, const PileProfile& profile, const FidelityPreset& preset,
                      const Material& material, const PileBuildOptions& options, Progress* progress) {

@@ -87,4 +87,13 @@ struct PileBuildOptions {
 PileBuild build_pile(Device& dev, const PileProfile& profile, const FidelityPreset& preset,
                      const Material& material, const PileBuildOptions& options, Progress* progress);
 
+// the pile's surface as the field tests measured it before loading: a heightmap of the
+// particles (terrain/heightmap.hpp, cell = D) scanned by a 2-D laser in the mid plane y = 0
+// from a sensor 3 m in front of the toe and 3 m up; (x, z) points from the front to the rear
+struct PileScan {
+  std::vector<Eigen::Vector2d> points;
+  double face_angle_deg = 0.0;  // least-squares slope of the points between 20% and 80% height
+};
+PileScan scan_pile(const Particles& particles, const PileProfile& profile, double diameter);
+
 }  // namespace talus

@@ -109,3 +109,24 @@ TEST(Pile, FormworkCoversTheFace) {
 
 }  // namespace
 }  // namespace talus
+
+namespace talus {
+namespace {
+
+// the laser scan of an unsettled, exactly shaped bed reads the profile's 32-degree face
+TEST(Pile, LaserScanOfTheEmittedProfileReadsItsFace) {
+  PileProfile profile = default_pile_profile();
+  // a bed cut exactly to the profile: lattice sites under the profile line only
+  const double d = 0.1;
+  Particles p;
+  for (double x = profile.points.front().x() + 0.5 * d; x < profile.rear_wall_x; x += d)
+    for (double y = -0.5 * profile.width + 0.5 * d; y < 0.5 * profile.width; y += d)
+      for (double z = 0.5 * d; z + 0.5 * d <= profile.height_at(x); z += d) p.add(Vec3(x, y, z), 0.5 * d, 2590);
+  PileScan scan = scan_pile(p, profile, d);
+  std::printf("scan: %zu points, face %.2f deg (profile 32)\n", scan.points.size(), scan.face_angle_deg);
+  EXPECT_GT(scan.points.size(), 100u);
+  EXPECT_NEAR(scan.face_angle_deg, 32.0, 2.0);
+}
+
+}  // namespace
+}  // namespace talus
