@@ -14,7 +14,7 @@ echo "code,config,wall_s_for_0.5_s,wall_s_per_sim_s"
 # talus: the settle10k case of `talus bench dem`
 t=$("$build/talus" bench dem --levels D400 --quiet | python3 -c \
   'import json,sys; r=json.load(sys.stdin)["results"][-1]; print(r["wall_s"])')
-echo "talus,PoCL dt 4 ms 40 PGS sweeps,$t,$(python3 -c "print($t/0.5)")"
+echo "talus,PoCL dt 4 ms 30 PGS sweeps,$t,$(python3 -c "print($t/0.5)")"
 
 # liggghts: 25,000 steps of 2e-5 s, one rank and two ranks
 cp "$peers"/liggghts-settle10k*.in "$work"/

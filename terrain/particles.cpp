@@ -1,6 +1,8 @@
 #include "terrain/particles.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <tuple>
 
 namespace talus {
 
@@ -13,6 +15,31 @@ void Particles::add(const Vec3& x, double r, double density) {
   radius.push_back(r);
   inv_mass.push_back(1.0 / mass);
   inv_inertia.push_back(1.0 / (0.4 * mass * r * r));
+}
+
+Particles Particles::permuted(const std::vector<size_t>& order) const {
+  Particles out;
+  for (size_t i : order) {
+    out.position.push_back(position[i]);
+    out.velocity.push_back(velocity[i]);
+    out.omega.push_back(omega[i]);
+    out.rotation.push_back(rotation[i]);
+    out.radius.push_back(radius[i]);
+    out.inv_mass.push_back(inv_mass[i]);
+    out.inv_inertia.push_back(inv_inertia[i]);
+  }
+  return out;
+}
+
+std::vector<size_t> spatial_order(const Particles& particles, double cell) {
+  std::vector<size_t> order(particles.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  auto key = [&](size_t i) {
+    const Vec3& x = particles.position[i];
+    return std::make_tuple(std::floor(x.x() / cell), std::floor(x.y() / cell), x.z());
+  };
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return key(a) < key(b); });
+  return order;
 }
 
 StaticGeom StaticGeom::plane(const Vec3& point, const Vec3& normal) {

@@ -38,7 +38,13 @@ struct Particles {
   void add(const Vec3& x, double r, double density);
   // mass of particle i [kg] (0 for fixed ones)
   double mass(size_t i) const { return inv_mass[i] > 0 ? 1.0 / inv_mass[i] : 0.0; }
+  // the same particles in the order `order` (a permutation of 0..size-1)
+  Particles permuted(const std::vector<size_t>& order) const;
 };
+
+// an order that keeps neighbours near each other in memory: by cell of edge `cell` in x, then
+// y, then z (columns), which the sweeps' gathers of body velocities reward
+std::vector<size_t> spatial_order(const Particles& particles, double cell);
 
 // static geometry: a plane (solid behind it) or an oriented box
 struct StaticGeom {

@@ -196,7 +196,8 @@ Particles emit_pile_particles(const PileProfile& profile, double diameter, const
       }
     }
   }
-  return particles;
+  // filled layer by layer, stored column by column: neighbours stay near in memory
+  return particles.permuted(spatial_order(particles, spacing));
 }
 
 double bulk_density(const Particles& particles, const Bounds& box, double particle_density) {

@@ -35,7 +35,7 @@ Scene settle10k_scene() {
   m.rolling = 0.0;
   DemSettings s;
   s.dt = 4.0e-3;
-  s.iterations = 40;
+  s.iterations = 30;
   return lattice_box_scene(LatticeBox{}, m, s);
 }
 

@@ -29,7 +29,7 @@ Scene lattice_box_scene(const LatticeBox& layout, const Material& material, cons
 // the 10k settling case that LIGGGHTS and Bullet were run on (shared/peers/README.md):
 // 20x20x25 lattice, spacing 6 mm, jitter +-0.4 mm, d 5 mm, rho 2500 kg/m^3, mu 0.5, a
 // 0.12 x 0.12 m box. talus's own choices: E = 1e8 Pa (nonsmooth DEM: stiff contacts, large
-// steps; LIGGGHTS needs its soft 5 MPa for a 2e-5 s step), dt 4 ms, 40 PGS sweeps (chosen in
+// steps; LIGGGHTS needs its soft 5 MPa for a 2e-5 s step), dt 4 ms, 30 PGS sweeps (chosen in
 // bench/RESULTS.md: the cheapest setting measured with max overlap below 1% of d).
 Scene settle10k_scene();
 
