@@ -1,0 +1,55 @@
+// The command line's contract for failures: one message on stderr naming what is wrong and
+// how to fix it, exit code 1 for a runtime failure and 2 for bad input (apps/talus.cpp).
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+namespace {
+
+const std::string kTalus = std::string(TALUS_BINARY_DIR) + "/talus";
+
+struct Outcome {
+  int code;
+  std::string err;
+};
+
+// runs the tool through the shell with `env` prefixed, capturing stderr
+Outcome run(const std::string& env, const std::string& args) {
+  auto err_path = std::filesystem::temp_directory_path() / "talus_cli_errors.txt";
+  std::string cmd = env + " " + kTalus + " " + args + " >/dev/null 2>" + err_path.string();
+  int status = std::system(cmd.c_str());
+  std::ifstream in(err_path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, ss.str()};
+}
+
+TEST(CliErrors, NoOpenClPlatformSaysHowToInstallPocl) {
+  auto out_dir = std::filesystem::temp_directory_path() / "talus_no_platform";
+  // an ICD search path with no vendor files: the loader finds no platform
+  Outcome o = run("OCL_ICD_VENDORS=/nonexistent-talus-icd", "pile --level D400 --quiet --out " + out_dir.string());
+  EXPECT_EQ(o.code, 1) << o.err;
+  EXPECT_NE(o.err.find("no OpenCL platform"), std::string::npos) << o.err;
+  EXPECT_NE(o.err.find("pocl-opencl-icd"), std::string::npos) << o.err;
+}
+
+TEST(CliErrors, UnknownLevelIsBadInputListingTheKnownOnes) {
+  Outcome o = run("", "pile --level D75 --out /tmp/talus_unused");
+  EXPECT_EQ(o.code, 2) << o.err;
+  EXPECT_NE(o.err.find("D100"), std::string::npos) << o.err;
+}
+
+TEST(CliErrors, MalformedProfileNamesFileAndField) {
+  auto path = (std::filesystem::temp_directory_path() / "talus_bad_profile_cli.json").string();
+  std::ofstream(path) << R"({"width_m": -1, "rear_wall_x_m": 5, "profile_xz_m": [[0, 0], [1, 1]]})";
+  Outcome o = run("", "pile --level D400 --profile " + path + " --out /tmp/talus_unused");
+  EXPECT_EQ(o.code, 2) << o.err;
+  EXPECT_NE(o.err.find(path), std::string::npos) << o.err;
+  EXPECT_NE(o.err.find("width_m"), std::string::npos) << o.err;
+}
+
+}  // namespace
