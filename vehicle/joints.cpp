@@ -40,6 +40,12 @@ void Joint::add_joint_row(std::vector<ConstraintRow>& rows, ConstraintRow row, R
   if (unit == RowUnit::angle) angle_violation_ = std::max(angle_violation_, std::abs(violation));
 }
 
+void Joint::begin_rows(const std::vector<ConstraintRow>& rows) {
+  first_row_ = static_cast<int>(rows.size());
+  bilateral_rows_ = 0;
+  position_violation_ = angle_violation_ = 0.0;
+}
+
 void Joint::add_point_rows(const std::vector<RigidBody>& bodies, std::vector<ConstraintRow>& rows) {
   const Vec3 pa = a_.world_anchor(bodies);
   const Vec3 pb = b_.world_anchor(bodies);
@@ -109,9 +115,7 @@ BallJoint::BallJoint(const std::vector<RigidBody>& bodies, int a, int b, const V
 }
 
 void BallJoint::add_rows(const std::vector<RigidBody>& bodies, std::vector<ConstraintRow>& rows) {
-  first_row_ = static_cast<int>(rows.size());
-  bilateral_rows_ = 0;
-  position_violation_ = angle_violation_ = 0.0;
+  begin_rows(rows);
   add_point_rows(bodies, rows);
 }
 
@@ -126,9 +130,7 @@ HingeJoint::HingeJoint(const std::vector<RigidBody>& bodies, int a, int b, const
 }
 
 void HingeJoint::add_rows(const std::vector<RigidBody>& bodies, std::vector<ConstraintRow>& rows) {
-  first_row_ = static_cast<int>(rows.size());
-  bilateral_rows_ = 0;
-  position_violation_ = angle_violation_ = 0.0;
+  begin_rows(rows);
   add_point_rows(bodies, rows);
   // axes aligned: x_a·z_b = 0, y_a·z_b = 0
   const Mat3 fa = a_.world_axes(bodies);
@@ -160,9 +162,7 @@ PrismaticJoint::PrismaticJoint(const std::vector<RigidBody>& bodies, int a, int 
 }
 
 void PrismaticJoint::add_rows(const std::vector<RigidBody>& bodies, std::vector<ConstraintRow>& rows) {
-  first_row_ = static_cast<int>(rows.size());
-  bilateral_rows_ = 0;
-  position_violation_ = angle_violation_ = 0.0;
+  begin_rows(rows);
   const Vec3 pa = a_.world_anchor(bodies);
   const Vec3 pb = b_.world_anchor(bodies);
   const Mat3 fa = a_.world_axes(bodies);
@@ -199,9 +199,7 @@ LockJoint::LockJoint(const std::vector<RigidBody>& bodies, int a, int b, const V
 }
 
 void LockJoint::add_rows(const std::vector<RigidBody>& bodies, std::vector<ConstraintRow>& rows) {
-  first_row_ = static_cast<int>(rows.size());
-  bilateral_rows_ = 0;
-  position_violation_ = angle_violation_ = 0.0;
+  begin_rows(rows);
   add_point_rows(bodies, rows);
   const Mat3 fa = a_.world_axes(bodies);
   const Mat3 fb = b_.world_axes(bodies);
@@ -224,9 +222,7 @@ CylinderJoint::CylinderJoint(const std::vector<RigidBody>& bodies, int a, const 
 }
 
 void CylinderJoint::add_rows(const std::vector<RigidBody>& bodies, std::vector<ConstraintRow>& rows) {
-  first_row_ = static_cast<int>(rows.size());
-  bilateral_rows_ = 0;
-  position_violation_ = angle_violation_ = 0.0;
+  begin_rows(rows);
   add_motor_and_limits(bodies, rows);
 }
 

@@ -54,6 +54,8 @@ class Joint : public Constraint {
  protected:
   // the row of the free coordinate (Jacobian only), for motor and limits
   virtual ConstraintRow coordinate_row(const std::vector<RigidBody>& bodies) const = 0;
+  // start this step's rows at the end of `rows`: no bilateral rows yet, violations reset
+  void begin_rows(const std::vector<ConstraintRow>& rows);
   // append the bilateral rows, then limit and motor rows
   void add_joint_row(std::vector<ConstraintRow>& rows, ConstraintRow row, RowUnit unit, double violation);
   void add_motor_and_limits(const std::vector<RigidBody>& bodies, std::vector<ConstraintRow>& rows);
