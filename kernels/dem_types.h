@@ -79,4 +79,20 @@ typedef struct {
   tl_int pad0;
 } TlRow;
 
+// the bucket: one rigid body of the vehicle that particles touch (SPEC §1 steps 3-6). Its rows
+// are TlRow with b = TL_BUCKET_BODY and arm_b the lever arm about the bucket's centre of mass;
+// they live in their own buffer and are solved one after another by one work-item
+// (kernels/bucket.cl), because every one of them shares the bucket and graph colouring would
+// give each its own colour
+#define TL_BUCKET_BODY (-2147483647)
+
+// the bucket's state inside the sweeps: its twist, and its articulated mobility from the direct
+// vehicle solver (the 6x6 Schur complement: twist change per impulse wrench [P; L] about the
+// centre of mass, all joints and motors of the machine active), row-major
+typedef struct {
+  tl_float4 velocity;      // xyz linear velocity of the centre of mass [m/s]; w unused
+  tl_float4 omega;         // xyz angular velocity [1/s]; w unused
+  tl_float mobility[36];   // W [m/(N s)], [1/(N m s)]; row-major 6x6
+} TlBucketBody;
+
 #endif

@@ -325,6 +325,10 @@ int DemWorld::sweep(int iterations) {
   return done;
 }
 
+void DemWorld::sweep_fixed(int iterations) {
+  if (buffers_.n_contacts > 0) sweep_->iterate(buffers_, iterations);
+}
+
 void DemWorld::store_impulses() {
   DemBuffers& b = buffers_;
   set_args(k_store_, b.rows, b.n_contacts, b.contacts[b.current]);
@@ -358,17 +362,36 @@ std::vector<double> DemWorld::step_recording_residuals() {
   return history;
 }
 
-void DemWorld::step_impl(std::vector<double>* history) {
+void DemWorld::begin_step() {
   // settings changed through settings() take effect here (the params are a few numbers)
   update_params();
   stats_ = StepStats{};
+  if (particle_count_ == 0) return;
+  // contacts, colours and rows of this step
+  broad_phase();
+  narrow_phase();
+  build_adjacency();
+  colour_contacts();
+  prepare_rows();
+  stats_.contacts = buffers_.n_contacts;
+  stats_.colours = static_cast<int>(buffers_.colour_start.size()) - 1;
+  stats_.colour_rounds = buffers_.colour_rounds;
+}
+
+void DemWorld::end_step() {
   if (particle_count_ > 0) {
-    // contacts, colours and rows of this step
-    broad_phase();
-    narrow_phase();
-    build_adjacency();
-    colour_contacts();
-    prepare_rows();
+    // keep the impulses for the next warm start, move the particles
+    store_impulses();
+    integrate();
+    buffers_.has_previous = true;
+    buffers_.current = 1 - buffers_.current;
+  }
+  time_ += settings_.dt;
+}
+
+void DemWorld::step_impl(std::vector<double>* history) {
+  begin_step();
+  if (particle_count_ > 0) {
     // velocities: external forces, warm start, then the sweeps
     apply_gravity();
     warm_start();
@@ -387,18 +410,10 @@ void DemWorld::step_impl(std::vector<double>* history) {
       }
       stats_.iterations = settings_.iterations;
     }
-    stats_.contacts = buffers_.n_contacts;
-    stats_.colours = static_cast<int>(buffers_.colour_start.size()) - 1;
-    stats_.colour_rounds = buffers_.colour_rounds;
     if (history != nullptr) stats_.residual = history->back();
     else if (settings_.tolerance > 0.0) stats_.residual = residual();
-    // keep the impulses for the next warm start, move the particles
-    store_impulses();
-    integrate();
-    buffers_.has_previous = true;
-    buffers_.current = 1 - buffers_.current;
   }
-  time_ += settings_.dt;
+  end_step();
 }
 
 }  // namespace talus

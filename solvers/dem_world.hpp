@@ -44,9 +44,16 @@ class DemWorld {
   // the particles as they are on the device now
   Particles particles() const;
   size_t size() const { return particle_count_; }
+  double max_radius() const { return max_radius_; }
 
-  // one full time step
+  // one full time step: begin_step(), gravity, warm start, sweeps, end_step()
   void step();
+  // the halves of a step around the velocity solve, for a coupled step that adds rows of its
+  // own between them (solvers/split_solver): begin_step finds this step's contacts and makes
+  // their rows; end_step keeps the impulses for the next warm start, moves the particles and
+  // advances the clock
+  void begin_step();
+  void end_step();
   double time() const { return time_; }
   const StepStats& stats() const { return stats_; }
   const DemSettings& settings() const { return settings_; }
@@ -63,6 +70,8 @@ class DemWorld {
   void apply_gravity();
   void warm_start();       // applies the rows' initial impulses to the bodies
   int sweep(int iterations);
+  // exactly `iterations` sweeps over the particle rows, whatever the tolerance says
+  void sweep_fixed(int iterations);
   void store_impulses();
   void integrate();
 

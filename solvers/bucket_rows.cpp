@@ -1,0 +1,324 @@
+#include "solvers/bucket_rows.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+
+#include "solvers/dem_world.hpp"
+
+namespace talus {
+
+namespace {
+
+// a previous contact of the same particle is the same contact when the normals agree this well
+// (cos 37 degrees): features of one bucket are at least 45 degrees apart (bottom/back/sides)
+constexpr double kSameNormal = 0.8;
+
+Vec3 xyz(const cl_float4& f) { return Vec3(f.s[0], f.s[1], f.s[2]); }
+
+// [r]x, the cross-product matrix: skew(r) p = r x p
+Mat3d skew(const Vec3& r) {
+  Mat3d s;
+  s << 0.0, -r.z(), r.y(), r.z(), 0.0, -r.x(), -r.y(), r.x(), 0.0;
+  return s;
+}
+
+// the largest eigenvalue of a symmetric (positive semi-definite) 3x3 block
+double largest_eigenvalue(const Mat3d& m) {
+  Eigen::SelfAdjointEigenSolver<Mat3d> es(0.5 * (m + m.transpose()), Eigen::EigenvaluesOnly);
+  return std::max(0.0, es.eigenvalues().maxCoeff());
+}
+
+// the bucket's twist change from impulse p at arm r plus angular impulse l
+void add_twist_change(BucketBody& b, const Vec3& p, const Vec3& l) {
+  Vec6 w;
+  w << p, l;
+  const Vec6 d = b.mobility * w;
+  b.velocity += d.head<3>();
+  b.omega += d.tail<3>();
+}
+
+}  // namespace
+
+std::vector<int> match_bucket_contacts(const std::vector<BucketContact>& contacts,
+                                       const std::vector<BucketImpulse>& previous) {
+  std::vector<int> match(contacts.size(), -1);
+  std::vector<char> used(previous.size(), 0);
+  for (size_t k = 0; k < contacts.size(); ++k) {
+    // the previous contacts of this particle (a sorted range)
+    const int particle = contacts[k].particle;
+    auto lo = std::lower_bound(previous.begin(), previous.end(), particle,
+                               [](const BucketImpulse& p, int i) { return p.particle < i; });
+    double best = kSameNormal;
+    for (auto it = lo; it != previous.end() && it->particle == particle; ++it) {
+      const size_t j = static_cast<size_t>(it - previous.begin());
+      const double c = it->normal.dot(contacts[k].normal);
+      if (!used[j] && c > best) {
+        best = c;
+        match[k] = static_cast<int>(j);
+      }
+    }
+    if (match[k] >= 0) used[match[k]] = 1;
+  }
+  return match;
+}
+
+std::vector<reference::Row> make_bucket_rows(const std::vector<BucketContact>& contacts,
+                                             const Particles& particles, const BucketBody& bucket,
+                                             const Vec3& com, const reference::StepParams& p,
+                                             const BucketMaterial& material,
+                                             const std::vector<BucketImpulse>& previous,
+                                             const std::vector<int>& match) {
+  std::vector<reference::Row> rows;
+  rows.reserve(contacts.size());
+  const double h = p.dt;
+  const double upsilon = 1.0 / (1.0 + 4.0 * p.damping_tau / h);
+  const Mat3d w_angular = bucket.mobility.block<3, 3>(3, 3);
+  for (size_t k = 0; k < contacts.size(); ++k) {
+    const BucketContact& c = contacts[k];
+    const int a = c.particle;
+    const Vec3& n = c.normal;
+    const double r = particles.radius[a];
+    const double inv_m = particles.inv_mass[a];
+    const double inv_i = particles.inv_inertia[a];
+    const Vec3 arm_b = c.point - com;
+
+    // the bucket's point mobility at the contact: K_b = E W E^T, E = [I, -[arm]x]
+    Eigen::Matrix<double, 3, 6> E;
+    E << Mat3d::Identity(), -skew(arm_b);
+    const Mat3d K = E * bucket.mobility * E.transpose();
+
+    // normal velocity before the step, predicted overlap, SPOOK with secant Hertz compliance
+    const Vec3 v_point = bucket.velocity + bucket.omega.cross(arm_b);
+    const double un = n.dot(v_point - particles.velocity[a]);
+    const double stiffness = reference::hertz_stiffness(r, p);
+    const double overlap = std::max(std::max(-c.gap, -c.gap - h * un), p.overlap_floor_rel * r);
+    const double compliance = 1.0 / (stiffness * std::sqrt(overlap));
+    const double sigma = 4.0 * compliance * upsilon / (h * h);
+
+    // effective masses: exact along n, an upper bound across (see the header)
+    const double d_n = inv_m + n.dot(K * n) + sigma;
+    const Mat3d tangential = (Mat3d::Identity() - n * n.transpose()) * K * (Mat3d::Identity() - n * n.transpose());
+    const double d_t = inv_m + inv_i * c.arm_particle.squaredNorm() + largest_eigenvalue(tangential);
+    const double d_r = inv_i + largest_eigenvalue(w_angular);
+
+    reference::Row row;
+    row.normal = n;
+    row.rhs = -(4.0 / h) * upsilon * c.gap + upsilon * un;
+    row.arm_a = c.arm_particle;
+    row.inv_dn = 1.0 / d_n;
+    row.arm_b = arm_b;
+    row.sigma = sigma;
+    row.inv_dt = d_t > 0.0 ? 1.0 / d_t : 0.0;
+    row.friction = material.friction;
+    row.rolling_limit = material.rolling * r;
+    row.inv_dr = d_r > 0.0 ? 1.0 / d_r : 0.0;
+    row.a = a;
+    row.b = TL_BUCKET_BODY;
+    row.contact = static_cast<int>(k);
+
+    // warm start: the matched impulses carried into the new frame, within the new cones
+    const int j = k < match.size() ? match[k] : -1;
+    if (j >= 0) {
+      const BucketImpulse& old = previous[j];
+      const double ln = old.impulse_n;
+      const Vec3 projected = old.impulse_t - old.impulse_t.dot(n) * n;
+      const double pm = projected.norm();
+      row.impulse_n = ln;
+      row.impulse_t = pm > 0.0 ? Vec3(projected * (std::min(old.impulse_t.norm(), row.friction * ln) / pm))
+                               : Vec3::Zero();
+      const double rmax = row.rolling_limit * ln;
+      const double twist = std::clamp(old.impulse_r.dot(n), -rmax, rmax);
+      Vec3 roll = old.impulse_r - old.impulse_r.dot(n) * n;
+      if (roll.norm() > rmax) roll *= rmax / roll.norm();
+      row.impulse_r = roll + twist * n;
+    }
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+Vec6 bucket_wrench_impulse(const std::vector<reference::Row>& rows) {
+  Vec6 j = Vec6::Zero();
+  for (const auto& r : rows) {
+    const Vec3 P = r.impulse_n * r.normal + r.impulse_t;
+    j.head<3>() += P;
+    j.tail<3>() += r.arm_b.cross(P) + r.impulse_r;
+  }
+  return j;
+}
+
+std::vector<BucketImpulse> bucket_impulses(const std::vector<reference::Row>& rows,
+                                           const std::vector<int>& particle_index) {
+  std::vector<BucketImpulse> out;
+  out.reserve(rows.size());
+  for (const auto& r : rows) {
+    BucketImpulse b;
+    b.particle = particle_index.at(r.a);
+    b.normal = r.normal;
+    b.impulse_n = r.impulse_n;
+    b.impulse_t = r.impulse_t;
+    b.impulse_r = r.impulse_r;
+    out.push_back(b);
+  }
+  return out;
+}
+
+TlRow to_device(const reference::Row& r) {
+  TlRow d{};
+  d.normal = to_float4(r.normal, r.rhs);
+  d.arm_a = to_float4(r.arm_a, r.inv_dn);
+  d.arm_b = to_float4(r.arm_b, r.sigma);
+  d.impulse_t = to_float4(r.impulse_t, r.impulse_n);
+  d.impulse_r = to_float4(r.impulse_r, r.inv_dt);
+  d.coef = to_float4(Vec3(r.friction, r.rolling_limit, r.inv_dr), 0.0);
+  d.a = r.a;
+  d.b = r.b;
+  d.contact = r.contact;
+  return d;
+}
+
+TlBucketBody to_device(const BucketBody& b) {
+  TlBucketBody d{};
+  d.velocity = to_float4(b.velocity, 0.0);
+  d.omega = to_float4(b.omega, 0.0);
+  for (int i = 0; i < 6; ++i)
+    for (int j = 0; j < 6; ++j) d.mobility[6 * i + j] = static_cast<float>(b.mobility(i, j));
+  return d;
+}
+
+BucketBody from_device(const TlBucketBody& d) {
+  BucketBody b;
+  b.velocity = xyz(d.velocity);
+  b.omega = xyz(d.omega);
+  for (int i = 0; i < 6; ++i)
+    for (int j = 0; j < 6; ++j) b.mobility(i, j) = d.mobility[6 * i + j];
+  return b;
+}
+
+namespace reference {
+
+void bucket_warm_start(const std::vector<Row>& rows, Particles& particles) {
+  for (const Row& row : rows) {
+    const int a = row.a;
+    const Vec3 P = row.impulse_n * row.normal + row.impulse_t;
+    particles.velocity[a] -= particles.inv_mass[a] * P;
+    particles.omega[a] -= particles.inv_inertia[a] * (row.arm_a.cross(P) + row.impulse_r);
+  }
+}
+
+void bucket_sweep(std::vector<Row>& rows, Particles& particles, BucketBody& bucket) {
+  for (Row& row : rows) {
+    const int a = row.a;
+    Vec3& va = particles.velocity[a];
+    Vec3& wa = particles.omega[a];
+    const double ima = particles.inv_mass[a];
+    const double iia = particles.inv_inertia[a];
+    const Vec3& n = row.normal;
+    double ln = row.impulse_n;
+
+    // normal
+    const double un = n.dot(bucket.velocity + bucket.omega.cross(row.arm_b) - va);
+    const double ln_new = std::max(0.0, ln + (row.rhs - un - row.sigma * ln) * row.inv_dn);
+    const Vec3 dp = (ln_new - ln) * n;
+    va -= ima * dp;
+    add_twist_change(bucket, dp, row.arm_b.cross(dp));
+    ln = ln_new;
+
+    // friction on the disc
+    const Vec3 u = (bucket.velocity + bucket.omega.cross(row.arm_b)) - (va + wa.cross(row.arm_a));
+    const Vec3 ut = u - u.dot(n) * n;
+    Vec3 lt_new = row.impulse_t - ut * row.inv_dt;
+    const double tmax = row.friction * ln;
+    const double tm = lt_new.norm();
+    if (tm > tmax) lt_new *= tm > 0.0 ? tmax / tm : 0.0;
+    const Vec3 dlt = lt_new - row.impulse_t;
+    va -= ima * dlt;
+    wa -= iia * row.arm_a.cross(dlt);
+    add_twist_change(bucket, dlt, row.arm_b.cross(dlt));
+
+    // rolling and twist
+    const Vec3 wrel = bucket.omega - wa;
+    const Vec3& lr = row.impulse_r;
+    const double rmax = row.rolling_limit * ln;
+    const Vec3 lr_t = lr - lr.dot(n) * n;
+    Vec3 lr_t_new = lr_t - (wrel - wrel.dot(n) * n) * row.inv_dr;
+    const double rm = lr_t_new.norm();
+    if (rm > rmax) lr_t_new *= rm > 0.0 ? rmax / rm : 0.0;
+    const double twist = std::clamp(lr.dot(n) - wrel.dot(n) * row.inv_dr, -rmax, rmax);
+    const Vec3 lr_new = lr_t_new + twist * n;
+    const Vec3 dlr = lr_new - lr;
+    wa -= iia * dlr;
+    add_twist_change(bucket, Vec3::Zero(), dlr);
+
+    row.impulse_n = ln;
+    row.impulse_t = lt_new;
+    row.impulse_r = lr_new;
+  }
+}
+
+}  // namespace reference
+
+BucketRowBlock::BucketRowBlock(Device& dev)
+    : dev_(dev), rows_(dev, 1), body_(dev, 1), index_(dev, 1), gathered_position_(dev, 1),
+      gathered_velocity_(dev, 1), gathered_omega_(dev, 1) {
+  const cl::Program& program = dev.program({"bucket.cl"});
+  gather_kernel_ = dev.kernel(program, "bucket_gather");
+  warm_kernel_ = dev.kernel(program, "bucket_warm_start");
+  sweep_kernel_ = dev.kernel(program, "bucket_sweep");
+}
+
+Particles BucketRowBlock::gather(const std::vector<int>& index, const Buffer<cl_float4>& position,
+                                 const Buffer<cl_float4>& velocity, const Buffer<cl_float4>& omega) {
+  Particles out;
+  const size_t n = index.size();
+  if (n == 0) return out;
+  index_.upload(index);
+  gathered_position_.resize(n);
+  gathered_velocity_.resize(n);
+  gathered_omega_.resize(n);
+  set_args(gather_kernel_, index_, static_cast<int>(n), position, velocity, omega, gathered_position_,
+           gathered_velocity_, gathered_omega_);
+  launch(dev_, gather_kernel_, n, "bucket_gather");
+  const auto x = gathered_position_.download(n);
+  const auto v = gathered_velocity_.download(n);
+  const auto w = gathered_omega_.download(n);
+  for (size_t k = 0; k < n; ++k) {
+    out.position.push_back(xyz(x[k]));
+    out.radius.push_back(x[k].s[3]);
+    out.velocity.push_back(xyz(v[k]));
+    out.inv_mass.push_back(v[k].s[3]);
+    out.omega.push_back(xyz(w[k]));
+    out.inv_inertia.push_back(w[k].s[3]);
+    out.rotation.emplace_back(0.0, 0.0, 0.0, 1.0);
+  }
+  return out;
+}
+
+void BucketRowBlock::set_rows(const std::vector<TlRow>& rows) {
+  rows_count_ = static_cast<int>(rows.size());
+  if (!rows.empty()) rows_.upload(rows);
+}
+
+void BucketRowBlock::set_bucket(const BucketBody& bucket) { body_.upload({to_device(bucket)}); }
+
+void BucketRowBlock::warm_start(Buffer<cl_float4>& velocity, Buffer<cl_float4>& omega) {
+  if (rows_count_ == 0) return;
+  set_args(warm_kernel_, rows_, rows_count_, velocity, omega);
+  launch(dev_, warm_kernel_, 1, "bucket_warm_start");
+}
+
+void BucketRowBlock::sweep(Buffer<cl_float4>& velocity, Buffer<cl_float4>& omega) {
+  if (rows_count_ == 0) return;
+  set_args(sweep_kernel_, rows_, rows_count_, velocity, omega, body_);
+  launch(dev_, sweep_kernel_, 1, "bucket_sweep");
+}
+
+std::vector<TlRow> BucketRowBlock::rows() const {
+  if (rows_count_ == 0) return {};
+  return rows_.download(rows_count_);
+}
+
+BucketBody BucketRowBlock::bucket() const { return from_device(body_.download(1)[0]); }
+
+}  // namespace talus

@@ -1,0 +1,128 @@
+// Contact rows between particles and the bucket (SPEC §1 steps 3-6, issue 4).
+//
+// The bucket is one body of the vehicle. Particles see it through its articulated mobility W,
+// the 6x6 Schur complement of the direct vehicle solve (vehicle::MultibodySystem::mobility): an
+// impulse wrench [P; L] on the bucket changes its twist by W [P; L] with every joint, motor and
+// tyre of the machine taking its share. The rows are the particle rows of kernels/solver.cl with
+// body b the bucket:
+//   - normal: SPOOK with the secant Hertz compliance of a sphere on a plate (R* = r, the same
+//     material as walls), D_n = 1/m_a + n^T K_b n + Sigma with K_b = E W E^T the bucket's
+//     point mobility at the contact (E maps a twist to the point's velocity);
+//   - friction on the disc with the bucket-soil coefficient, rolling and twist as for walls.
+//     Their effective masses are scalars: the particle's isotropic share plus the largest
+//     eigenvalue of the bucket's tangential (or angular) block, an upper bound that keeps the
+//     projected steps stable where the bucket's anisotropy would make an exact scalar wrong.
+// Rows are made on the host in double (the contacts come from Embree on the host anyway) and
+// solved on the device by kernels/bucket.cl; BucketRowBlock owns the device side. The free
+// functions in namespace reference are the double twins of the kernels.
+#pragma once
+#include <vector>
+
+#include "host/device.hpp"
+#include "kernels/common.h"
+#include "kernels/dem_types.h"
+#include "solvers/dem_reference.hpp"
+#include "terrain/bucket_contacts.hpp"
+
+namespace talus {
+
+using Mat3d = Eigen::Matrix3d;
+using Vec6 = vehicle::Vec6;
+using Mat6 = vehicle::Mat6;
+
+// the bucket as the rows see it: twist of its centre of mass and articulated mobility
+struct BucketBody {
+  Vec3 velocity = Vec3::Zero();  // [m/s]
+  Vec3 omega = Vec3::Zero();     // [1/s]
+  Mat6 mobility = Mat6::Zero();  // W: twist change per impulse wrench about the centre of mass
+  Vec6 twist() const {
+    Vec6 t;
+    t << velocity, omega;
+    return t;
+  }
+};
+
+// the contact material between particles and the bucket
+struct BucketMaterial {
+  double friction = 0.2;  // bucket-soil Coulomb friction, paper §4.4 (calibrated there)
+  double rolling = 0.02;  // rolling resistance against the plate: the gravel's own mu_r
+};
+
+// last step's solved impulses of one bucket contact, kept for warm starting
+struct BucketImpulse {
+  int particle = -1;
+  Vec3 normal = Vec3::Zero();
+  double impulse_n = 0.0;
+  Vec3 impulse_t = Vec3::Zero();
+  Vec3 impulse_r = Vec3::Zero();
+};
+
+// warm-start matching: for each new contact, the previous contact of the same particle whose
+// normal is closest to the new one (and within 37 degrees, cos 0.8), each used at most once;
+// -1 where none. `previous` sorted by particle (as rows are). A particle may touch the bucket at
+// several features, so the particle alone is not a key; the triangle is not one either, since a
+// particle sliding over the bottom plate crosses triangles every few steps.
+std::vector<int> match_bucket_contacts(const std::vector<BucketContact>& contacts,
+                                       const std::vector<BucketImpulse>& previous);
+
+// the rows of the bucket contacts (double). `particles` holds the candidates' state before the
+// step (velocities before gravity), indexed like contacts[k].particle; `com` is the bucket's
+// centre of mass (arms are taken about it); `previous`/`match` give warm-start impulses (pass
+// empty vectors for none). Each row's `a` is the particle's index in `particles`, b is
+// TL_BUCKET_BODY, `contact` the contact's index.
+std::vector<reference::Row> make_bucket_rows(const std::vector<BucketContact>& contacts,
+                                             const Particles& particles, const BucketBody& bucket,
+                                             const Vec3& com, const reference::StepParams& p,
+                                             const BucketMaterial& material,
+                                             const std::vector<BucketImpulse>& previous,
+                                             const std::vector<int>& match);
+
+// the impulse wrench the rows put on the bucket about its centre of mass: sum of [P; arm x P + L]
+Vec6 bucket_wrench_impulse(const std::vector<reference::Row>& rows);
+
+// the rows' impulses for the next step's warm start; `particle_index` maps row.a to the
+// particle's index in the whole system
+std::vector<BucketImpulse> bucket_impulses(const std::vector<reference::Row>& rows,
+                                           const std::vector<int>& particle_index);
+
+TlRow to_device(const reference::Row& r);
+TlBucketBody to_device(const BucketBody& b);
+BucketBody from_device(const TlBucketBody& b);
+
+namespace reference {
+// kernels/bucket.cl bucket_warm_start: particles receive the rows' starting impulses
+void bucket_warm_start(const std::vector<Row>& rows, Particles& particles);
+// kernels/bucket.cl bucket_sweep: one sweep over the rows in order, bucket through W
+void bucket_sweep(std::vector<Row>& rows, Particles& particles, BucketBody& bucket);
+}  // namespace reference
+
+// the device side: rows, the bucket's state, and the gather of the candidates' state
+class BucketRowBlock {
+ public:
+  explicit BucketRowBlock(Device& dev);
+
+  // the candidates' state (centre/radius, velocity/inverse mass, omega/inverse inertia) from the
+  // particle buffers, in the order of `index`
+  Particles gather(const std::vector<int>& index, const Buffer<cl_float4>& position,
+                   const Buffer<cl_float4>& velocity, const Buffer<cl_float4>& omega);
+  // rows with `a` already mapped to particle indices of the whole system
+  void set_rows(const std::vector<TlRow>& rows);
+  void set_bucket(const BucketBody& bucket);
+  int size() const { return rows_count_; }
+
+  void warm_start(Buffer<cl_float4>& velocity, Buffer<cl_float4>& omega);
+  void sweep(Buffer<cl_float4>& velocity, Buffer<cl_float4>& omega);
+  std::vector<TlRow> rows() const;
+  BucketBody bucket() const;
+
+ private:
+  Device& dev_;
+  Buffer<TlRow> rows_;
+  Buffer<TlBucketBody> body_;
+  Buffer<int> index_;
+  Buffer<cl_float4> gathered_position_, gathered_velocity_, gathered_omega_;
+  int rows_count_ = 0;
+  cl::Kernel gather_kernel_, warm_kernel_, sweep_kernel_;
+};
+
+}  // namespace talus
