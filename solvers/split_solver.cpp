@@ -1,0 +1,152 @@
+#include "solvers/split_solver.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "host/error.hpp"
+
+namespace talus {
+
+SplitSolver::SplitSolver(Device& dev, DemWorld& dem, vehicle::WheelLoader& loader,
+                         const CouplingSettings& settings, const embree::Device& embree)
+    : dev_(dev), dem_(dem), loader_(loader), settings_(settings), scene_(loader.bucket_mesh(), embree),
+      selection_(dev), block_(dev) {
+  if (settings.max_passes < 1) throw InputError("CouplingSettings.max_passes: must be at least 1");
+  if (!(settings.tolerance > 0.0)) throw InputError("CouplingSettings.tolerance: must be positive [m/s]");
+  if (!(settings.material.friction >= 0.0) || !(settings.material.rolling >= 0.0))
+    throw InputError("CouplingSettings.material: friction and rolling must not be negative");
+  for (const Vec3& v : scene_.vertices()) bucket_reach_ = std::max(bucket_reach_, v.norm());
+}
+
+double SplitSolver::point_speed_difference(const Vec6& a, const Vec6& b, const Vec3& com) const {
+  // |dv + dw x (x - com)| <= |dv| + |dw| |x - com|, with |x - com| bounded by the reach from the
+  // mesh origin (the tip) plus the distance of the centre of mass from it
+  const double reach = bucket_reach_ + (loader_.bucket_tip_world() - com).norm();
+  return (a.head<3>() - b.head<3>()).norm() + (a.tail<3>() - b.tail<3>()).norm() * reach;
+}
+
+void SplitSolver::step() {
+  stats_ = CouplingStats{};
+  const double h = dem_.settings().dt;
+  vehicle::MultibodySystem& vehicle = loader_.system();
+  const vehicle::RigidBody& bucket_body = vehicle.body(loader_.bucket_body());
+  const Vec3 com = bucket_body.position;
+  const Vec6 twist_before = bucket_body.twist();
+
+  // 1. rows of both sides from the start-of-step state
+  vehicle.assemble(h);
+  dem_.begin_step();
+  const reference::StepParams params = reference::from_device(dem_.params());
+
+  // 2. particles near the bucket: device box selection, their state, embree contacts. The
+  // contact range covers what the bucket and a particle can close within the step (speculative)
+  const BucketPose pose = bucket_pose(loader_);
+  const double r_max = dem_.max_radius();
+  const double bucket_speed = twist_before.head<3>().norm() + twist_before.tail<3>().norm() * (bucket_reach_ +
+                              (pose.position - com).norm());
+  const double reach = 2.0 * h * (bucket_speed + dem_.settings().max_speed);
+  std::vector<int> candidates;
+  std::vector<BucketContact> contacts;
+  Particles near;
+  if (dem_.size() > 0) {
+    const double margin_box = dem_.settings().margin_rel + reach / std::max(r_max, 1e-12);
+    const Aabb box = candidate_box(scene_.world_bounds(pose), r_max, margin_box);
+    DemBuffers& b = dem_.buffers();
+    candidates = selection_.select(b.position, dem_.size(), box);
+    near = block_.gather(candidates, b.position, b.velocity, b.omega);
+    std::vector<int> local(candidates.size());
+    for (size_t k = 0; k < local.size(); ++k) local[k] = static_cast<int>(k);
+    // each particle's own margin: the relative one plus the speculative reach in its radii
+    const auto t0 = std::chrono::steady_clock::now();
+    double r_min = r_max;
+    for (double r : near.radius) r_min = std::min(r_min, r);
+    const double margin = dem_.settings().margin_rel + reach / std::max(r_min, 1e-12);
+    contacts = scene_.find_bucket_contacts(near, local, pose, margin);
+    stats_.embree_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
+  stats_.candidates = static_cast<int>(candidates.size());
+  stats_.bucket_contacts = static_cast<int>(contacts.size());
+  for (const BucketContact& c : contacts)
+    stats_.max_overlap_rel = std::max(stats_.max_overlap_rel, -c.gap / near.radius[c.particle]);
+
+  // 3. warm start: match last step's impulses (by particle of the whole system), take their
+  // wrench into a first vehicle solve, and read the bucket's twist and mobility under that load
+  std::vector<BucketContact> keyed = contacts;
+  for (auto& c : keyed) c.particle = candidates[c.particle];
+  const std::vector<int> match = dem_.settings().warm_start ? match_bucket_contacts(keyed, previous_)
+                                                            : std::vector<int>();
+  BucketBody start;
+  start.velocity = twist_before.head<3>();
+  start.omega = twist_before.tail<3>();
+  const Vec6 warm_impulse =
+      bucket_wrench_impulse(make_bucket_rows(contacts, near, start, com, params, settings_.material, previous_, match));
+  loader_.set_bucket_wrench(warm_impulse / h);
+  vehicle.solve();
+  start.mobility = loader_.bucket_mobility();
+  std::vector<reference::Row> rows =
+      make_bucket_rows(contacts, near, start, com, params, settings_.material, previous_, match);
+  std::vector<TlRow> device_rows;
+  device_rows.reserve(rows.size());
+  for (auto& r : rows) {
+    TlRow d = to_device(r);
+    d.a = candidates[r.a];
+    device_rows.push_back(d);
+  }
+  block_.set_rows(device_rows);
+  BucketBody solved;
+  const Vec6 twist0 = vehicle.solved_twist(loader_.bucket_body());
+  solved.velocity = twist0.head<3>();
+  solved.omega = twist0.tail<3>();
+  solved.mobility = start.mobility;
+  block_.set_bucket(solved);
+
+  // 4-5. velocities: gravity, warm start, sweeps with the bucket rows, outer passes
+  dem_.apply_gravity();
+  dem_.warm_start();
+  if (dem_.settings().warm_start) block_.warm_start(dem_.buffers().velocity, dem_.buffers().omega);
+  const int iterations = dem_.settings().iterations;
+  const int pass_sweeps = std::max(1, static_cast<int>(std::lround(settings_.pass_sweep_fraction * iterations)));
+  Vec6 impulse = warm_impulse;
+  for (int pass = 0; pass < settings_.max_passes; ++pass) {
+    const int sweeps = pass == 0 ? iterations : pass_sweeps;
+    for (int it = 0; it < sweeps; ++it) {
+      dem_.sweep_fixed(1);
+      block_.sweep(dem_.buffers().velocity, dem_.buffers().omega);
+    }
+    ++stats_.passes;
+    if (rows.empty()) break;  // nothing touches the bucket (and the vehicle solved without load)
+    // the rows' impulses back to double, their wrench into the direct solve
+    const std::vector<TlRow> solved_rows = block_.rows();
+    for (size_t k = 0; k < rows.size(); ++k) {
+      const reference::Row r = reference::from_device(solved_rows[k]);
+      rows[k].impulse_n = r.impulse_n;
+      rows[k].impulse_t = r.impulse_t;
+      rows[k].impulse_r = r.impulse_r;
+    }
+    impulse = bucket_wrench_impulse(rows);
+    const Vec6 twist_sweeps = block_.bucket().twist();
+    loader_.set_bucket_wrench(impulse / h);
+    vehicle.solve();
+    const Vec6 twist_direct = vehicle.solved_twist(loader_.bucket_body());
+    stats_.residual = point_speed_difference(twist_direct, twist_sweeps, com);
+    if (stats_.residual < settings_.tolerance || pass + 1 == settings_.max_passes) break;
+    // the vehicle answered differently: go on from its twist and its new mobility
+    BucketBody next;
+    next.velocity = twist_direct.head<3>();
+    next.omega = twist_direct.tail<3>();
+    next.mobility = loader_.bucket_mobility();
+    block_.set_bucket(next);
+  }
+  stats_.impulse = impulse;
+  stats_.wrench = impulse / h;
+
+  // 6. both sides move; the bucket impulses are kept for the next warm start
+  previous_ = talus::bucket_impulses(rows, candidates);
+  std::stable_sort(previous_.begin(), previous_.end(),
+                   [](const BucketImpulse& a, const BucketImpulse& b) { return a.particle < b.particle; });
+  dem_.end_step();
+  vehicle.integrate();
+}
+
+}  // namespace talus

@@ -1,0 +1,86 @@
+// The type-D step: the particle world (DemWorld, iterative, on the device) and the wheel loader
+// (MultibodySystem, direct, on the host) coupled strongly through the bucket contacts
+// (SPEC §1 steps 1-7, the paper's "time-implicit integration").
+//
+// One step:
+//   1. the vehicle assembles its rows; the particles find their own contacts and rows;
+//   2. particles near the bucket are selected on the device (DeviceBoxSelection), their state
+//      gathered, and Embree finds their contacts with the bucket mesh on the host;
+//   3. last step's bucket impulses are matched to the new contacts (warm start) and their wrench
+//      goes into a first direct vehicle solve, which yields the bucket's twist and its
+//      articulated mobility W (Schur complement, with the active set under that load);
+//   4. PGS or Jacobi sweeps over the particle rows, each followed by one serial sweep over the
+//      bucket rows in which the bucket moves by W times every impulse change;
+//   5. the bucket rows' total wrench goes back into the direct solve. If the bucket twist it
+//      yields differs from the one the sweeps ended with (the vehicle's active set changed: a
+//      cylinder reached its force limit, a tyre started to slip), the sweeps go on from the new
+//      twist and mobility: an outer pass. Passes stop when the difference, as the largest
+//      velocity of a bucket point, is below the tolerance, or after max_passes;
+//   6. both sides integrate positions.
+// How many passes: with an unchanged active set the first pass already agrees to float
+// rounding, because the sweeps used the same linear response W the direct solve has; only a
+// change of active set needs more. docs/validation.md reports how often that happens.
+#pragma once
+#include <memory>
+#include <vector>
+
+#include "solvers/bucket_rows.hpp"
+#include "solvers/dem_world.hpp"
+#include "terrain/bucket_contacts.hpp"
+#include "terrain/bucket_selection.hpp"
+#include "vehicle/wheel_loader.hpp"
+
+namespace talus {
+
+struct CouplingSettings {
+  BucketMaterial material;
+  int max_passes = 4;              // outer passes of steps 4-5 (the first included)
+  double tolerance = 1.0e-3;       // [m/s] bucket point-velocity disagreement that ends the passes
+  // sweeps in each pass after the first, as a fraction of the step's iterations (at least one)
+  double pass_sweep_fraction = 0.2;
+};
+
+// what one coupled step did
+struct CouplingStats {
+  int candidates = 0;          // particles in the bucket's box
+  int bucket_contacts = 0;     // rows between particles and the bucket
+  int passes = 0;              // outer passes run
+  double residual = 0.0;       // final bucket point-velocity disagreement [m/s]
+  double max_overlap_rel = 0.0;  // deepest particle-bucket overlap at the step's start / radius
+  Vec6 wrench = Vec6::Zero();  // mean wrench of the particles on the bucket over the step [N, N m]
+  Vec6 impulse = Vec6::Zero(); // the same as an impulse over the step [N s, N m s]
+  double embree_seconds = 0.0; // wall time of the Embree queries
+};
+
+class SplitSolver {
+ public:
+  // `dem` and `loader` must outlive the solver; their timesteps become dem.settings().dt
+  SplitSolver(Device& dev, DemWorld& dem, vehicle::WheelLoader& loader, const CouplingSettings& settings,
+              const embree::Device& embree = embree::Device());
+
+  // one coupled step with the controls already set on the loader
+  void step();
+
+  const CouplingStats& stats() const { return stats_; }
+  const CouplingSettings& settings() const { return settings_; }
+  const BucketScene& bucket_scene() const { return scene_; }
+  // the bucket contacts' solved impulses of the last step (particle indices of the whole system)
+  const std::vector<BucketImpulse>& bucket_impulses() const { return previous_; }
+
+ private:
+  // the largest speed difference over the bucket's points between two twists [m/s]
+  double point_speed_difference(const Vec6& a, const Vec6& b, const Vec3& com) const;
+
+  Device& dev_;
+  DemWorld& dem_;
+  vehicle::WheelLoader& loader_;
+  CouplingSettings settings_;
+  BucketScene scene_;
+  DeviceBoxSelection selection_;
+  BucketRowBlock block_;
+  std::vector<BucketImpulse> previous_;
+  CouplingStats stats_;
+  double bucket_reach_ = 0.0;  // largest distance of a mesh vertex from the mesh origin [m]
+};
+
+}  // namespace talus

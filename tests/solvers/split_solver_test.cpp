@@ -1,0 +1,187 @@
+// The coupled type-D step (solvers/split_solver): particles against the wheel loader's bucket.
+// Each test measures a balance or a bound that a wrong coupling breaks.
+#include "solvers/split_solver.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <random>
+
+#include "terrain/bucket_fill.hpp"
+#include "tests/solvers/dem_test_util.hpp"
+#include "vehicle/data_file.hpp"
+
+namespace talus {
+namespace {
+
+std::string machine_file() { return vehicle::find_data_file("wa320", "machines"); }
+
+// particles on a jittered lattice at the given profile-frame points of the bucket (in the world)
+Particles particles_in_bucket_frame(const BucketPose& pose, const Vec3& lo, const Vec3& hi, double d,
+                                    unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> jitter(-0.05 * d, 0.05 * d), size(0.9 * d, 1.1 * d);
+  Particles p;
+  const double spacing = 1.12 * d;
+  for (double x = lo.x(); x <= hi.x(); x += spacing)
+    for (double y = lo.y(); y <= hi.y(); y += spacing)
+      for (double z = lo.z(); z <= hi.z(); z += spacing)
+        p.add(pose.to_world(Vec3(x + jitter(rng), y + jitter(rng), z + jitter(rng))), 0.5 * size(rng), 2590.0);
+  return p;
+}
+
+Bounds bounds_around(const Vec3& centre, double half) {
+  Bounds b;
+  b.lo = centre - Vec3::Constant(half);
+  b.hi = centre + Vec3::Constant(half);
+  return b;
+}
+
+TEST(SplitSolver, ImpulsesOnTheBucketBalanceTheParticles) {
+  // no gravity on the particles and no other geometry: every momentum change of the particles
+  // comes from the bucket, so the wrench the vehicle receives must be minus their total momentum
+  // change (linear, and angular about the bucket's centre of mass)
+  vehicle::WheelLoader loader(machine_file());
+  const BucketPose pose = bucket_pose(loader);
+  Particles p = particles_in_bucket_frame(pose, Vec3(-1.0, -1.0, 0.048), Vec3(-0.2, 1.0, 0.5), 0.1, 7);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (size_t i = 0; i < p.size(); ++i) {
+    p.velocity[i] = pose.orientation * Vec3(-0.5 + 0.3 * u(rng), 0.3 * u(rng), -1.0 + 0.3 * u(rng));
+    p.omega[i] = Vec3(u(rng), u(rng), u(rng));
+  }
+  DemSettings settings;
+  settings.dt = 0.005;
+  settings.iterations = 40;
+  settings.gravity = Vec3::Zero();
+  DemWorld dem(test::shared_device(), gravel(), settings, bounds_around(pose.position, 4.0), {});
+  dem.set_particles(p);
+  SplitSolver split(test::shared_device(), dem, loader, CouplingSettings{});
+  const Vec3 com = loader.bodies()[loader.bucket_body()].position;
+
+  const Particles before = dem.particles();
+  split.step();
+  const Particles after = dem.particles();
+  Vec3 linear = Vec3::Zero(), angular = Vec3::Zero();
+  for (size_t i = 0; i < before.size(); ++i) {
+    const double m = before.mass(i);
+    const Vec3 dp = m * (after.velocity[i] - before.velocity[i]);
+    linear += dp;
+    angular += (before.position[i] - com).cross(dp) +
+               (after.omega[i] - before.omega[i]) / before.inv_inertia[i];
+  }
+  const Vec6 on_bucket = split.stats().impulse;
+  std::printf("[ measured ] %d bucket contacts; impulse on the bucket %.4f N s, %.4f N m s; imbalance "
+              "%.2e N s, %.2e N m s\n", split.stats().bucket_contacts, on_bucket.head<3>().norm(),
+              on_bucket.tail<3>().norm(), (linear + on_bucket.head<3>()).norm(),
+              (angular + on_bucket.tail<3>()).norm());
+  ASSERT_GT(split.stats().bucket_contacts, 50);
+  ASSERT_GT(on_bucket.head<3>().norm(), 1.0);
+  // float impulses summed over hundreds of rows: 1e-4 of the total
+  EXPECT_LT((linear + on_bucket.head<3>()).norm(), 1e-4 * on_bucket.head<3>().norm());
+  EXPECT_LT((angular + on_bucket.tail<3>()).norm(), 1e-4 * on_bucket.tail<3>().norm() + 1e-3);
+}
+
+TEST(SplitSolver, ParticlesAtRestInTheBucketWeighTheirMass) {
+  // a standing machine with gravel dropped into its bucket: once settled, the vertical force of the
+  // particles on the bucket is their weight, and the lift cylinders carry the extra load
+  vehicle::WheelLoader loader(machine_file());
+  const BucketPose pose = bucket_pose(loader);
+  const double d = 0.12;
+  // behind the cutting edge and ahead of the corner arc, so that every particle starts inside
+  Particles p = particles_in_bucket_frame(pose, Vec3(-0.95, -1.15, 0.08), Vec3(-0.45, 1.15, 0.55), d, 3);
+  DemSettings settings;
+  settings.dt = 0.005;
+  settings.iterations = 40;
+  const std::vector<StaticGeom> ground = {StaticGeom::plane(Vec3::Zero(), Vec3::UnitZ())};
+  DemWorld dem(test::shared_device(), gravel(), settings, bounds_around(pose.position, 3.0), ground);
+  dem.set_particles(p);
+  SplitSolver split(test::shared_device(), dem, loader, CouplingSettings{});
+  double weight = 0.0;
+  for (size_t i = 0; i < p.size(); ++i) weight += p.mass(i) * 9.81;
+
+  // raise the boom for 0.4 s (the machine settles on its tyres and would put the bucket's
+  // bottom below the ground: the vehicle has no bucket-ground contact) and curl the bucket for
+  // 0.6 s so the gravel does not run out over the edge, then hold; 2 s in all, the force averaged
+  // over the last 0.5 s (the machine still rocks a little on its tyres)
+  loader.set_drive_speed(0.0);
+  const int steps = static_cast<int>(2.0 / settings.dt), window = static_cast<int>(0.5 / settings.dt);
+  Vec6 mean = Vec6::Zero();
+  int max_passes = 0;
+  double max_residual = 0.0;
+  for (int k = 0; k < steps; ++k) {
+    const double t = k * settings.dt;
+    loader.set_lift_speed(t < 0.4 ? 0.1 : 0.0);
+    loader.set_tilt_speed(t < 0.6 ? loader.tilt_spec().max_speed : 0.0);
+    split.step();
+    if (k >= steps - window) {
+      mean += split.stats().wrench / window;
+      max_passes = std::max(max_passes, split.stats().passes);
+      max_residual = std::max(max_residual, split.stats().residual);
+    }
+  }
+  const double in_bucket = loaded_mass(dem.particles(), loader.bucket_mesh(), bucket_pose(loader));
+  std::printf("[ measured ] %zu particles, %.1f kg; %.1f kg in the bucket, weighing %.1f N; vertical force "
+              "on the bucket %.1f N (%+.2f%%); passes <= %d, coupling residual <= %.2e m/s\n", p.size(),
+              weight / 9.81, in_bucket, in_bucket * 9.81, -mean.z(),
+              100.0 * (-mean.z() - in_bucket * 9.81) / (in_bucket * 9.81), max_passes, max_residual);
+  // nearly all the gravel stays in the curled bucket, and the bucket carries its weight
+  EXPECT_GT(in_bucket * 9.81, 0.98 * weight);
+  EXPECT_NEAR(-mean.z(), in_bucket * 9.81, 0.02 * in_bucket * 9.81);
+  EXPECT_LT(std::abs(mean.x()), 0.05 * weight);
+  EXPECT_LT(max_residual, CouplingSettings{}.tolerance);
+}
+
+TEST(SplitSolver, NoParticlePassesThroughTheBucketAtFullDriveSpeed) {
+  // the machine drives at its top speed into a bed of gravel: the deepest overlap of a particle
+  // with the bucket plates must stay far below the radius. A particle can only get through the
+  // thin shell by first overlapping it by its whole radius (its centre on the plate, where the
+  // closest-point normal flips), so a bound of half the radius shows that none passed
+  vehicle::WheelLoader loader(machine_file());
+  const Vec3 tip = loader.bucket_tip_world();
+  const double d = 0.15;
+  const double bed_start = tip.x() + 2.5;  // m of run-up to reach top speed
+  Particles p;
+  {
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> jitter(-0.05 * d, 0.05 * d), size(0.9 * d, 1.1 * d);
+    for (double x = bed_start; x < bed_start + 1.2; x += 1.05 * d)
+      for (double y = -1.5; y <= 1.5; y += 1.05 * d)
+        for (double z = 0.5 * d + 0.005; z < 0.7; z += 1.05 * d)
+          p.add(Vec3(x + jitter(rng), y + jitter(rng), z), 0.5 * size(rng), 2590.0);
+  }
+  DemSettings settings;
+  settings.dt = 0.005;
+  settings.iterations = 30;
+  settings.max_speed = loader.top_speed();
+  const std::vector<StaticGeom> ground = {StaticGeom::plane(Vec3::Zero(), Vec3::UnitZ())};
+  Bounds bounds;
+  bounds.lo = Vec3(tip.x() - 0.5, -3.0, -0.1);
+  bounds.hi = Vec3(bed_start + 3.0, 3.0, 2.5);
+  DemWorld dem(test::shared_device(), gravel(), settings, bounds, ground);
+  dem.set_particles(p);
+  SplitSolver split(test::shared_device(), dem, loader, CouplingSettings{});
+  loader.set_lift_speed(0.0);
+  loader.set_tilt_speed(0.0);
+  loader.set_drive_speed(loader.top_speed());
+
+  double deepest = 0.0, speed_at_bed = 0.0;
+  int touching_steps = 0;
+  const int steps = static_cast<int>(1.6 / settings.dt);
+  for (int k = 0; k < steps; ++k) {
+    split.step();
+    deepest = std::max(deepest, split.stats().max_overlap_rel);
+    if (split.stats().bucket_contacts > 0) {
+      if (touching_steps++ == 0) speed_at_bed = loader.bodies()[loader.front_frame()].velocity.x();
+    }
+  }
+  std::printf("[ measured ] %zu particles; bucket reached the bed at %.2f m/s (top %.2f m/s); %d steps in "
+              "contact; deepest overlap %.1f%% of a radius\n", p.size(), speed_at_bed, loader.top_speed(),
+              touching_steps, 100.0 * deepest);
+  ASSERT_GT(touching_steps, 20);
+  EXPECT_GT(speed_at_bed, 0.8 * loader.top_speed());
+  EXPECT_LT(deepest, 0.5);
+}
+
+}  // namespace
+}  // namespace talus
