@@ -201,6 +201,22 @@ WheelLoader::WheelLoader(const std::string& machine_file, double payload_kg) : p
     tyres_[i] = &system_.add_constraint(std::make_unique<TyreContact>(w[i], Vec3::UnitY(), tp));
     tyres_[i]->name = "tyre_" + system_.body(w[i]).name;
   }
+  // the bucket's bottom corners on the ground: both ends of the cutting edge and of the heel
+  // (where the flat bottom meets the corner arc), in the bucket body's frame
+  const auto& bg = f.member(root, "", "bucket_ground");
+  GroundContactParameters gp;
+  gp.stiffness = f.number(bg, "bucket_ground", "stiffness");
+  gp.friction = f.number(bg, "bucket_ground", "friction");
+  gp.damping_time = f.number(bg, "bucket_ground", "damping_time");
+  gp.viscous_compliance = f.number(bg, "bucket_ground", "friction_viscous_compliance");
+  if (!(gp.stiffness > 0) || !(gp.friction >= 0) || !(gp.damping_time >= 0) || !(gp.viscous_compliance >= 0))
+    f.fail("bucket_ground", "has a non-positive stiffness or a negative friction or damping", "correct the values");
+  std::vector<Vec3> corners;
+  const double half_width = 0.5 * mesh_.inner_width;
+  for (double x : {0.0, -g.bottom_length})
+    for (double y : {-half_width, half_width}) corners.push_back(profile_to_body_ * Vec3(x, y, 0.0));
+  bucket_ground_ = &system_.add_constraint(std::make_unique<PointGroundContact>(bucket_, corners, gp));
+  bucket_ground_->name = "bucket_ground";
   driveline_ = &system_.add_constraint(std::make_unique<Driveline>(w, frames, Vec3::UnitY(), dp));
   driveline_->name = "driveline";
   front_frame_ = frames[0];

@@ -12,6 +12,7 @@
 
 #include "vehicle/bucket_mesh.hpp"
 #include "vehicle/driveline.hpp"
+#include "vehicle/ground_contact.hpp"
 #include "vehicle/joints.hpp"
 #include "vehicle/multibody.hpp"
 #include "vehicle/tyre_contact.hpp"
@@ -55,6 +56,8 @@ class WheelLoader {
   CylinderJoint& tilt_cylinder() const { return *tilt_; }
   const Driveline& driveline() const { return *driveline_; }
   const std::array<TyreContact*, 4>& tyres() const { return tyres_; }
+  // the bucket's bottom corners (cutting-edge and heel ends) against the flat ground
+  const PointGroundContact& bucket_ground() const { return *bucket_ground_; }
   const CylinderSpec& lift_spec() const { return lift_spec_; }
   const CylinderSpec& tilt_spec() const { return tilt_spec_; }
   HingeJoint& hinge(const std::string& name) const;
@@ -76,6 +79,7 @@ class WheelLoader {
   CylinderJoint* tilt_ = nullptr;
   Driveline* driveline_ = nullptr;
   std::array<TyreContact*, 4> tyres_{};
+  PointGroundContact* bucket_ground_ = nullptr;
   std::vector<Joint*> joints_;
   std::vector<std::pair<std::string, HingeJoint*>> hinges_;
   CylinderSpec lift_spec_, tilt_spec_;
