@@ -1,9 +1,13 @@
-// `talus run --scenario NAME --out DIR`: replay a scenario's feedforward target speeds on the wheel
-// loader and write DIR/timeseries.csv (100 Hz sensors, SPEC §2.4) and DIR/summary.json.
-// Scenarios with a particle pile need issue 4 and fail with a clear "not yet".
+// `talus run --scenario NAME [--fidelity LEVEL] --out DIR`: replay a scenario's feedforward
+// target speeds on the wheel loader and write DIR/timeseries.csv (100 Hz sensors, SPEC §2.4) and
+// DIR/summary.json. Scenarios with a pile (FB35, HD27, RD21) dig in a particle pile built at the
+// fidelity level (solvers/digging.hpp) and also write the pile's laser scan, particle snapshots
+// for ParaView, and PNG figures.
+#include <algorithm>
+#include <cctype>
 #include <chrono>
+#include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <nlohmann/json.hpp>
@@ -11,6 +15,12 @@
 
 #include "apps/commands.hpp"
 #include "host/error.hpp"
+#include "io/output.hpp"
+#include "io/plot.hpp"
+#include "io/progress.hpp"
+#include "io/render.hpp"
+#include "sim2real/timeseries.hpp"
+#include "solvers/digging.hpp"
 #include "vehicle/data_file.hpp"
 #include "vehicle/scenario.hpp"
 #include "vehicle/sensors.hpp"
@@ -20,48 +30,55 @@ namespace talus::app {
 
 namespace {
 
+// the side-view image size [px] (2:1, the shape of a pile seen from the side)
+constexpr int kImageWidth = 1600, kImageHeight = 800;
+// the figures' size [px]
+constexpr int kFigureWidth = 1400, kFigureHeight = 1000;
+
 struct RunOptions {
   std::string scenario;
+  std::string fidelity = "D400";
   std::string out;
   std::string json;
+  std::string sweep = "pgs";
+  double snapshot_interval = 1.0;  // s; 0: no snapshots
+  unsigned seed = 1;
+  bool quiet = false;
 };
 
-// write a file under a temporary name, then rename it into place
-void write_atomically(const std::filesystem::path& path, const std::string& text) {
-  const std::filesystem::path tmp = path.string() + ".tmp";
-  {
-    std::ofstream out(tmp);
-    if (!out) throw Error("cannot write " + tmp.string() + "; check that the folder is writable");
-    out << text;
-    if (!out) throw Error("writing " + tmp.string() + " failed (disk full?)");
-  }
-  std::filesystem::rename(tmp, path);
+// the 100 Hz log as the channel-contract CSV
+std::string timeseries_csv(const vehicle::SensorLog& log) {
+  std::ostringstream csv;
+  csv << std::setprecision(10) << vehicle::sensor_csv_header() << '\n';
+  for (const auto& s : log.samples()) vehicle::write_sensor_csv_row(csv, s);
+  return csv.str();
 }
 
-void run(const RunOptions& o) {
-  // the paper's pile scenarios, and any scenario with a pile, need the particles of issue 4
-  for (const char* pile_scenario : {"FB35", "HD27", "RD21"}) {
-    if (o.scenario == pile_scenario && vehicle::find_data_file(o.scenario, "scenarios").empty()) {
-      throw Error("not yet: scenario " + o.scenario + " needs the particle pile (issue 4)");
-    }
+void emit_summary(const RunOptions& o, const nlohmann::json& summary) {
+  write_json((std::filesystem::path(o.out) / sim2real::kSummaryFile).string(), summary);
+  if (o.json == "-") {
+    std::cout << summary.dump(2) << "\n";
+  } else if (!o.json.empty()) {
+    write_json(o.json, summary);
   }
-  const vehicle::Scenario sc = vehicle::load_scenario(o.scenario);
-  if (sc.pile) throw Error("not yet: scenario " + sc.name + " needs the particle pile (issue 4)");
+}
+
+// a scenario without particles: the machine alone on flat ground
+void run_vehicle_only(const RunOptions& o, const vehicle::Scenario& sc) {
   const std::string machine = vehicle::find_data_file(sc.machine, "machines");
   if (machine.empty()) {
     throw InputError(sc.path + ": field 'machine' names '" + sc.machine +
                      "', which is neither a file nor data/machines/" + sc.machine + ".json; fix the name");
   }
-  std::filesystem::create_directories(o.out);
-
+  make_output_dir(o.out);
   vehicle::WheelLoader loader(machine, sc.payload);
   vehicle::SensorLog log(100.0);
   const int steps = static_cast<int>(std::llround(sc.duration / sc.timestep));
   std::cerr << "talus run: " << sc.name << ", " << sc.duration << " s at h = " << sc.timestep * 1e3 << " ms on "
             << loader.name() << " (" << loader.operating_mass() << " kg with payload)\n";
   const auto start = std::chrono::steady_clock::now();
+  Progress progress("run " + sc.name, sc.duration, !o.quiet);
   log.after_step(loader, 0.0, 0.0);
-  const int progress_every = static_cast<int>(std::llround(1.0 / sc.timestep));
   for (int k = 0; k < steps; ++k) {
     // feedforward targets at the start of the step
     const double t = k * sc.timestep;
@@ -70,45 +87,191 @@ void run(const RunOptions& o) {
     loader.set_tilt_speed(sc.tilt(t));
     loader.step(sc.timestep);
     log.after_step(loader, (k + 1) * sc.timestep, sc.timestep);
-    if ((k + 1) % progress_every == 0) {
-      std::cerr << "\r  t = " << std::fixed << std::setprecision(1) << (k + 1) * sc.timestep << " s" << std::flush;
-    }
+    progress.update((k + 1) * sc.timestep);
   }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::cerr << "\n";
-
-  // outputs: time series and summary, each written to a temporary name then renamed
-  std::ostringstream csv;
-  csv << std::setprecision(10) << vehicle::sensor_csv_header() << '\n';
-  for (const auto& s : log.samples()) vehicle::write_sensor_csv_row(csv, s);
-  const std::filesystem::path dir(o.out);
-  write_atomically(dir / "timeseries.csv", csv.str());
-  nlohmann::json summary = {{"scenario", sc.name},
-                            {"work_J", log.work()},
-                            {"sim_time_s", steps * sc.timestep},
-                            {"wall_time_s", wall},
-                            {"realtime_factor", wall > 0 ? steps * sc.timestep / wall : 0.0}};
-  write_atomically(dir / "summary.json", summary.dump(2) + "\n");
-  if (!o.json.empty()) {
-    if (o.json == "-") {
-      std::cout << summary.dump(2) << "\n";
-    } else {
-      write_atomically(o.json, summary.dump(2) + "\n");
-    }
-  }
-  std::cerr << "talus run: wrote " << (dir / "timeseries.csv").string() << " (" << log.samples().size()
+  progress.finish();
+  write_file_atomically((std::filesystem::path(o.out) / sim2real::kTimeseriesFile).string(), timeseries_csv(log));
+  const nlohmann::json summary = {{"scenario", sc.name},
+                                  {"work_J", log.work()},
+                                  {"loaded_mass_kg", sc.payload},
+                                  {"sim_time_s", steps * sc.timestep},
+                                  {"wall_time_s", wall},
+                                  {"realtime_factor", wall > 0 ? steps * sc.timestep / wall : 0.0}};
+  emit_summary(o, summary);
+  std::cerr << "talus run: wrote " << o.out << "/timeseries.csv (" << log.samples().size()
             << " samples) and summary.json; work " << log.work() / 1e3 << " kJ, real-time factor "
             << summary["realtime_factor"].get<double>() << "\n";
+}
+
+// a ParaView collection of the snapshots with their times (File > Open particles.pvd)
+std::string pvd_collection(const std::vector<std::pair<double, std::string>>& snapshots) {
+  std::ostringstream s;
+  s << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n";
+  for (const auto& [t, file] : snapshots)
+    s << "    <DataSet timestep=\"" << t << "\" group=\"\" part=\"0\" file=\"" << file << "\"/>\n";
+  s << "  </Collection>\n</VTKFile>\n";
+  return s.str();
+}
+
+// the side view of particles and the posed bucket, ray-traced, coloured by speed
+void write_render(const std::string& path, const Particles& particles, const vehicle::WheelLoader& loader,
+                  const Bounds& view) {
+  RenderScene scene;
+  scene.particles = &particles;
+  scene.colouring = ParticleColouring::Speed;
+  scene.max_speed = 1.0;  // m/s: the paper's figures colour 0-1 m/s
+  scene.meshes.push_back(posed_mesh(loader.bucket_mesh(), bucket_pose(loader)));
+  scene.ground_height = 0.0;
+  const Camera camera = side_camera(view.lo, view.hi, double(kImageWidth) / kImageHeight);
+  render_particles(scene, camera, kImageWidth, kImageHeight).write_png(path);
+}
+
+// a pile scenario: build the pile at the level, dig, write everything
+void run_digging(const RunOptions& o, const vehicle::Scenario& sc) {
+  const FidelityPreset& preset = fidelity_preset(o.fidelity);
+  const std::string profile_path = vehicle::find_data_file(sc.pile_profile, "piles");
+  if (profile_path.empty())
+    throw InputError(sc.path + ": field 'pile_profile' names '" + sc.pile_profile +
+                     "', which is neither a file nor data/piles/" + sc.pile_profile + ".json; fix the name");
+  const PileProfile profile = load_pile_profile(profile_path);
+  DiggingOptions options;
+  options.pile.seed = o.seed;
+  options.sweep = parse_sweep(o.sweep, "--sweep");
+  make_output_dir(o.out);
+  const std::filesystem::path dir(o.out);
+  const auto start = std::chrono::steady_clock::now();
+  Device dev;
+  std::cerr << "talus run: " << sc.name << " at " << preset.name << " (D " << preset.diameter * 1e3 << " mm, h "
+            << preset.dt * 1e3 << " ms, " << preset.iterations << " sweeps) on " << dev.description() << "\n";
+
+  // the pile, settled, and its laser scan before loading (as the field tests measured it)
+  PileBuild pile;
+  {
+    Progress progress("pile " + preset.name, 1.5 * options.pile.max_time, !o.quiet);
+    pile = build_scenario_pile(dev, sc, profile, preset, options, &progress);
+    progress.finish(std::to_string(pile.particles.size()) + " particles");
+  }
+  const double pile_wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  PileProfile placed = profile;
+  for (Vec3& p : placed.points) p.x() += sc.pile_toe_x;
+  placed.rear_wall_x += sc.pile_toe_x;
+  const PileScan scan = scan_pile(pile.particles, placed, preset.diameter);
+  std::string scan_csv = "x,z\n";
+  for (const auto& q : scan.points) scan_csv += std::to_string(q.x()) + "," + std::to_string(q.y()) + "\n";
+  write_file_atomically((dir / "scan.csv").string(), scan_csv);
+
+  // the run, with snapshots at the interval
+  DiggingSimulation sim(dev, sc, preset, pile, options);
+  std::filesystem::create_directories(dir / "snapshots");
+  std::vector<std::pair<double, std::string>> snapshots;
+  auto snapshot = [&](const Particles& p) {
+    const std::string name = "snapshots/particles_" + std::to_string(snapshots.size()) + ".vtp";
+    write_file_atomically((dir / name).string(), particles_vtp(p));
+    snapshots.emplace_back(sim.time(), name);
+  };
+  const bool snapshots_on = o.snapshot_interval > 0.0;
+  if (snapshots_on) snapshot(sim.particles());
+  const int every = snapshots_on ? std::max(1, static_cast<int>(std::lround(o.snapshot_interval / preset.dt))) : 0;
+  const auto dig_start = std::chrono::steady_clock::now();
+  Progress progress("dig " + sc.name + " " + preset.name, sc.duration, !o.quiet);
+  for (int k = 1; !sim.done(); ++k) {
+    sim.step();
+    if (snapshots_on && k % every == 0) snapshot(sim.particles());
+    std::ostringstream note;
+    note << std::fixed << std::setprecision(0) << sim.split().stats().bucket_contacts << " bucket contacts, "
+         << sim.loaded_mass() << " kg in the bucket";
+    progress.update(sim.time(), note.str());
+  }
+  const double dig_wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - dig_start).count();
+  const Particles final_particles = sim.particles();
+  const double loaded = sim.loaded_mass();
+  progress.finish(std::to_string(static_cast<long>(std::lround(loaded))) + " kg loaded");
+
+  // outputs: time series, snapshots' collection, summary, figures
+  write_file_atomically((dir / sim2real::kTimeseriesFile).string(), timeseries_csv(sim.log()));
+  if (snapshots_on) write_file_atomically((dir / "particles.pvd").string(), pvd_collection(snapshots));
+  const double sim_time = sim.time();
+  nlohmann::json summary = {
+      {"scenario", sc.name},
+      {"fidelity", preset.name},
+      {"particles", static_cast<int>(pile.particles.size())},
+      {"loaded_mass_kg", loaded},
+      {"work_J", vehicle::work_between(sim.log().samples(), sc.dig_start, sc.dig_end)},
+      {"work_total_J", sim.log().work()},
+      {"sim_time_s", sim_time},
+      {"wall_time_s", dig_wall},
+      {"realtime_factor", dig_wall > 0 ? sim_time / dig_wall : 0.0},
+      {"pile_build_wall_s", pile_wall},
+      {"pile_bulk_density", pile.bulk_density},
+      {"scan_face_angle_deg", scan.face_angle_deg},
+      {"dig_start_s", sc.dig_start},
+      {"dig_end_s", sc.dig_end},
+      {"coupling",
+       {{"steps_with_bucket_contacts", sim.contact_steps()},
+        {"mean_passes", sim.mean_passes()},
+        {"max_passes", sim.max_passes()},
+        {"max_residual_m_s", sim.max_residual()},
+        {"max_bucket_overlap_rel", sim.max_bucket_overlap_rel()}}},
+      {"device", dev.description()},
+      {"reconstructed_inputs", true}};
+  if (sc.field_loaded_mass_kg > 0) {
+    summary["field_loaded_mass_kg"] = sc.field_loaded_mass_kg;
+    summary["field_work_J"] = sc.field_work_J;
+  }
+  emit_summary(o, summary);
+
+  // figures: the channels, the bucket tip over the scanned pile, power, and the rendered side view
+  const sim2real::Run run = sim2real::load_run(dir);
+  channel_figure({run}, nullptr).write_png((dir / "channels.png").string(), kFigureWidth, kFigureHeight);
+  std::vector<std::pair<double, double>> surface;
+  for (const auto& q : scan.points) surface.emplace_back(q.x(), q.y());
+  trajectory_figure({run}, nullptr, surface).write_png((dir / "trajectory.png").string(), kFigureWidth, kFigureWidth / 2);
+  power_figure({run}, nullptr).write_png((dir / "power.png").string(), kFigureWidth, kFigureHeight / 2);
+  Bounds view;
+  view.lo = Vec3(sc.pile_toe_x - 4.0, -3.0, 0.0);
+  view.hi = Vec3(placed.rear_wall_x, 3.0, 4.0);
+  write_render((dir / "side.png").string(), final_particles, sim.loader(), view);
+  std::cerr << "talus run: " << sc.name << " " << preset.name << ": " << loaded << " kg loaded, work in the "
+            << "digging phase " << summary["work_J"].get<double>() / 1e3 << " kJ, real-time factor " << summary["realtime_factor"].get<double>()
+            << "; results in " << o.out << "\n";
+}
+
+void run(const RunOptions& o) {
+  // a shipped name in any case (hd27, HD27) or a path
+  std::string name = o.scenario;
+  if (vehicle::find_data_file(name, "scenarios").empty()) {
+    std::string lower = name;
+    std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return std::tolower(c); });
+    if (!vehicle::find_data_file(lower, "scenarios").empty()) name = lower;
+  }
+  const vehicle::Scenario sc = vehicle::load_scenario(name);
+  if (sc.pile) {
+    run_digging(o, sc);
+  } else {
+    run_vehicle_only(o, sc);
+  }
 }
 
 }  // namespace
 
 void add_run_command(CLI::App& app) {
   auto opts = std::make_shared<RunOptions>();
-  auto* cmd = app.add_subcommand("run", "replay a scenario's feedforward inputs on the wheel loader");
-  cmd->add_option("--scenario", opts->scenario, "scenario name (data/scenarios/NAME.json) or path")->required();
-  cmd->add_option("--out", opts->out, "output folder for timeseries.csv and summary.json")->required();
+  auto* cmd = app.add_subcommand("run", "replay a scenario's feedforward inputs on the wheel loader (digging in "
+                                        "a particle pile for fb35, hd27, rd21)");
+  cmd->add_option("--scenario", opts->scenario, "scenario name (data/scenarios/NAME.json: fb35, hd27, rd21, "
+                                                "flat-lift) or path")->required();
+  cmd->add_option("--fidelity", opts->fidelity, "particle level for pile scenarios: D400, D200, D100, D50")
+      ->capture_default_str();
+  cmd->add_option("--out", opts->out, "output folder for timeseries.csv, summary.json and, with a pile, "
+                                      "scan.csv, snapshots/, particles.pvd and PNG figures")->required();
   cmd->add_option("--json", opts->json, "also write the summary to this file ('-' for stdout)");
+  cmd->add_option("--snapshot-interval", opts->snapshot_interval, "simulated seconds between particle snapshots "
+                                                                  "(.vtp); 0 for none")
+      ->capture_default_str()->check(CLI::NonNegativeNumber);
+  cmd->add_option("--sweep", opts->sweep, "particle sweeps: pgs or jacobi")->capture_default_str();
+  cmd->add_option("--seed", opts->seed, "random seed of the pile's particle sizes and jitter")->capture_default_str();
+  cmd->add_flag("--quiet", opts->quiet, "no progress on stderr");
   cmd->callback([opts] { run(*opts); });
 }
 

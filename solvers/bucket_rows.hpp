@@ -45,7 +45,7 @@ struct BucketBody {
 // the contact material between particles and the bucket
 struct BucketMaterial {
   double friction = 0.2;  // bucket-soil Coulomb friction, paper §4.4 (calibrated there)
-  double rolling = 0.02;  // rolling resistance against the plate: the gravel's own mu_r
+  double rolling = Material{}.rolling;  // rolling resistance against the plate: the gravel's own mu_r
 };
 
 // last step's solved impulses of one bucket contact, kept for warm starting

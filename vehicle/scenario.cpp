@@ -58,18 +58,32 @@ Scenario load_scenario(const std::string& name_or_path) {
   s.description = root.contains("description") && root["description"].is_string() ? root["description"].get<std::string>() : "";
   s.pile = root.contains("pile") && root["pile"].is_boolean() && root["pile"].get<bool>();
   if (root.contains("pile") && !root["pile"].is_boolean()) f.fail("pile", "is not true or false", "write true or false");
-  if (s.pile) return s;  // the rest is for the particle pile's issue to define
   s.machine = f.text(root, "", "machine");
   s.duration = f.plain_number(root, "", "duration");
-  s.timestep = f.plain_number(root, "", "timestep");
   s.payload = root.contains("payload") ? f.plain_number(root, "", "payload") : 0.0;
   if (!(s.duration > 0)) f.fail("duration", "is not > 0", "give the simulated time in s");
-  if (!(s.timestep > 0) || s.timestep > 0.01) f.fail("timestep", "is not in (0, 0.01] s", "use e.g. 0.005 (sensors run at 100 Hz)");
-  const double per_sample = 0.01 / s.timestep;
-  if (std::abs(per_sample - std::round(per_sample)) > 1e-9) {
-    f.fail("timestep", "does not divide the 10 ms sensor period", "use 0.01, 0.005, 0.0025, 0.002 or 0.001");
-  }
   if (!(s.payload >= 0)) f.fail("payload", "is negative", "give the payload in kg (0 for an empty bucket)");
+  if (s.pile) {
+    // the pile, its placement and the digging phase; the timestep comes from the fidelity level
+    s.pile_profile = root.contains("pile_profile") ? f.text(root, "", "pile_profile") : "default";
+    s.pile_toe_x = f.plain_number(root, "", "pile_toe_x");
+    s.dig_start = f.plain_number(root, "", "dig_start");
+    s.dig_end = f.plain_number(root, "", "dig_end");
+    if (!(s.dig_start >= 0 && s.dig_start < s.dig_end && s.dig_end <= s.duration))
+      f.fail("dig_end", "does not make 0 <= dig_start < dig_end <= duration", "give the digging phase in s");
+    if (root.contains("field")) {
+      const auto& field = f.member(root, "", "field");
+      s.field_loaded_mass_kg = f.plain_number(field, "field", "loaded_mass_kg");
+      s.field_work_J = f.plain_number(field, "field", "work_J");
+    }
+  } else {
+    s.timestep = f.plain_number(root, "", "timestep");
+    if (!(s.timestep > 0) || s.timestep > 0.01) f.fail("timestep", "is not in (0, 0.01] s", "use e.g. 0.005 (sensors run at 100 Hz)");
+    const double per_sample = 0.01 / s.timestep;
+    if (std::abs(per_sample - std::round(per_sample)) > 1e-9) {
+      f.fail("timestep", "does not divide the 10 ms sensor period", "use 0.01, 0.005, 0.0025, 0.002 or 0.001");
+    }
+  }
   s.drive = series(f, "drive");
   s.lift = series(f, "lift");
   s.tilt = series(f, "tilt");

@@ -3,6 +3,12 @@
 //   {"name": "...", "description": "...", "machine": "wa320", "pile": false,
 //    "duration": 12.0, "timestep": 0.005, "payload": 3500,
 //    "drive": [[t, v], ...], "lift": [[t, v], ...], "tilt": [[t, v], ...]}   (s, m/s, kg)
+// Scenarios with "pile": true dig in a particle pile (solvers/digging.hpp); their timestep comes
+// from the fidelity level, and they add
+//    "pile_profile": "default",   the pile's cross-section (data/piles/NAME.json or a path)
+//    "pile_toe_x": 5.0,           world x of the profile's toe (the machine's front axle is at 0)
+//    "dig_start": 1.0, "dig_end": 8.0,   the digging phase the metrics compare [s]
+//    "field": {"loaded_mass_kg": 2700, "work_J": 127000}   the field test's values (optional)
 #pragma once
 #include <string>
 #include <utility>
@@ -30,6 +36,11 @@ struct Scenario {
   double timestep = 0.005;   // s
   double payload = 0.0;      // kg
   PiecewiseLinear drive, lift, tilt;  // target speeds [m/s]
+  // particle-pile scenarios
+  std::string pile_profile;          // name or path of the pile profile
+  double pile_toe_x = 0.0;           // [m]
+  double dig_start = 0.0, dig_end = 0.0;  // digging phase [s]
+  double field_loaded_mass_kg = 0.0, field_work_J = 0.0;  // 0 when not given
 };
 
 // by name (data/scenarios/NAME.json) or path; InputError naming file, field and fix

@@ -1,5 +1,7 @@
 #include "vehicle/sensors.hpp"
 
+#include <algorithm>
+
 #include <cmath>
 #include <ostream>
 
@@ -63,12 +65,59 @@ void write_sensor_csv_row(std::ostream& out, const SensorSample& s) {
       << ',' << s.bucket_tip_x << ',' << s.bucket_tip_z << ',' << s.power << '\n';
 }
 
+double work_between(const std::vector<SensorSample>& samples, double t0, double t1) {
+  // the power at time t by linear interpolation between samples (clamped to the log)
+  double w = 0.0;
+  for (size_t k = 1; k < samples.size(); ++k) {
+    const SensorSample& a = samples[k - 1];
+    const SensorSample& b = samples[k];
+    const double lo = std::max(a.t, t0), hi = std::min(b.t, t1);
+    if (hi <= lo || b.t <= a.t) continue;
+    const auto power_at = [&](double t) { return a.power + (b.power - a.power) * (t - a.t) / (b.t - a.t); };
+    w += 0.5 * (power_at(lo) + power_at(hi)) * (hi - lo);
+  }
+  return w;
+}
+
+SensorSample interpolate(const SensorSample& a, const SensorSample& b, double s) {
+  auto mix = [s](double x, double y) { return x + s * (y - x); };
+  SensorSample r;
+  r.t = mix(a.t, b.t);
+  r.f_lift = mix(a.f_lift, b.f_lift);
+  r.f_tilt = mix(a.f_tilt, b.f_tilt);
+  r.f_traction = mix(a.f_traction, b.f_traction);
+  r.v_drive = mix(a.v_drive, b.v_drive);
+  r.d_lift = mix(a.d_lift, b.d_lift);
+  r.d_tilt = mix(a.d_tilt, b.d_tilt);
+  r.boom_deg = mix(a.boom_deg, b.boom_deg);
+  r.bucket_deg = mix(a.bucket_deg, b.bucket_deg);
+  r.pitch_deg = mix(a.pitch_deg, b.pitch_deg);
+  r.x_vehicle = mix(a.x_vehicle, b.x_vehicle);
+  r.bucket_tip_x = mix(a.bucket_tip_x, b.bucket_tip_x);
+  r.bucket_tip_z = mix(a.bucket_tip_z, b.bucket_tip_z);
+  r.power = mix(a.power, b.power);
+  r.lift_rate = mix(a.lift_rate, b.lift_rate);
+  r.tilt_rate = mix(a.tilt_rate, b.tilt_rate);
+  return r;
+}
+
 void SensorLog::after_step(const WheelLoader& loader, double t, double h) {
   const SensorSample s = read_sensors(loader, t);
   work_ += s.power * h;
-  // sample at t = k period (within half a step)
-  const double next = static_cast<double>(samples_.size()) * period_;
-  if (t + 0.5 * h >= next) samples_.push_back(s);
+  // every sampling instant k period within this step (half a step's tolerance at its end, so
+  // steps that divide the period sample their own states exactly)
+  for (;;) {
+    const double next = static_cast<double>(samples_.size()) * period_;
+    if (next > t + 1e-9 * period_) break;
+    if (!has_last_ || h <= 0.0 || next >= t - 1e-9 * period_) {
+      samples_.push_back(s);
+      samples_.back().t = next;
+    } else {
+      samples_.push_back(interpolate(last_, s, (next - last_.t) / (t - last_.t)));
+    }
+  }
+  last_ = s;
+  has_last_ = true;
 }
 
 }  // namespace talus::vehicle

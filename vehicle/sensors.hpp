@@ -36,7 +36,10 @@ void write_sensor_csv_row(std::ostream& out, const SensorSample& s);
 class SensorLog {
  public:
   explicit SensorLog(double rate_hz = 100.0) : period_(1.0 / rate_hz) {}
-  // call after every step; records a sample when a sampling instant is reached
+  // call after every step (and once at the start with h = 0); records a sample at every sampling
+  // instant k / rate_hz the step reached. Steps longer than the period (D400: 20 ms) get their
+  // instants linearly interpolated between the states before and after the step, so the log is
+  // at the stated rate whatever the timestep
   void after_step(const WheelLoader& loader, double t, double h);
   const std::vector<SensorSample>& samples() const { return samples_; }
   double work() const { return work_; }  // J, integrated every step
@@ -46,6 +49,15 @@ class SensorLog {
   double period_;
   double work_ = 0.0;
   std::vector<SensorSample> samples_;
+  SensorSample last_;       // the state after the previous step
+  bool has_last_ = false;
 };
+
+// the work [J] of the logged power over [t0, t1] (trapezoids between samples, the window's ends
+// interpolated): the work of a phase, e.g. the digging phase the metrics compare
+double work_between(const std::vector<SensorSample>& samples, double t0, double t1);
+
+// a + s (b - a), channel by channel (time included)
+SensorSample interpolate(const SensorSample& a, const SensorSample& b, double s);
 
 }  // namespace talus::vehicle

@@ -1,5 +1,7 @@
-// `talus run` end to end: the output contract of SPEC §2.4 / issue 3, and the "not yet" for piles.
+// `talus run` end to end: the output contract of SPEC §2.4 for the machine alone and for digging.
 #include <gtest/gtest.h>
+
+#include <sys/wait.h>
 
 #include <cstdlib>
 #include <filesystem>
@@ -36,13 +38,42 @@ TEST(VehicleRunTest, FlatLiftWritesTimeseriesAndSummary) {
   EXPECT_FALSE(std::filesystem::exists(dir / "timeseries.csv.tmp"));
 }
 
-TEST(VehicleRunTest, PileScenarioSaysNotYet) {
-  const auto err = std::filesystem::temp_directory_path() / "talus_run_fb35.err";
-  const std::string cmd = kTalus + " run --scenario FB35 --out /tmp/talus_fb35 2>" + err.string();
-  EXPECT_NE(std::system(cmd.c_str()), 0);
-  std::ifstream in(err);
-  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  EXPECT_NE(text.find("not yet: scenario FB35 needs the particle pile (issue 4)"), std::string::npos) << text;
+// the main job at the coarsest level: the HD27 pile scenario at D400 end to end, with every output
+// the issue names (the physics of the run is tested in tests/solvers/digging_test.cpp)
+TEST(DiggingRunTest, Hd27AtD400WritesTheRunContractSnapshotsAndFigures) {
+  const auto dir = std::filesystem::temp_directory_path() / "talus_run_hd27_d400";
+  std::filesystem::remove_all(dir);
+  const std::string cmd = kTalus + " run --scenario hd27 --fidelity D400 --snapshot-interval 3 --quiet --out " +
+                          dir.string() + " 2>/dev/null";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  // 9 s at 100 Hz from 20 ms steps (samples between steps interpolated)
+  std::ifstream csv(dir / "timeseries.csv");
+  std::string line;
+  int rows = -1;
+  while (std::getline(csv, line)) ++rows;
+  EXPECT_EQ(rows, 901);
+  const auto summary = nlohmann::json::parse(std::ifstream(dir / "summary.json"));
+  for (const char* key : {"scenario", "fidelity", "particles", "loaded_mass_kg", "work_J", "sim_time_s",
+                          "wall_time_s", "realtime_factor", "dig_start_s", "dig_end_s"}) {
+    EXPECT_TRUE(summary.contains(key)) << key;
+  }
+  EXPECT_EQ(summary["scenario"], "HD27");
+  EXPECT_EQ(summary["fidelity"], "D400");
+  EXPECT_NEAR(summary["particles"].get<double>(), 800, 0.15 * 800);  // paper Table 3
+  EXPECT_GT(summary["loaded_mass_kg"].get<double>(), 0.0);
+  EXPECT_GT(summary["work_J"].get<double>(), 0.0);
+  // snapshots at 0, 3, 6, 9 s and their ParaView collection; the pile scan; the figures
+  for (int k = 0; k < 4; ++k)
+    EXPECT_TRUE(std::filesystem::exists(dir / "snapshots" / ("particles_" + std::to_string(k) + ".vtp"))) << k;
+  for (const char* file : {"particles.pvd", "scan.csv", "channels.png", "trajectory.png", "power.png", "side.png"})
+    EXPECT_GT(std::filesystem::file_size(dir / file), 100u) << file;
+}
+
+TEST(DiggingRunTest, UnknownFidelityIsBadInput) {
+  const std::string cmd = kTalus + " run --scenario hd27 --fidelity D300 --out /tmp/talus_hd27_bad 2>/dev/null";
+  const int status = std::system(cmd.c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 2);
 }
 
 }  // namespace

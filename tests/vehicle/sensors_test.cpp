@@ -58,5 +58,42 @@ TEST(SensorTest, LogAt100HzAndWorkMatchesPotentialEnergy) {
   EXPECT_LT(std::abs(s.pitch_deg), 2.0);
 }
 
+// steps longer than the 10 ms period (D400: 20 ms) still give 100 Hz samples, the ones between
+// steps interpolated; a shorter step samples its own states
+TEST(SensorTest, LongStepsAreSampledAt100HzByInterpolation) {
+  WheelLoader w(find_data_file("wa320", "machines"));
+  SensorLog log(100.0);
+  log.after_step(w, 0.0, 0.0);
+  w.set_lift_speed(0.1);
+  const double h = 0.02;
+  std::vector<SensorSample> after_steps;
+  for (int k = 1; k <= 50; ++k) {
+    w.step(h);
+    log.after_step(w, k * h, h);
+    after_steps.push_back(log.samples().back());
+  }
+  ASSERT_EQ(log.samples().size(), 101u);  // 0 .. 1 s at 10 ms
+  for (size_t i = 0; i < log.samples().size(); ++i) EXPECT_NEAR(log.samples()[i].t, 0.01 * i, 1e-12);
+  // the sample at 0.03 s lies halfway between the steps ending at 0.02 s and 0.04 s
+  const SensorSample mid = interpolate(log.samples()[2], log.samples()[4], 0.5);
+  EXPECT_NEAR(log.samples()[3].d_lift, mid.d_lift, 1e-12);
+  EXPECT_NEAR(log.samples()[3].f_lift, mid.f_lift, 1e-9);
+}
+
+TEST(SensorTest, WorkBetweenIntegratesThePowerOverAWindow) {
+  // power rising linearly, P = 1000 t W, sampled at 100 Hz: the work over [0.125, 0.5] s is
+  // 500 (0.5^2 - 0.125^2) J exactly (trapezoids are exact for a linear power)
+  std::vector<SensorSample> samples;
+  for (int k = 0; k <= 100; ++k) {
+    SensorSample s;
+    s.t = 0.01 * k;
+    s.power = 1000.0 * s.t;
+    samples.push_back(s);
+  }
+  EXPECT_NEAR(work_between(samples, 0.125, 0.5), 500.0 * (0.25 - 0.015625), 1e-9);
+  EXPECT_NEAR(work_between(samples, 0.0, 1.0), 500.0, 1e-9);
+  EXPECT_EQ(work_between(samples, 2.0, 3.0), 0.0);  // outside the log
+}
+
 }  // namespace
 }  // namespace talus::vehicle

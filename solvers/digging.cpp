@@ -1,0 +1,91 @@
+#include "solvers/digging.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "host/error.hpp"
+#include "terrain/bucket_fill.hpp"
+#include "vehicle/data_file.hpp"
+
+namespace talus {
+
+namespace {
+// the broad-phase region beyond the pile: gravel carried back this far in front of the toe [m]
+// (the cycles reverse a few metres), and lifted this high [m] (full lift puts the bucket's top
+// near 5 m, vehicle/data: hinge pin 3.9-4.0 m at full lift)
+constexpr double kCarryBack = 6.0;
+constexpr double kCarryHeight = 5.5;
+// the machine settles onto its tyres before the clock starts, with no gravel in reach [s]
+// (tyre vibrations die out in a few tenths of a second, data/machines damping_time)
+constexpr double kVehicleSettle = 1.0;
+}  // namespace
+
+PileBuild build_scenario_pile(Device& dev, const vehicle::Scenario& scenario, const PileProfile& profile,
+                              const FidelityPreset& preset, const DiggingOptions& options, Progress* progress) {
+  if (!scenario.pile) throw InputError(scenario.path + ": scenario '" + scenario.name + "' has no pile (\"pile\": false)");
+  // the profile moved to the scenario's place, then built and settled there
+  PileProfile placed = profile;
+  for (Vec3& p : placed.points) p.x() += scenario.pile_toe_x;
+  placed.rear_wall_x += scenario.pile_toe_x;
+  PileBuild pile = build_pile(dev, placed, preset, gravel(), options.pile, progress);
+  pile.bounds.lo.x() = std::min(pile.bounds.lo.x(), scenario.pile_toe_x - kCarryBack);
+  pile.bounds.hi.z() = std::max(pile.bounds.hi.z(), kCarryHeight);
+  return pile;
+}
+
+DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scenario, const FidelityPreset& preset,
+                                     const PileBuild& pile, const DiggingOptions& options)
+    : dev_(dev), scenario_(scenario), preset_(preset), log_(100.0) {
+  if (!scenario.pile) throw InputError(scenario.path + ": scenario '" + scenario.name + "' has no pile (\"pile\": false)");
+  const std::string machine = vehicle::find_data_file(scenario.machine, "machines");
+  if (machine.empty())
+    throw InputError(scenario.path + ": field 'machine' names '" + scenario.machine +
+                     "', which is neither a file nor data/machines/" + scenario.machine + ".json; fix the name");
+  loader_ = std::make_unique<vehicle::WheelLoader>(machine, scenario.payload);
+
+  // the machine settles on its tyres first, controls at rest
+  const double h = preset.dt;
+  loader_->set_drive_speed(0.0);
+  loader_->set_lift_speed(0.0);
+  loader_->set_tilt_speed(0.0);
+  for (int k = 0; k < static_cast<int>(std::lround(kVehicleSettle / h)); ++k) loader_->step(h);
+
+  // the particles: the level's timestep and sweeps, speculative contacts for thrown gravel
+  DemSettings settings;
+  settings.dt = h;
+  settings.iterations = preset.iterations;
+  settings.sweep = options.sweep;
+  settings.max_speed = options.max_particle_speed;
+  dem_ = std::make_unique<DemWorld>(dev, gravel(), settings, pile.bounds, pile.geoms);
+  dem_->set_particles(pile.particles);
+  split_ = std::make_unique<SplitSolver>(dev, *dem_, *loader_, options.coupling);
+  steps_total_ = static_cast<int>(std::lround(scenario.duration / h));
+  log_.after_step(*loader_, 0.0, 0.0);
+}
+
+void DiggingSimulation::step() {
+  // the feedforward targets at the start of the step, one coupled step, the sensors after it
+  const double h = preset_.dt;
+  loader_->set_drive_speed(scenario_.drive(time_));
+  loader_->set_lift_speed(scenario_.lift(time_));
+  loader_->set_tilt_speed(scenario_.tilt(time_));
+  split_->step();
+  ++steps_done_;
+  time_ = steps_done_ * h;
+  log_.after_step(*loader_, time_, h);
+  // coupling bookkeeping
+  const CouplingStats& s = split_->stats();
+  if (s.bucket_contacts > 0) {
+    ++contact_steps_;
+    pass_sum_ += s.passes;
+    max_passes_ = std::max(max_passes_, s.passes);
+    max_residual_ = std::max(max_residual_, s.residual);
+  }
+  max_overlap_rel_ = std::max(max_overlap_rel_, s.max_overlap_rel);
+}
+
+double DiggingSimulation::loaded_mass() const {
+  return talus::loaded_mass(dem_->particles(), loader_->bucket_mesh(), bucket_pose(*loader_));
+}
+
+}  // namespace talus

@@ -1,0 +1,81 @@
+// The type-D digging simulator (issue 4): a scenario's pile built and settled at a fidelity level,
+// placed in front of the wheel loader, and the scenario's feedforward inputs replayed with the
+// particles and the machine coupled through the bucket (solvers/split_solver.hpp).
+//
+// Frames: the machine's reference pose has its front axle at x = 0 (data/machines/*.json); the
+// pile's profile (data/piles/*.json) is shifted so its toe lies at the scenario's pile_toe_x.
+// One timestep for both sides, the level's (paper Table 3), so the coupling stays implicit; the
+// sensors are logged at 100 Hz (interpolated within steps longer than 10 ms, vehicle/sensors.hpp).
+#pragma once
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "io/progress.hpp"
+#include "solvers/split_solver.hpp"
+#include "terrain/pile.hpp"
+#include "vehicle/scenario.hpp"
+#include "vehicle/sensors.hpp"
+
+namespace talus {
+
+struct DiggingOptions {
+  PileBuildOptions pile;         // settling of the pile before the machine starts
+  CouplingSettings coupling;     // bucket contacts and outer passes
+  SweepKind sweep = SweepKind::Pgs;
+  // the fastest particle to expect [m/s] (speculative contacts, DemSettings::max_speed): gravel
+  // thrown by the bucket moves at about the bucket's speed, 1-2 m/s in these scenarios
+  double max_particle_speed = 2.0;
+};
+
+// the scenario's pile at the level, settled and shifted to the scenario's place: particles,
+// container (ground, sides, rear wall) and the broad-phase bounds, which also cover where the
+// machine carries gravel (back to 6 m in front of the toe, up to 5 m high)
+PileBuild build_scenario_pile(Device& dev, const vehicle::Scenario& scenario, const PileProfile& profile,
+                              const FidelityPreset& preset, const DiggingOptions& options, Progress* progress);
+
+class DiggingSimulation {
+ public:
+  // the scenario must have a pile; `pile` from build_scenario_pile (or a saved one)
+  DiggingSimulation(Device& dev, const vehicle::Scenario& scenario, const FidelityPreset& preset,
+                    const PileBuild& pile, const DiggingOptions& options);
+
+  // one step with the scenario's controls at the current time
+  void step();
+  double time() const { return time_; }
+  int steps_total() const { return steps_total_; }
+  bool done() const { return steps_done_ >= steps_total_; }
+
+  const vehicle::WheelLoader& loader() const { return *loader_; }
+  const DemWorld& dem() const { return *dem_; }
+  const SplitSolver& split() const { return *split_; }
+  const vehicle::SensorLog& log() const { return log_; }
+  // particles now (downloaded from the device)
+  Particles particles() const { return dem_->particles(); }
+  // soil in the bucket now, by terrain/bucket_fill's rule [kg]
+  double loaded_mass() const;
+
+  // coupling over the run so far: steps with bucket contacts, the largest outer-pass count and
+  // coupling residual, and the mean number of passes over steps with contacts
+  int contact_steps() const { return contact_steps_; }
+  int max_passes() const { return max_passes_; }
+  double max_residual() const { return max_residual_; }
+  double mean_passes() const { return contact_steps_ > 0 ? double(pass_sum_) / contact_steps_ : 0.0; }
+  double max_bucket_overlap_rel() const { return max_overlap_rel_; }
+
+ private:
+  Device& dev_;
+  vehicle::Scenario scenario_;
+  FidelityPreset preset_;
+  std::unique_ptr<vehicle::WheelLoader> loader_;
+  std::unique_ptr<DemWorld> dem_;
+  std::unique_ptr<SplitSolver> split_;
+  vehicle::SensorLog log_;
+  double time_ = 0.0;
+  int steps_done_ = 0, steps_total_ = 0;
+  int contact_steps_ = 0, max_passes_ = 0;
+  long pass_sum_ = 0;
+  double max_residual_ = 0.0, max_overlap_rel_ = 0.0;
+};
+
+}  // namespace talus
