@@ -80,6 +80,7 @@ void DiggingSimulation::step() {
     pass_sum_ += s.passes;
     max_passes_ = std::max(max_passes_, s.passes);
     max_residual_ = std::max(max_residual_, s.residual);
+    if (s.residual >= split_->settings().tolerance) ++capped_steps_;
   }
   max_overlap_rel_ = std::max(max_overlap_rel_, s.max_overlap_rel);
 }

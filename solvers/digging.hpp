@@ -62,6 +62,8 @@ class DiggingSimulation {
   double max_residual() const { return max_residual_; }
   double mean_passes() const { return contact_steps_ > 0 ? double(pass_sum_) / contact_steps_ : 0.0; }
   double max_bucket_overlap_rel() const { return max_overlap_rel_; }
+  // steps whose outer passes stopped at the limit with the residual still above the tolerance
+  int steps_at_pass_limit() const { return capped_steps_; }
 
  private:
   Device& dev_;
@@ -73,7 +75,7 @@ class DiggingSimulation {
   vehicle::SensorLog log_;
   double time_ = 0.0;
   int steps_done_ = 0, steps_total_ = 0;
-  int contact_steps_ = 0, max_passes_ = 0;
+  int contact_steps_ = 0, max_passes_ = 0, capped_steps_ = 0;
   long pass_sum_ = 0;
   double max_residual_ = 0.0, max_overlap_rel_ = 0.0;
 };

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <tuple>
 
 #include "host/error.hpp"
 #include "solvers/spook.hpp"
@@ -116,6 +117,8 @@ void MultibodySystem::assemble(double h) {
   for (int r = 0; r < m; ++r) A.coeffRef(r, r) += sigma_[r];
   A.makeCompressed();
   mcp_.A = std::move(A);
+  assembled_force_range_.resize(m);
+  for (int r = 0; r < m; ++r) assembled_force_range_[r] = {rows_[r].force_min, rows_[r].force_max};
   if (warm_lambda_.size() != m) {
     warm_lambda_ = Eigen::VectorXd::Zero(m);
     warm_state_.assign(m, solvers::RowState::free);
@@ -138,6 +141,12 @@ void MultibodySystem::solve() {
   }
   const Eigen::VectorXd vstar = v + h_ * (minv_ * f);
   mcp_.b = rhs_ - G_ * vstar;
+  // every solve of the step starts from the assembled bounds
+  for (int r = 0; r < m; ++r) {
+    std::tie(rows_[r].force_min, rows_[r].force_max) = assembled_force_range_[r];
+    mcp_.lo[r] = h_ * rows_[r].force_min;
+    mcp_.hi[r] = h_ * rows_[r].force_max;
+  }
   // solve, then let constraints with speed-dependent bounds correct them and solve again
   bound_passes_ = 0;
   for (int pass = 0; pass < kMaxBoundPasses; ++pass) {

@@ -13,6 +13,7 @@
 //   M_b⁻¹ - M_b⁻¹ G_bᵀ A_FF⁻¹ G_b M_b⁻¹ from the direct solver's factor.
 #pragma once
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include "solvers/direct_solver.hpp"
@@ -81,6 +82,10 @@ class MultibodySystem {
   Eigen::SparseMatrix<double> minv_;
   Eigen::VectorXd sigma_, rhs_;
   solvers::BoundedMcp mcp_;
+  // the impulse bounds as assembled: solve() starts from them, so bounds that a previous solve
+  // of the same step lowered (the engine's speed-dependent torque limit) do not stick when the
+  // step is solved again with another external wrench (the particle coupling's outer passes)
+  std::vector<std::pair<double, double>> assembled_force_range_;  // per row [N or N m]
   solvers::McpResult result_;
   Eigen::VectorXd velocity_after_;  // v⁺ of the last solve
   Eigen::VectorXd warm_lambda_;

@@ -64,7 +64,9 @@ Scenario load_scenario(const std::string& name_or_path) {
   if (!(s.duration > 0)) f.fail("duration", "is not > 0", "give the simulated time in s");
   if (!(s.payload >= 0)) f.fail("payload", "is negative", "give the payload in kg (0 for an empty bucket)");
   if (s.pile) {
-    // the pile, its placement and the digging phase; the timestep comes from the fidelity level
+    // the pile, its placement and the digging phase; the timestep comes from the fidelity level.
+    // The load is the gravel the bucket picks up: a payload on top would count it twice
+    if (s.payload > 0) f.fail("payload", "is set for a scenario with a pile", "remove it (the bucket fills with particles)");
     s.pile_profile = root.contains("pile_profile") ? f.text(root, "", "pile_profile") : "default";
     s.pile_toe_x = f.plain_number(root, "", "pile_toe_x");
     s.dig_start = f.plain_number(root, "", "dig_start");

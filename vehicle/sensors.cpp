@@ -4,6 +4,9 @@
 
 #include <cmath>
 #include <ostream>
+#include <string>
+
+#include "host/error.hpp"
 
 namespace talus::vehicle {
 
@@ -102,14 +105,19 @@ SensorSample interpolate(const SensorSample& a, const SensorSample& b, double s)
 }
 
 void SensorLog::after_step(const WheelLoader& loader, double t, double h) {
+  if (!has_last_ && t != 0.0)
+    throw Error("sensor log: the first sample must be taken at t = 0 (got t = " + std::to_string(t) + " s)");
+  if (has_last_ && !(h > 0.0 && t > last_.t))
+    throw Error("sensor log: after the first sample every call must follow a step (h > 0, t later than before)");
   const SensorSample s = read_sensors(loader, t);
-  work_ += s.power * h;
-  // every sampling instant k period within this step (half a step's tolerance at its end, so
-  // steps that divide the period sample their own states exactly)
+  // work: trapezoids over the step, as work_between integrates the samples
+  if (has_last_) work_ += 0.5 * (last_.power + s.power) * h;
+  // every sampling instant k period within this step: the step's own state where an instant
+  // falls on its end (to within a billionth of the period), interpolated otherwise
   for (;;) {
     const double next = static_cast<double>(samples_.size()) * period_;
     if (next > t + 1e-9 * period_) break;
-    if (!has_last_ || h <= 0.0 || next >= t - 1e-9 * period_) {
+    if (!has_last_ || next >= t - 1e-9 * period_) {
       samples_.push_back(s);
       samples_.back().t = next;
     } else {

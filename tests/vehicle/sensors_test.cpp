@@ -7,6 +7,7 @@
 #include <iostream>
 #include <sstream>
 
+#include "host/error.hpp"
 #include "vehicle/data_file.hpp"
 
 namespace talus::vehicle {
@@ -78,6 +79,18 @@ TEST(SensorTest, LongStepsAreSampledAt100HzByInterpolation) {
   const SensorSample mid = interpolate(log.samples()[2], log.samples()[4], 0.5);
   EXPECT_NEAR(log.samples()[3].d_lift, mid.d_lift, 1e-12);
   EXPECT_NEAR(log.samples()[3].f_lift, mid.f_lift, 1e-9);
+}
+
+TEST(SensorTest, LogRejectsCallsOutOfOrder) {
+  WheelLoader w(find_data_file("wa320", "machines"));
+  SensorLog late(100.0);
+  EXPECT_THROW(late.after_step(w, 0.5, 0.01), talus::Error);  // the first sample must be at t = 0
+  SensorLog log(100.0);
+  log.after_step(w, 0.0, 0.0);
+  w.step(0.01);
+  log.after_step(w, 0.01, 0.01);
+  EXPECT_THROW(log.after_step(w, 0.5, 0.0), talus::Error);   // a jump without a step
+  EXPECT_THROW(log.after_step(w, 0.01, 0.01), talus::Error);  // not later than before
 }
 
 TEST(SensorTest, WorkBetweenIntegratesThePowerOverAWindow) {
