@@ -270,9 +270,8 @@ BucketRowBlock::BucketRowBlock(Device& dev)
 
 Particles BucketRowBlock::gather(const std::vector<int>& index, const Buffer<cl_float4>& position,
                                  const Buffer<cl_float4>& velocity, const Buffer<cl_float4>& omega) {
-  Particles out;
   const size_t n = index.size();
-  if (n == 0) return out;
+  if (n == 0) return Particles{};
   index_.upload(index);
   gathered_position_.resize(n);
   gathered_velocity_.resize(n);
@@ -280,19 +279,10 @@ Particles BucketRowBlock::gather(const std::vector<int>& index, const Buffer<cl_
   set_args(gather_kernel_, index_, static_cast<int>(n), position, velocity, omega, gathered_position_,
            gathered_velocity_, gathered_omega_);
   launch(dev_, gather_kernel_, n, "bucket_gather");
-  const auto x = gathered_position_.download(n);
-  const auto v = gathered_velocity_.download(n);
-  const auto w = gathered_omega_.download(n);
-  for (size_t k = 0; k < n; ++k) {
-    out.position.push_back(xyz(x[k]));
-    out.radius.push_back(x[k].s[3]);
-    out.velocity.push_back(xyz(v[k]));
-    out.inv_mass.push_back(v[k].s[3]);
-    out.omega.push_back(xyz(w[k]));
-    out.inv_inertia.push_back(w[k].s[3]);
-    out.rotation.emplace_back(0.0, 0.0, 0.0, 1.0);
-  }
-  return out;
+  // orientations are not gathered: the rows do not need them
+  const std::vector<cl_float4> identity(n, to_float4(Vec3::Zero(), 1.0));
+  return reference::particles_from_device(gathered_position_.download(n), gathered_velocity_.download(n),
+                                          gathered_omega_.download(n), identity);
 }
 
 void BucketRowBlock::set_rows(const std::vector<TlRow>& rows) {

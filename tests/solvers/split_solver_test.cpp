@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <memory>
 #include <random>
 
 #include "terrain/bucket_fill.hpp"
@@ -36,6 +37,33 @@ Bounds bounds_around(const Vec3& centre, double half) {
   b.hi = centre + Vec3::Constant(half);
   return b;
 }
+
+// a standing machine on flat ground with a block of gravel (D 0.12 m) in its bucket, behind the
+// cutting edge and ahead of the corner arc (so that every particle starts inside), between the
+// heights z_lo and z_hi of the bucket's frame; the coupled step ready to run
+struct LoadedBucket {
+  vehicle::WheelLoader loader{machine_file()};
+  Particles particles;
+  std::unique_ptr<DemWorld> dem;
+  std::unique_ptr<SplitSolver> split;
+
+  LoadedBucket(double z_lo, double z_hi, int iterations, double density_factor = 1.0) {
+    const BucketPose pose = bucket_pose(loader);
+    particles = particles_in_bucket_frame(pose, Vec3(-0.95, -1.15, z_lo), Vec3(-0.45, 1.15, z_hi), 0.12, 3);
+    for (size_t i = 0; i < particles.size(); ++i) {
+      particles.inv_mass[i] /= density_factor;
+      particles.inv_inertia[i] /= density_factor;
+    }
+    DemSettings settings;
+    settings.dt = 0.005;
+    settings.iterations = iterations;
+    const std::vector<StaticGeom> ground = {StaticGeom::plane(Vec3::Zero(), Vec3::UnitZ())};
+    dem = std::make_unique<DemWorld>(test::shared_device(), gravel(), settings, bounds_around(pose.position, 3.0),
+                                     ground);
+    dem->set_particles(particles);
+    split = std::make_unique<SplitSolver>(test::shared_device(), *dem, loader, CouplingSettings{});
+  }
+};
 
 TEST(SplitSolver, ImpulsesOnTheBucketBalanceTheParticles) {
   // no gravity on the particles and no other geometry: every momentum change of the particles
@@ -85,18 +113,11 @@ TEST(SplitSolver, ImpulsesOnTheBucketBalanceTheParticles) {
 TEST(SplitSolver, ParticlesAtRestInTheBucketWeighTheirMass) {
   // a standing machine with gravel dropped into its bucket: once settled, the vertical force of the
   // particles on the bucket is their weight, and the lift cylinders carry the extra load
-  vehicle::WheelLoader loader(machine_file());
-  const BucketPose pose = bucket_pose(loader);
-  const double d = 0.12;
-  // behind the cutting edge and ahead of the corner arc, so that every particle starts inside
-  Particles p = particles_in_bucket_frame(pose, Vec3(-0.95, -1.15, 0.08), Vec3(-0.45, 1.15, 0.55), d, 3);
-  DemSettings settings;
-  settings.dt = 0.005;
-  settings.iterations = 40;
-  const std::vector<StaticGeom> ground = {StaticGeom::plane(Vec3::Zero(), Vec3::UnitZ())};
-  DemWorld dem(test::shared_device(), gravel(), settings, bounds_around(pose.position, 3.0), ground);
-  dem.set_particles(p);
-  SplitSolver split(test::shared_device(), dem, loader, CouplingSettings{});
+  LoadedBucket b(0.08, 0.55, 40);
+  vehicle::WheelLoader& loader = b.loader;
+  SplitSolver& split = *b.split;
+  const Particles& p = b.particles;
+  const double dt = b.dem->settings().dt;
   double weight = 0.0;
   for (size_t i = 0; i < p.size(); ++i) weight += p.mass(i) * 9.81;
 
@@ -105,12 +126,12 @@ TEST(SplitSolver, ParticlesAtRestInTheBucketWeighTheirMass) {
   // 0.6 s so the gravel does not run out over the edge, then hold; 2 s in all, the force averaged
   // over the last 0.5 s (the machine still rocks a little on its tyres)
   loader.set_drive_speed(0.0);
-  const int steps = static_cast<int>(2.0 / settings.dt), window = static_cast<int>(0.5 / settings.dt);
+  const int steps = static_cast<int>(2.0 / dt), window = static_cast<int>(0.5 / dt);
   Vec6 mean = Vec6::Zero();
   int max_passes = 0;
   double max_residual = 0.0;
   for (int k = 0; k < steps; ++k) {
-    const double t = k * settings.dt;
+    const double t = k * dt;
     loader.set_lift_speed(t < 0.4 ? 0.1 : 0.0);
     loader.set_tilt_speed(t < 0.6 ? loader.tilt_spec().max_speed : 0.0);
     split.step();
@@ -120,7 +141,7 @@ TEST(SplitSolver, ParticlesAtRestInTheBucketWeighTheirMass) {
       max_residual = std::max(max_residual, split.stats().residual);
     }
   }
-  const double in_bucket = loaded_mass(dem.particles(), loader.bucket_mesh(), bucket_pose(loader));
+  const double in_bucket = loaded_mass(b.dem->particles(), loader.bucket_mesh(), bucket_pose(loader));
   std::printf("[ measured ] %zu particles, %.1f kg; %.1f kg in the bucket, weighing %.1f N; vertical force "
               "on the bucket %.1f N (%+.2f%%); passes <= %d, coupling residual <= %.2e m/s\n", p.size(),
               weight / 9.81, in_bucket, in_bucket * 9.81, -mean.z(),
@@ -189,22 +210,11 @@ TEST(SplitSolver, OuterPassesRunWhenTheVehicleActiveSetChangesAndConverge) {
   // (the bucket's corners leave the ground, tyres unload, cylinders load up to 70-80 % of their
   // limits) between the warm-started solve and the final one. Outer passes must then run and bring
   // the bucket's twist in the sweeps and in the direct solve within the tolerance
-  vehicle::WheelLoader loader(machine_file());
-  const BucketPose pose = bucket_pose(loader);
-  Particles p = particles_in_bucket_frame(pose, Vec3(-0.95, -1.15, 0.3), Vec3(-0.45, 1.15, 0.8), 0.12, 3);
   constexpr double kDenser = 80.0;
-  for (size_t i = 0; i < p.size(); ++i) {
-    p.inv_mass[i] /= kDenser;
-    p.inv_inertia[i] /= kDenser;
-  }
-  DemSettings settings;
-  settings.dt = 0.005;
-  settings.iterations = 40;
-  const std::vector<StaticGeom> ground = {StaticGeom::plane(Vec3::Zero(), Vec3::UnitZ())};
-  DemWorld dem(test::shared_device(), gravel(), settings, bounds_around(pose.position, 3.0), ground);
-  dem.set_particles(p);
-  CouplingSettings coupling;
-  SplitSolver split(test::shared_device(), dem, loader, coupling);
+  LoadedBucket b(0.3, 0.8, 40, kDenser);
+  vehicle::WheelLoader& loader = b.loader;
+  SplitSolver& split = *b.split;
+  const CouplingSettings coupling = split.settings();
   loader.set_lift_speed(loader.lift_spec().max_speed);
   loader.set_tilt_speed(loader.tilt_spec().max_speed);
   int multi = 0, capped = 0, steps = 0;
@@ -231,20 +241,11 @@ TEST(SplitSolver, TwoRunsAreBitIdentical) {
   // same inputs, same device, same work-group sizes: the same particles and the same machine to
   // the last bit (no unordered float accumulation anywhere in the coupled step)
   auto run = [] {
-    vehicle::WheelLoader loader(machine_file());
-    const BucketPose pose = bucket_pose(loader);
-    Particles p = particles_in_bucket_frame(pose, Vec3(-0.95, -1.15, 0.08), Vec3(-0.45, 1.15, 0.55), 0.12, 3);
-    DemSettings settings;
-    settings.dt = 0.005;
-    settings.iterations = 20;
-    const std::vector<StaticGeom> ground = {StaticGeom::plane(Vec3::Zero(), Vec3::UnitZ())};
-    DemWorld dem(test::shared_device(), gravel(), settings, bounds_around(pose.position, 3.0), ground);
-    dem.set_particles(p);
-    SplitSolver split(test::shared_device(), dem, loader, CouplingSettings{});
-    loader.set_lift_speed(0.1);
-    loader.set_tilt_speed(0.1);
-    for (int k = 0; k < 60; ++k) split.step();
-    return std::make_pair(dem.particles(), loader.bodies());
+    LoadedBucket b(0.08, 0.55, 20);
+    b.loader.set_lift_speed(0.1);
+    b.loader.set_tilt_speed(0.1);
+    for (int k = 0; k < 60; ++k) b.split->step();
+    return std::make_pair(b.dem->particles(), b.loader.bodies());
   };
   const auto a = run();
   const auto b = run();
