@@ -802,4 +802,6 @@ Figure resolution_figure(const std::vector<ResolutionPoint>& points) {
   return f;
 }
 
+Rgb series_colour(std::size_t i) { return run_colour(i); }
+
 }  // namespace talus

@@ -127,4 +127,7 @@ struct ResolutionPoint {
 // and model family: colour by scenario, solid for the first family, dashed for the next
 Figure resolution_figure(const std::vector<ResolutionPoint>& points);
 
+// the colour of the i-th simulated series in every figure (a cycle of eight distinct hues)
+Rgb series_colour(std::size_t i);
+
 }  // namespace talus

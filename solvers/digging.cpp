@@ -64,11 +64,16 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
 }
 
 void DiggingSimulation::step() {
-  // the feedforward targets at the start of the step, one coupled step, the sensors after it
+  // the feedforward targets at the start of the step
+  step(scenario_.drive(time_), scenario_.lift(time_), scenario_.tilt(time_));
+}
+
+void DiggingSimulation::step(double drive, double lift, double tilt) {
+  // the targets, one coupled step, the sensors after it
   const double h = preset_.dt;
-  loader_->set_drive_speed(scenario_.drive(time_));
-  loader_->set_lift_speed(scenario_.lift(time_));
-  loader_->set_tilt_speed(scenario_.tilt(time_));
+  loader_->set_drive_speed(drive);
+  loader_->set_lift_speed(lift);
+  loader_->set_tilt_speed(tilt);
   split_->step();
   ++steps_done_;
   time_ = steps_done_ * h;

@@ -42,6 +42,8 @@ class DiggingSimulation {
 
   // one step with the scenario's controls at the current time
   void step();
+  // one step with the given target speeds [m/s] (a controller instead of the scenario's inputs)
+  void step(double drive, double lift, double tilt);
   double time() const { return time_; }
   int steps_total() const { return steps_total_; }
   bool done() const { return steps_done_ >= steps_total_; }

@@ -236,11 +236,14 @@ PileScan scan_pile(const Particles& particles, const PileProfile& profile, doubl
       surface.radius.push_back(0.0);
     }
   Heightmap map = Heightmap::from_particles(surface, x0, -0.5 * profile.width, diameter, nx, ny);
-  // the laser: 400 rays in the mid plane from in front of the toe towards the rear wall
+  // the laser: 800 rays in the mid plane from in front of the toe, aimed at ground points from the
+  // run-out to far behind the rear wall: the rays aimed behind the pile are the ones that graze
+  // its top (those that pass over the wall leave the map and are dropped)
   const double sensor_back = 3.0, sensor_up = 3.0;  // [m] a scanner on a tripod in front
+  const double beyond = 10.0 * sensor_up;           // [m] aim past the wall: rays down to ~1/10 slope
   Eigen::Vector3d sensor(profile.points.front().x() - sensor_back, 0.0, sensor_up);
   PileScan scan;
-  scan.points = map.scan_profile(0.0, x0, profile.rear_wall_x - 0.5 * diameter, 400, sensor);
+  scan.points = map.scan_profile(0.0, x0, profile.rear_wall_x + beyond, 800, sensor);
   // the face: a line through the points between 20% and 80% of the highest
   double zmax = 0.0;
   for (auto& q : scan.points) zmax = std::max(zmax, q.y());

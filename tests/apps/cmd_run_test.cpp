@@ -76,4 +76,33 @@ TEST(DiggingRunTest, UnknownFidelityIsBadInput) {
   EXPECT_EQ(WEXITSTATUS(status), 2);
 }
 
+// the sweep's cycles are independent: one process, two MPI ranks, or two shards merged by
+// --collect give the same results to the last digit (the cycles are bit-identical wherever they run)
+TEST(SweepRunTest, OneProcessTwoRanksAndTwoShardsAgree) {
+  const auto base = std::filesystem::temp_directory_path() / "talus_sweep";
+  std::filesystem::remove_all(base);
+  const std::string args = " sweep --scenario fb35 --fidelity D400 --samples 2 --max-time 8 --quiet --out ";
+  auto read = [](const std::filesystem::path& p) {
+    std::ifstream in(p);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  };
+  // one process
+  ASSERT_EQ(std::system((kTalus + args + (base / "one").string() + " 2>/dev/null").c_str()), 0);
+  const std::string one = read(base / "one" / "D400" / "sweep.csv");
+  EXPECT_NE(one.find("\n0,"), std::string::npos) << one;
+  EXPECT_NE(one.find("\n1,"), std::string::npos) << one;
+  EXPECT_TRUE(std::filesystem::exists(base / "one" / "sweep.png"));
+  EXPECT_TRUE(std::filesystem::exists(base / "one" / "summary.json"));
+  // two shards, then --collect
+  for (const char* shard : {"0/2", "1/2"})
+    ASSERT_EQ(std::system((kTalus + args + (base / "shards").string() + " --shard " + shard + " 2>/dev/null").c_str()), 0);
+  ASSERT_EQ(std::system((kTalus + args + (base / "shards").string() + " --collect 2>/dev/null").c_str()), 0);
+  EXPECT_EQ(read(base / "shards" / "D400" / "sweep.csv"), one);
+  // two MPI ranks (mpirun from Debian's openmpi-bin; root needs Open MPI's explicit consent)
+  const std::string mpi = "mpirun --allow-run-as-root --oversubscribe -np 2 " + kTalus + args +
+                          (base / "mpi").string() + " 2>/dev/null";
+  ASSERT_EQ(std::system(mpi.c_str()), 0) << mpi;
+  EXPECT_EQ(read(base / "mpi" / "D400" / "sweep.csv"), one);
+}
+
 }  // namespace

@@ -1,0 +1,52 @@
+// The sweep's measures (solvers/feedback_sweep): best productivity and the paper's domain gap,
+// domain shift and performance drop (paper §7.2), on results whose answers are known by hand.
+#include "solvers/feedback_sweep.hpp"
+
+#include <gtest/gtest.h>
+
+namespace talus {
+namespace {
+
+CycleResult result(double s, double mass, double time, bool completed = true) {
+  CycleResult r;
+  r.s = s;
+  r.loaded_mass_kg = mass;
+  r.cycle_time_s = time;
+  r.work_J = 1e5;
+  r.completed = completed;
+  return r;
+}
+
+TEST(FeedbackSweep, BestProductivityIgnoresUnfinishedCycles) {
+  // M/T = 300, 400, 350 kg/s; an unfinished cycle would read 1000 kg/s
+  const std::vector<CycleResult> r = {result(0.0, 3000, 10), result(0.5, 3200, 8), result(1.0, 2800, 8),
+                                      result(0.25, 5000, 5, false)};
+  const SweepOptimum best = best_productivity(r);
+  EXPECT_DOUBLE_EQ(best.s, 0.5);
+  EXPECT_DOUBLE_EQ(best.productivity, 400.0);
+}
+
+TEST(FeedbackSweep, DomainTransferAsThePaperDefinesIt) {
+  // tuned in A (best 416 kg/s at s = 0.42), used in B (best 366 kg/s at s = 0.36): gap 50 kg/s
+  // (13.7 % of B's best), shift 0.06; B at A's optimum, halfway between B's samples at 0.36 and
+  // 0.48 (366 and 346 kg/s), gives 356 kg/s: a drop of 10/366
+  const std::vector<CycleResult> a = {result(0.30, 3900, 10), result(0.42, 4160, 10), result(0.54, 4000, 10)};
+  const std::vector<CycleResult> b = {result(0.24, 3400, 10), result(0.36, 3660, 10), result(0.48, 3460, 10)};
+  const DomainTransfer d = domain_transfer(a, b);
+  EXPECT_NEAR(d.gap_kg_s, 50.0, 1e-9);
+  EXPECT_NEAR(d.gap_rel, 50.0 / 366.0, 1e-12);
+  EXPECT_NEAR(d.shift, 0.06, 1e-12);
+  EXPECT_NEAR(d.drop_rel, 10.0 / 366.0, 1e-12);
+}
+
+TEST(FeedbackSweep, FeedbackScenarioStartsFiveMetresFromThePile) {
+  const vehicle::Scenario base = vehicle::load_scenario("fb35");
+  const vehicle::Scenario s = feedback_scenario(base, 5.0, 30.0);
+  // the machine's reference pose has its bucket tip at x = 3.45 m (data/machines/wa320.json)
+  EXPECT_NEAR(s.pile_toe_x, 3.45 + 5.0, 1e-9);
+  EXPECT_DOUBLE_EQ(s.duration, 30.0);
+  EXPECT_THROW(feedback_scenario(vehicle::load_scenario("flat-lift"), 5.0, 30.0), InputError);
+}
+
+}  // namespace
+}  // namespace talus
