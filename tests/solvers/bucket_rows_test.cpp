@@ -173,14 +173,15 @@ TEST(BucketRows, KernelsMatchDoubleReferenceOnRandomContacts) {
   twist.expect_within();
 }
 
-TEST(BucketRows, SweepsConvergeToNonPenetrationAndFrictionCone) {
-  // the reference alone, many sweeps: every normal row ends satisfied (complementarity), every
-  // friction impulse inside its disc, and the bucket moved by exactly W times the total wrench
+TEST(BucketRows, FrictionlessSweepsConvergeToNonPenetration) {
+  // the reference alone, normal rows only: with compliance the problem is a strictly convex QP,
+  // on which projected Gauss-Seidel converges; every normal row ends satisfied (complementarity)
   const uint64_t seed = test::fresh_seed();
   SCOPED_TRACE(test::seed_note(seed));
   std::mt19937_64 rng(seed);
   RandomCase c = random_case(rng, 30);
-  auto rows = make_bucket_rows(c.contacts, c.particles, c.bucket, c.com, c.params, BucketMaterial{}, {}, {});
+  const BucketMaterial frictionless{0.0, 0.0};
+  auto rows = make_bucket_rows(c.contacts, c.particles, c.bucket, c.com, c.params, frictionless, {}, {});
   Particles p = c.particles;
   BucketBody b = c.bucket;
   std::printf("[ measured ] sweeps  max normal-row residual [m/s]\n");
@@ -197,6 +198,20 @@ TEST(BucketRows, SweepsConvergeToNonPenetrationAndFrictionCone) {
     if (s == 1 || s == 10 || s == 50 || s == 100 || s == 400) std::printf("[ measured ] %6d  %.3e\n", s, worst);
   }
   EXPECT_LT(worst, 1e-6);
+  for (const auto& r : rows) EXPECT_GE(r.impulse_n, 0.0);
+}
+
+TEST(BucketRows, SweepsKeepImpulsesInTheirConesAndMoveTheBucketByW) {
+  // with friction and rolling (the default bucket material), after any number of sweeps: every
+  // impulse lies in its cone, and the bucket has moved by exactly W times the rows' total wrench
+  const uint64_t seed = test::fresh_seed();
+  SCOPED_TRACE(test::seed_note(seed));
+  std::mt19937_64 rng(seed);
+  RandomCase c = random_case(rng, 30);
+  auto rows = make_bucket_rows(c.contacts, c.particles, c.bucket, c.com, c.params, BucketMaterial{}, {}, {});
+  Particles p = c.particles;
+  BucketBody b = c.bucket;
+  for (int s = 0; s < 50; ++s) reference::bucket_sweep(rows, p, b);
   for (const auto& r : rows) {
     EXPECT_GE(r.impulse_n, 0.0);
     EXPECT_LE(r.impulse_t.norm(), r.friction * r.impulse_n * (1 + 1e-12) + 1e-15);
