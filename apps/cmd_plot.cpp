@@ -1,7 +1,10 @@
 // `talus plot --runs DIR... [--ref DIR] [--pile-profile FILE] --out DIR`: the paper-style figures
+// (with --ref also resolution.png: mean error and real-time factor against particle size)
 // of recorded runs (docs/plots.md): channels.png, trajectory.png and power.png in --out.
+#include <fstream>
 #include <iostream>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <utility>
@@ -10,6 +13,7 @@
 #include "apps/commands.hpp"
 #include "io/output.hpp"
 #include "io/plot.hpp"
+#include "sim2real/table.hpp"
 #include "sim2real/timeseries.hpp"
 #include "terrain/pile.hpp"
 
@@ -23,6 +27,7 @@ constexpr int kChannelsHeightPx = 1800;  // seven panels
 constexpr int kTrajectoryHeightPx = 700;
 constexpr int kPowerPanelPx = 300;       // power.png grows with the number of runs
 constexpr int kPowerMarginPx = 150;      // legend and x axis
+constexpr int kResolutionHeightPx = 900; // two panels: error and real-time factor
 
 struct PlotArgs {
   std::vector<std::string> runs;
@@ -50,6 +55,24 @@ void plot(const PlotArgs& a) {
   power_figure(runs, reference)
       .write_png(out + "power.png", kWidthPx, kPowerMarginPx + kPowerPanelPx * power_panels);
   std::cerr << "talus plot: wrote channels.png, trajectory.png and power.png to " << a.out << "\n";
+
+  // against a reference: the mean error and the real-time factor of each run against its particle
+  // size (runs whose fidelity names a size, e.g. D200 or G100)
+  if (!reference) return;
+  std::vector<ResolutionPoint> points;
+  for (const sim2real::Run& r : runs) {
+    const std::string fidelity = r.summary.fidelity.value_or("");
+    const size_t digits = fidelity.find_first_of("0123456789");
+    if (digits == std::string::npos || digits == 0) continue;
+    const nlohmann::json summary = nlohmann::json::parse(std::ifstream(r.dir / sim2real::kSummaryFile));
+    const double realtime = summary.value("realtime_factor", 0.0);
+    const sim2real::Comparison c = sim2real::compare_runs(r, *reference, sim2real::CompareOptions{});
+    points.push_back({r.summary.scenario.value_or(r.label()), fidelity, std::stod(fidelity.substr(digits)), c.mean,
+                      realtime});
+  }
+  if (points.empty()) return;
+  resolution_figure(points).write_png(out + "resolution.png", kWidthPx, kResolutionHeightPx);
+  std::cerr << "talus plot: wrote resolution.png (" << points.size() << " runs against the reference)\n";
 }
 
 }  // namespace

@@ -404,23 +404,27 @@ TEST_F(PlotTest, ShortLogAxisIsLabelledAtEveryDoubling) {
 TEST_F(PlotTest, CommandWritesTheThreeFiguresAndRejectsBadInput) {
   const std::string talus = std::string(TALUS_BINARY_DIR) + "/talus";
   if (!fs::exists(talus)) GTEST_SKIP() << talus << " not built";
-  for (const char* name : {"ref", "sim"}) {
+  for (const char* name : {"ref", "D200"}) {
     sim2real::Run r = synthetic_run(name, 0.05, 2.0e5, -0.02, 1.0e5, 3.0e4, 1.5);
     r.summary.dig_start_s = 0.5;
     r.summary.dig_end_s = 1.5;
+    r.summary.loaded_mass_kg = 2700.0;  // the errors of mass and work need them non-zero
+    r.summary.work_J = 1.27e5;
     fs::create_directories(dir_ / name);
     sim2real::save_timeseries(dir_ / name / sim2real::kTimeseriesFile, r.series);
     sim2real::save_summary(dir_ / name / sim2real::kSummaryFile, r.summary);
   }
   const std::string profile = std::string(TALUS_SOURCE_DIR) + "/data/piles/default.json";
   const std::string out = file("figures");
-  std::string cmd = talus + " plot --runs " + file("sim") + " --ref " + file("ref") + " --pile-profile " +
+  std::string cmd = talus + " plot --runs " + file("D200") + " --ref " + file("ref") + " --pile-profile " +
                     profile + " --out " + out + " 2>/dev/null";
   int status = std::system(cmd.c_str());
   ASSERT_TRUE(WIFEXITED(status));
   EXPECT_EQ(WEXITSTATUS(status), 0);
   for (const char* name : {"channels.png", "trajectory.png", "power.png"})
     EXPECT_GT(read_png(out + "/" + name).width, 0) << name;
+  // a run named by a particle level is also placed on the resolution figure
+  EXPECT_GT(read_png(out + "/resolution.png").width, 0);
   // a run folder that does not exist is bad input: exit code 2
   cmd = talus + " plot --runs " + file("missing") + " --out " + out + " 2>/dev/null";
   status = std::system(cmd.c_str());
