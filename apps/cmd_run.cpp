@@ -116,14 +116,25 @@ std::string pvd_collection(const std::vector<std::pair<double, std::string>>& sn
   return s.str();
 }
 
-// the side view of particles and the posed bucket, ray-traced, coloured by speed
+// the side view of particles and the posed bucket (cut away), ray-traced, coloured by speed
 void write_render(const std::string& path, const Particles& particles, const vehicle::WheelLoader& loader,
                   const Bounds& view) {
   RenderScene scene;
   scene.particles = &particles;
   scene.colouring = ParticleColouring::Speed;
   scene.max_speed = 1.0;  // m/s: the paper's figures colour 0-1 m/s
-  scene.meshes.push_back(posed_mesh(loader.bucket_mesh(), bucket_pose(loader)));
+  // a cutaway bucket: without its near side plate (the camera looks along +y from the -y side),
+  // so the gravel inside shows
+  vehicle::BucketMesh cutaway = loader.bucket_mesh();
+  const double near_side = -0.5 * cutaway.inner_width;
+  cutaway.triangles.erase(std::remove_if(cutaway.triangles.begin(), cutaway.triangles.end(),
+                                         [&](const std::array<int, 3>& t) {
+                                           return std::all_of(t.begin(), t.end(), [&](int v) {
+                                             return std::abs(cutaway.vertices[v].y() - near_side) < 1e-9;
+                                           });
+                                         }),
+                          cutaway.triangles.end());
+  scene.meshes.push_back(posed_mesh(cutaway, bucket_pose(loader)));
   scene.ground_height = 0.0;
   const Camera camera = side_camera(view.lo, view.hi, double(kImageWidth) / kImageHeight);
   render_particles(scene, camera, kImageWidth, kImageHeight).write_png(path);
