@@ -2,7 +2,8 @@
 // target speeds on the wheel loader and write DIR/timeseries.csv (100 Hz sensors, SPEC §2.4) and
 // DIR/summary.json. Scenarios with a pile (FB35, HD27, RD21) dig in a particle pile built at the
 // fidelity level (solvers/digging.hpp) and also write the pile's laser scan, particle snapshots
-// for ParaView, and PNG figures.
+// for ParaView, and PNG figures. --effect NAME:key=value,... adds model extensions (vehicle/effect.hpp,
+// docs/effects.md), --effect-plugin FILE loads more from a shared library; summary.json lists them.
 #include <algorithm>
 #include <cctype>
 #include <chrono>
@@ -22,6 +23,8 @@
 #include "sim2real/timeseries.hpp"
 #include "solvers/digging.hpp"
 #include "vehicle/data_file.hpp"
+#include "vehicle/effect.hpp"
+#include "vehicle/effect_plugin.hpp"
 #include "vehicle/scenario.hpp"
 #include "vehicle/sensors.hpp"
 #include "vehicle/wheel_loader.hpp"
@@ -46,7 +49,36 @@ struct RunOptions {
   double snapshot_interval = 1.0;  // s; 0: no snapshots
   unsigned seed = 1;
   bool quiet = false;
+  std::vector<std::string> effects;         // NAME:key=value,...
+  std::vector<std::string> effect_plugins;  // shared libraries
 };
+
+// the model extensions of the options, in their order (bad input before anything runs)
+struct RunEffects {
+  vehicle::EffectPlugins plugins;  // keeps the libraries loaded while the effects live
+  vehicle::EffectSet set;
+};
+
+std::unique_ptr<RunEffects> make_run_effects(const RunOptions& o) {
+  auto e = std::make_unique<RunEffects>();
+  e->plugins = vehicle::load_effect_plugins(o.effect_plugins);
+  for (const auto& spec : o.effects) e->set.add(vehicle::make_effect(spec, e->plugins));
+  return e;
+}
+
+// one line for stderr: "effects: a (k=v, ...), b (...)"
+std::string effects_note(const vehicle::EffectSet& effects) {
+  std::ostringstream note;
+  for (size_t i = 0; i < effects.size(); ++i) {
+    note << (i ? "; " : "") << effects[i].name();
+    const auto params = effects[i].to_json()["params"];
+    std::string list;
+    for (const auto& [k, v] : params.items())
+      list += (list.empty() ? "" : ", ") + k + "=" + (v.is_string() ? v.get<std::string>() : v.dump());
+    if (!list.empty()) note << " (" << list << ")";
+  }
+  return note.str();
+}
 
 // the 100 Hz log as the channel-contract CSV
 std::string timeseries_csv(const vehicle::SensorLog& log) {
@@ -66,7 +98,7 @@ void emit_summary(const RunOptions& o, const nlohmann::json& summary) {
 }
 
 // a scenario without particles: the machine alone on flat ground
-void run_vehicle_only(const RunOptions& o, const vehicle::Scenario& sc) {
+void run_vehicle_only(const RunOptions& o, const vehicle::Scenario& sc, vehicle::EffectSet& effects) {
   const std::string machine = vehicle::find_data_file(sc.machine, "machines");
   if (machine.empty()) {
     throw InputError(sc.path + ": field 'machine' names '" + sc.machine +
@@ -79,16 +111,26 @@ void run_vehicle_only(const RunOptions& o, const vehicle::Scenario& sc) {
   std::cerr << "talus run: " << sc.name << ", " << sc.duration << " s at h = " << sc.timestep * 1e3 << " ms on "
             << loader.name() << " (" << loader.operating_mass() << " kg with payload)\n";
   const auto start = std::chrono::steady_clock::now();
+  if (!effects.empty()) std::cerr << "talus run: effects: " << effects_note(effects) << "\n";
   Progress progress("run " + sc.name, sc.duration, !o.quiet);
-  log.after_step(loader, 0.0, 0.0);
+  if (effects.empty()) {
+    log.after_step(loader, 0.0, 0.0);
+  } else {
+    effects.reset(loader, 0.0);
+    log.after_step(effects.sensors(0.0, vehicle::read_sensors(loader, 0.0)), 0.0);
+  }
   for (int k = 0; k < steps; ++k) {
     // feedforward targets at the start of the step
     const double t = k * sc.timestep;
-    loader.set_drive_speed(sc.drive(t));
-    loader.set_lift_speed(sc.lift(t));
-    loader.set_tilt_speed(sc.tilt(t));
-    loader.step(sc.timestep);
-    log.after_step(loader, (k + 1) * sc.timestep, sc.timestep);
+    if (effects.empty()) {
+      loader.set_drive_speed(sc.drive(t));
+      loader.set_lift_speed(sc.lift(t));
+      loader.set_tilt_speed(sc.tilt(t));
+      loader.step(sc.timestep);
+      log.after_step(loader, (k + 1) * sc.timestep, sc.timestep);
+    } else {
+      vehicle::step_with_effects(loader, effects, t, sc.timestep, {sc.drive(t), sc.lift(t), sc.tilt(t)}, &log);
+    }
     progress.update((k + 1) * sc.timestep);
   }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -99,7 +141,8 @@ void run_vehicle_only(const RunOptions& o, const vehicle::Scenario& sc) {
                                   {"loaded_mass_kg", sc.payload},
                                   {"sim_time_s", steps * sc.timestep},
                                   {"wall_time_s", wall},
-                                  {"realtime_factor", wall > 0 ? steps * sc.timestep / wall : 0.0}};
+                                  {"realtime_factor", wall > 0 ? steps * sc.timestep / wall : 0.0},
+                                  {"effects", effects.to_json()}};
   emit_summary(o, summary);
   std::cerr << "talus run: wrote " << o.out << "/timeseries.csv (" << log.samples().size()
             << " samples) and summary.json; work " << log.work() / 1e3 << " kJ, real-time factor "
@@ -141,7 +184,7 @@ void write_render(const std::string& path, const Particles& particles, const veh
 }
 
 // a pile scenario: build the pile at the level, dig, write everything
-void run_digging(const RunOptions& o, const vehicle::Scenario& sc) {
+void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::EffectSet& effects) {
   const FidelityPreset& preset = fidelity_preset(o.fidelity);
   const std::string profile_path = vehicle::find_data_file(sc.pile_profile, "piles");
   if (profile_path.empty())
@@ -175,7 +218,8 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc) {
   write_file_atomically((dir / "scan.csv").string(), scan_csv);
 
   // the run, with snapshots at the interval
-  DiggingSimulation sim(dev, sc, preset, pile, options);
+  if (!effects.empty()) std::cerr << "talus run: effects: " << effects_note(effects) << "\n";
+  DiggingSimulation sim(dev, sc, preset, pile, options, effects.empty() ? nullptr : &effects);
   std::filesystem::create_directories(dir / "snapshots");
   std::vector<std::pair<double, std::string>> snapshots;
   auto snapshot = [&](const Particles& p) {
@@ -234,7 +278,8 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc) {
         {"steps_at_pass_limit", sim.steps_at_pass_limit()},
         {"max_bucket_overlap_rel", sim.max_bucket_overlap_rel()}}},
       {"device", dev.description()},
-      {"reconstructed_inputs", true}};
+      {"reconstructed_inputs", true},
+      {"effects", effects.to_json()}};
   if (sc.field_loaded_mass_kg > 0) {
     summary["field_loaded_mass_kg"] = sc.field_loaded_mass_kg;
     summary["field_work_J"] = sc.field_work_J;
@@ -266,10 +311,11 @@ void run(const RunOptions& o) {
     if (!vehicle::find_data_file(lower, "scenarios").empty()) name = lower;
   }
   const vehicle::Scenario sc = vehicle::load_scenario(name);
+  const auto effects = make_run_effects(o);
   if (sc.pile) {
-    run_digging(o, sc);
+    run_digging(o, sc, effects->set);
   } else {
-    run_vehicle_only(o, sc);
+    run_vehicle_only(o, sc, effects->set);
   }
 }
 
@@ -292,6 +338,14 @@ void add_run_command(CLI::App& app) {
   cmd->add_option("--sweep", opts->sweep, "particle sweeps: pgs or jacobi")->capture_default_str();
   cmd->add_option("--seed", opts->seed, "random seed of the pile's particle sizes and jitter")->capture_default_str();
   cmd->add_flag("--quiet", opts->quiet, "no progress on stderr");
+  cmd->add_option("--effect", opts->effects,
+                  "a model extension, NAME or NAME:key=value,key=value (repeatable, applied in order): "
+                  "engine_power_sharing, hydraulic_lag, pump_flow_limit, cylinder_friction, wheel_slip_sensor, "
+                  "tyre_rolling_resistance, sensor_bias, sensor_delay, or a plug-in's (docs/effects.md)")
+      ->expected(1)->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  cmd->add_option("--effect-plugin", opts->effect_plugins,
+                  "a shared library with more effects (vehicle/effect_abi.h; repeatable)")
+      ->expected(1)->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   cmd->callback([opts] { run(*opts); });
 }
 

@@ -34,8 +34,9 @@ PileBuild build_scenario_pile(Device& dev, const vehicle::Scenario& scenario, co
 }
 
 DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scenario, const FidelityPreset& preset,
-                                     const PileBuild& pile, const DiggingOptions& options)
-    : dev_(dev), scenario_(scenario), preset_(preset), log_(100.0) {
+                                     const PileBuild& pile, const DiggingOptions& options,
+                                     vehicle::EffectSet* effects)
+    : dev_(dev), scenario_(scenario), preset_(preset), log_(100.0), effects_(effects) {
   if (!scenario.pile) throw InputError(scenario.path + ": scenario '" + scenario.name + "' has no pile (\"pile\": false)");
   const std::string machine = vehicle::find_data_file(scenario.machine, "machines");
   if (machine.empty())
@@ -60,7 +61,13 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
   dem_->set_particles(pile.particles);
   split_ = std::make_unique<SplitSolver>(dev, *dem_, *loader_, options.coupling);
   steps_total_ = static_cast<int>(std::lround(scenario.duration / h));
-  log_.after_step(*loader_, 0.0, 0.0);
+  if (effects_) {
+    // the effects start with the settled machine at t = 0
+    effects_->reset(*loader_, 0.0);
+    log_.after_step(effects_->sensors(0.0, vehicle::read_sensors(*loader_, 0.0)), 0.0);
+  } else {
+    log_.after_step(*loader_, 0.0, 0.0);
+  }
 }
 
 void DiggingSimulation::step() {
@@ -71,13 +78,20 @@ void DiggingSimulation::step() {
 void DiggingSimulation::step(double drive, double lift, double tilt) {
   // the targets, one coupled step, the sensors after it
   const double h = preset_.dt;
-  loader_->set_drive_speed(drive);
-  loader_->set_lift_speed(lift);
-  loader_->set_tilt_speed(tilt);
+  vehicle::ActuatorCommands u{drive, lift, tilt};
+  if (effects_) u = effects_->commands(time_, h, u);
+  loader_->set_drive_speed(u.drive);
+  loader_->set_lift_speed(u.lift);
+  loader_->set_tilt_speed(u.tilt);
+  if (effects_) effects_->before_step(time_, h, *loader_);
   split_->step();
   ++steps_done_;
   time_ = steps_done_ * h;
-  log_.after_step(*loader_, time_, h);
+  if (effects_) {
+    log_.after_step(effects_->sensors(h, vehicle::read_sensors(*loader_, time_)), h);
+  } else {
+    log_.after_step(*loader_, time_, h);
+  }
   // coupling bookkeeping
   const CouplingStats& s = split_->stats();
   if (s.bucket_contacts > 0) {

@@ -14,6 +14,7 @@
 #include "io/progress.hpp"
 #include "solvers/split_solver.hpp"
 #include "terrain/pile.hpp"
+#include "vehicle/effect.hpp"
 #include "vehicle/scenario.hpp"
 #include "vehicle/sensors.hpp"
 
@@ -36,13 +37,17 @@ PileBuild build_scenario_pile(Device& dev, const vehicle::Scenario& scenario, co
 
 class DiggingSimulation {
  public:
-  // the scenario must have a pile; `pile` from build_scenario_pile (or a saved one)
+  // the scenario must have a pile; `pile` from build_scenario_pile (or a saved one). With
+  // `effects` (model extensions, vehicle/effect.hpp; not owned, must outlive the simulation) the
+  // set is reset when the machine has settled, and every step's commands, limits and forces and
+  // the logged sensors go through it: log() records what the sensors report
   DiggingSimulation(Device& dev, const vehicle::Scenario& scenario, const FidelityPreset& preset,
-                    const PileBuild& pile, const DiggingOptions& options);
+                    const PileBuild& pile, const DiggingOptions& options, vehicle::EffectSet* effects = nullptr);
 
   // one step with the scenario's controls at the current time
   void step();
-  // one step with the given target speeds [m/s] (a controller instead of the scenario's inputs)
+  // one step with the given target speeds [m/s] (a controller instead of the scenario's inputs);
+  // with effects, these are the operator's targets before on_commands
   void step(double drive, double lift, double tilt);
   double time() const { return time_; }
   int steps_total() const { return steps_total_; }
@@ -75,6 +80,7 @@ class DiggingSimulation {
   std::unique_ptr<DemWorld> dem_;
   std::unique_ptr<SplitSolver> split_;
   vehicle::SensorLog log_;
+  vehicle::EffectSet* effects_ = nullptr;
   double time_ = 0.0;
   int steps_done_ = 0, steps_total_ = 0;
   int contact_steps_ = 0, max_passes_ = 0, capped_steps_ = 0;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include "host/error.hpp"
 
@@ -9,15 +10,21 @@ namespace talus::vehicle {
 
 Driveline::Driveline(std::array<int, 4> wheels, std::array<int, 4> frames, const Vec3& local_axis,
                      DrivelineParameters p)
-    : wheels_(wheels), frames_(frames), axis_(local_axis.normalized()), p_(p) {
+    : wheels_(wheels), frames_(frames), axis_(local_axis.normalized()), p_(p), power_limit_(p.max_power) {
   if (!(p.max_power > 0.0) || !(p.stall_torque > 0.0) || !(p.gear_ratio > 0.0) || !(p.wheel_radius > 0.0)) {
     throw Error("driveline: power, stall torque, gear ratio and wheel radius must be > 0");
   }
 }
 
+void Driveline::set_power_limit(double watts) {
+  if (!(watts > 0.0) || !std::isfinite(watts))
+    throw Error("driveline: the power limit must be a finite value > 0 W (got " + std::to_string(watts) + ")");
+  power_limit_ = watts;
+}
+
 double Driveline::torque_limit(double motor_speed) const {
   const double w = std::abs(motor_speed);
-  return w > 0.0 ? std::min(p_.stall_torque, p_.max_power / w) : p_.stall_torque;
+  return w > 0.0 ? std::min(p_.stall_torque, power_limit_ / w) : p_.stall_torque;
 }
 
 ConstraintRow Driveline::motor_row(const std::vector<RigidBody>& bodies) const {

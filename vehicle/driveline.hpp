@@ -5,6 +5,8 @@
 // The motor's torque limit depends on its speed: T_max(ω) = min(T_stall, P_max / |ω|); the power
 // part is settled after each solve (update_bounds) so the delivered power never exceeds P_max.
 // The engine and hydrostatic transmission have no inertia of their own here (not in the baseline).
+// The power limit starts at P_max and may be lowered step by step (set_power_limit): the engine
+// power left to the driveline when the work hydraulics share the engine (vehicle/effect.hpp).
 #pragma once
 #include <array>
 
@@ -36,6 +38,10 @@ class Driveline : public Constraint {
   double motor_torque() const { return forces_.empty() ? 0.0 : forces_[0]; }
   double torque_limit(double motor_speed) const;
   const DrivelineParameters& parameters() const { return p_; }
+  // the power the motor may deliver from the next step on [W] (> 0); parameters().max_power stays
+  // the rated value
+  void set_power_limit(double watts);
+  double power_limit() const { return power_limit_; }
 
  private:
   ConstraintRow motor_row(const std::vector<RigidBody>& bodies) const;
@@ -43,6 +49,7 @@ class Driveline : public Constraint {
   Vec3 axis_;
   DrivelineParameters p_;
   double target_drive_speed_ = 0.0;
+  double power_limit_ = 0.0;  // W, P_max unless lowered
 };
 
 }  // namespace talus::vehicle

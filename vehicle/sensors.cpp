@@ -104,12 +104,14 @@ SensorSample interpolate(const SensorSample& a, const SensorSample& b, double s)
   return r;
 }
 
-void SensorLog::after_step(const WheelLoader& loader, double t, double h) {
+void SensorLog::after_step(const WheelLoader& loader, double t, double h) { after_step(read_sensors(loader, t), h); }
+
+void SensorLog::after_step(const SensorSample& s, double h) {
+  const double t = s.t;
   if (!has_last_ && t != 0.0)
     throw Error("sensor log: the first sample must be taken at t = 0 (got t = " + std::to_string(t) + " s)");
   if (has_last_ && !(h > 0.0 && t > last_.t))
     throw Error("sensor log: after the first sample every call must follow a step (h > 0, t later than before)");
-  const SensorSample s = read_sensors(loader, t);
   // work: trapezoids over the step, as work_between integrates the samples
   if (has_last_) work_ += 0.5 * (last_.power + s.power) * h;
   // every sampling instant k period within this step: the step's own state where an instant

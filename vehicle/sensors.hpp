@@ -41,6 +41,9 @@ class SensorLog {
   // instants linearly interpolated between the states before and after the step, so the log is
   // at the stated rate whatever the timestep
   void after_step(const WheelLoader& loader, double t, double h);
+  // the same with a sample already taken at s.t (what the sensors report when model extensions
+  // change the readings, vehicle/effect.hpp)
+  void after_step(const SensorSample& s, double h);
   const std::vector<SensorSample>& samples() const { return samples_; }
   double work() const { return work_; }  // J, integrated every step
   double period() const { return period_; }

@@ -121,6 +121,8 @@ WheelLoader::WheelLoader(const std::string& machine_file, double payload_kg) : p
     CylinderSpec s;
     s.force_push = pressure * M_PI / 4 * bore * bore;
     s.force_pull = pressure * M_PI / 4 * (bore * bore - rod * rod);
+    s.piston_area = M_PI / 4 * bore * bore;
+    s.annulus_area = M_PI / 4 * (bore * bore - rod * rod);
     s.max_speed = f.number(c, where, "max_speed");
     const auto& range = f.quantity(c, where, "length_range");
     if (!range.is_array() || range.size() != 2 || !range[0].is_number() || !range[1].is_number()) {

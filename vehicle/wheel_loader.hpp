@@ -24,6 +24,8 @@ struct CylinderSpec {
   double force_pull = 0.0;   // N, relief pressure x annulus area
   double max_speed = 0.0;    // m/s
   double length_min = 0.0, length_max = 0.0;  // m
+  double piston_area = 0.0;  // m^2, bore side: the oil an extending cylinder takes per metre
+  double annulus_area = 0.0; // m^2, rod side: the oil a retracting cylinder takes per metre
 };
 
 class WheelLoader {
@@ -40,6 +42,9 @@ class WheelLoader {
   void set_drive_speed(double v);
   void set_lift_speed(double v);
   void set_tilt_speed(double v);
+  // the engine power the driveline may use from the next step on [W] (> 0; max_power() by
+  // default): the model extensions that share the engine with the hydraulics lower it
+  void set_drive_power_limit(double watts) { driveline_->set_power_limit(watts); }
   void step(double h) { system_.step(h); }
 
   // coupling hooks
