@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "apps/commands.hpp"
+#include "apps/run.hpp"
 #include "host/error.hpp"
 #include "io/output.hpp"
 #include "io/plot.hpp"
@@ -39,19 +40,6 @@ constexpr int kImageWidth = 1600, kImageHeight = 800;
 constexpr int kFigureWidth = 1400, kFigureHeight = 1000;
 // simulated time between progress notes, which count the load in the bucket [s]
 constexpr double kProgressNoteInterval = 0.5;
-
-struct RunOptions {
-  std::string scenario;
-  std::string fidelity = "D400";
-  std::string out;
-  std::string json;
-  std::string sweep = "pgs";
-  double snapshot_interval = 1.0;  // s; 0: no snapshots
-  unsigned seed = 1;
-  bool quiet = false;
-  std::vector<std::string> effects;         // NAME:key=value,...
-  std::vector<std::string> effect_plugins;  // shared libraries
-};
 
 // the model extensions of the options, in their order (bad input before anything runs)
 struct RunEffects {
@@ -302,7 +290,9 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
             << "; results in " << o.out << "\n";
 }
 
-void run(const RunOptions& o) {
+}  // namespace
+
+void run_scenario(const RunOptions& o) {
   // a shipped name in any case (hd27, HD27) or a path
   std::string name = o.scenario;
   if (vehicle::find_data_file(name, "scenarios").empty()) {
@@ -319,7 +309,6 @@ void run(const RunOptions& o) {
   }
 }
 
-}  // namespace
 
 void add_run_command(CLI::App& app) {
   auto opts = std::make_shared<RunOptions>();
@@ -346,7 +335,7 @@ void add_run_command(CLI::App& app) {
   cmd->add_option("--effect-plugin", opts->effect_plugins,
                   "a shared library with more effects (vehicle/effect_abi.h; repeatable)")
       ->expected(1)->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
-  cmd->callback([opts] { run(*opts); });
+  cmd->callback([opts] { run_scenario(*opts); });
 }
 
 }  // namespace talus::app

@@ -1,0 +1,25 @@
+// The scenario run behind `talus run`, shared with `talus synth` (which runs a scenario, then
+// turns its output into a measured-run directory).
+#pragma once
+#include <string>
+#include <vector>
+
+namespace talus::app {
+
+struct RunOptions {
+  std::string scenario;
+  std::string fidelity = "D400";
+  std::string out;
+  std::string json;
+  std::string sweep = "pgs";
+  double snapshot_interval = 1.0;  // s; 0: no snapshots
+  unsigned seed = 1;
+  bool quiet = false;
+  std::vector<std::string> effects;         // NAME:key=value,...
+  std::vector<std::string> effect_plugins;  // shared libraries
+};
+
+// runs the scenario and writes its outputs into o.out (apps/cmd_run.cpp)
+void run_scenario(const RunOptions& o);
+
+}  // namespace talus::app

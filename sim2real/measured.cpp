@@ -1,0 +1,153 @@
+#include "sim2real/measured.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "host/error.hpp"
+#include "io/output.hpp"
+
+namespace talus::sim2real {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// relative agreement asked of values that appear in two files (metadata and summary)
+constexpr double kSameValue = 1e-9;
+// the time column may step off the stated rate by this fraction of a period (CSV rounding)
+constexpr double kPeriodTolerance = 1e-6;
+
+// reads one JSON object, or InputError naming the file
+nlohmann::json read_object(const fs::path& file) {
+  std::ifstream in(file);
+  if (!in) throw InputError(file.string() + ": cannot open; a measured run needs " + kMetadataFile);
+  nlohmann::json j;
+  try {
+    in >> j;
+  } catch (const nlohmann::json::parse_error& e) {
+    throw InputError(file.string() + ": not valid JSON: " + e.what());
+  }
+  if (!j.is_object()) throw InputError(file.string() + ": must be a JSON object");
+  return j;
+}
+
+// the field checks, each naming file and field
+struct Fields {
+  const fs::path& file;
+  const nlohmann::json& j;
+
+  [[noreturn]] void fail(const std::string& field, const std::string& problem) const {
+    throw InputError(file.string() + ": field '" + field + "': " + problem);
+  }
+  const nlohmann::json& member(const nlohmann::json& o, const std::string& field, const std::string& key) const {
+    if (!o.contains(key)) fail(field, "missing");
+    return o.at(key);
+  }
+  double number(const nlohmann::json& o, const std::string& field, const std::string& key) const {
+    const auto& v = member(o, field, key);
+    if (!v.is_number() || !std::isfinite(v.get<double>())) fail(field, "must be a finite number, got " + v.dump());
+    return v.get<double>();
+  }
+  std::string text(const nlohmann::json& o, const std::string& field, const std::string& key) const {
+    const auto& v = member(o, field, key);
+    if (!v.is_string() || v.get<std::string>().empty()) fail(field, "must be a non-empty string, got " + v.dump());
+    return v.get<std::string>();
+  }
+  // [[a, b], ...] of finite numbers with a increasing (strictly when `strict`)
+  Series2 pairs(const nlohmann::json& o, const std::string& field, const std::string& key, bool strict) const {
+    const auto& v = member(o, field, key);
+    if (!v.is_array() || v.empty()) fail(field, "must be a non-empty array of [a, b] pairs");
+    Series2 out;
+    for (size_t i = 0; i < v.size(); ++i) {
+      const std::string where = field + "[" + std::to_string(i) + "]";
+      const auto& p = v[i];
+      if (!p.is_array() || p.size() != 2 || !p[0].is_number() || !p[1].is_number() ||
+          !std::isfinite(p[0].get<double>()) || !std::isfinite(p[1].get<double>()))
+        fail(where, "must be a pair of finite numbers, got " + p.dump());
+      const double a = p[0].get<double>();
+      if (!out.empty() && (strict ? a <= out.back().first : a < out.back().first))
+        fail(where, "goes back; sort the pairs by their first value");
+      out.emplace_back(a, p[1].get<double>());
+    }
+    return out;
+  }
+};
+
+bool same(double a, double b) { return std::abs(a - b) <= kSameValue * std::max(std::abs(a), std::abs(b)); }
+
+}  // namespace
+
+MeasuredMetadata load_metadata(const fs::path& file) {
+  const nlohmann::json j = read_object(file);
+  const Fields f{file, j};
+  // format and version first: anything else is someone else's file
+  if (f.text(j, "format", "format") != kMeasuredFormat)
+    f.fail("format", std::string("must be \"") + kMeasuredFormat + "\"");
+  const double version = f.number(j, "version", "version");
+  if (version != kMeasuredVersion)
+    f.fail("version", "is " + std::to_string(version) + "; this talus reads version " + std::to_string(kMeasuredVersion));
+  MeasuredMetadata m;
+  m.scenario = f.text(j, "scenario", "scenario");
+  m.machine = f.text(j, "machine", "machine");
+  m.sample_rate_hz = f.number(j, "sample_rate_hz", "sample_rate_hz");
+  if (!(m.sample_rate_hz > 0.0)) f.fail("sample_rate_hz", "must be positive (the channel contract is 100 Hz)");
+  m.pile_toe_x_m = f.number(j, "pile_toe_x_m", "pile_toe_x_m");
+  m.pile_scan = f.pairs(j, "pile_scan", "pile_scan", false);
+  const auto& inputs = f.member(j, "operator_inputs", "operator_inputs");
+  if (!inputs.is_object()) f.fail("operator_inputs", "must be an object with drive, lift and tilt series");
+  m.drive = f.pairs(inputs, "operator_inputs.drive", "drive", false);
+  m.lift = f.pairs(inputs, "operator_inputs.lift", "lift", false);
+  m.tilt = f.pairs(inputs, "operator_inputs.tilt", "tilt", false);
+  m.loaded_mass_kg = f.number(j, "loaded_mass_kg", "loaded_mass_kg");
+  m.work_J = f.number(j, "work_J", "work_J");
+  if (!(m.loaded_mass_kg >= 0.0)) f.fail("loaded_mass_kg", "must not be negative");
+  return m;
+}
+
+void save_metadata(const fs::path& file, const MeasuredMetadata& m) {
+  auto pairs = [](const Series2& s) {
+    nlohmann::json a = nlohmann::json::array();
+    for (const auto& [x, y] : s) a.push_back({x, y});
+    return a;
+  };
+  nlohmann::json j = {{"format", kMeasuredFormat},
+                      {"version", kMeasuredVersion},
+                      {"scenario", m.scenario},
+                      {"machine", m.machine},
+                      {"sample_rate_hz", m.sample_rate_hz},
+                      {"pile_toe_x_m", m.pile_toe_x_m},
+                      {"pile_scan", pairs(m.pile_scan)},
+                      {"operator_inputs", {{"drive", pairs(m.drive)}, {"lift", pairs(m.lift)}, {"tilt", pairs(m.tilt)}}},
+                      {"loaded_mass_kg", m.loaded_mass_kg},
+                      {"work_J", m.work_J}};
+  write_file_atomically(file.string(), j.dump(1) + "\n");
+}
+
+MeasuredRun load_measured_run(const fs::path& dir) {
+  MeasuredRun r;
+  r.run = load_run(dir);
+  const fs::path file = dir / kMetadataFile;
+  r.meta = load_metadata(file);
+  const nlohmann::json none;
+  const Fields f{file, none};
+  // the time column at the stated rate
+  const auto& t = r.run.series[Channel::t];
+  const double period = 1.0 / r.meta.sample_rate_hz;
+  for (size_t k = 1; k < t.size(); ++k) {
+    if (std::abs(t[k] - t[k - 1] - period) > kPeriodTolerance * period)
+      throw InputError((dir / kTimeseriesFile).string() + ": line " + std::to_string(k + 2) + ": field 't': steps " +
+                       std::to_string(t[k] - t[k - 1]) + " s, not the metadata's 1/" +
+                       std::to_string(r.meta.sample_rate_hz) + " s; resample or fix sample_rate_hz");
+  }
+  // the scalars the summary repeats must agree
+  if (!same(r.meta.loaded_mass_kg, r.run.summary.loaded_mass_kg))
+    f.fail("loaded_mass_kg", "differs from summary.json's; the two files must describe the same run");
+  if (!same(r.meta.work_J, r.run.summary.work_J))
+    f.fail("work_J", "differs from summary.json's; the two files must describe the same run");
+  if (r.run.summary.scenario && *r.run.summary.scenario != r.meta.scenario)
+    f.fail("scenario", "is '" + r.meta.scenario + "' but summary.json says '" + *r.run.summary.scenario + "'");
+  return r;
+}
+
+}  // namespace talus::sim2real

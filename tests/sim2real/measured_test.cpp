@@ -1,0 +1,104 @@
+// The measured-run format (sim2real/measured): a round trip, and every malformed field rejected
+// with one error naming the file and the field (or line).
+#include "sim2real/measured.hpp"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <functional>
+#include <nlohmann/json.hpp>
+
+#include "host/error.hpp"
+#include "tests/sim2real/synthetic_runs.hpp"
+
+namespace talus::sim2real {
+namespace {
+
+namespace fs = std::filesystem;
+
+MeasuredMetadata sample_metadata() {
+  MeasuredMetadata m;
+  m.scenario = "HD27";
+  m.machine = "wa320";
+  m.sample_rate_hz = test::kRefRateHz;
+  m.pile_toe_x_m = 5.0;
+  m.pile_scan = {{5.0, 0.0}, {6.0, 0.6}, {8.2, 2.0}, {10.1, 2.0}};
+  m.drive = {{0.0, 0.0}, {0.8, 1.2}, {9.0, 0.0}};
+  m.lift = {{0.0, 0.0}, {1.6, 0.2}};
+  m.tilt = {{0.0, 0.0}};
+  m.loaded_mass_kg = 2700.0;
+  m.work_J = 127e3;
+  return m;
+}
+
+// a complete measured run in a fresh folder: the reference series at 100 Hz, its summary, metadata
+fs::path write_run(const std::string& tag) {
+  const fs::path dir = test::fresh_temp_dir(tag);
+  save_timeseries(dir / kTimeseriesFile, test::reference_series());
+  RunSummary s;
+  s.loaded_mass_kg = 2700.0;
+  s.work_J = 127e3;
+  s.scenario = "HD27";
+  s.fidelity = "field";
+  save_summary(dir / kSummaryFile, s);
+  save_metadata(dir / kMetadataFile, sample_metadata());
+  return dir;
+}
+
+// edits metadata.json with `change`, then returns the loader's error ("" when it loads)
+template <class Change>
+std::string error_after(const std::string& tag, Change change) {
+  const fs::path dir = write_run(tag);
+  nlohmann::json j = nlohmann::json::parse(std::ifstream(dir / kMetadataFile));
+  change(j);
+  std::ofstream(dir / kMetadataFile) << j.dump();
+  try {
+    load_measured_run(dir);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(MeasuredRun, RoundTrip) {
+  const fs::path dir = write_run("measured_round_trip");
+  const MeasuredRun r = load_measured_run(dir);
+  const MeasuredMetadata want = sample_metadata();
+  EXPECT_EQ(r.meta.scenario, want.scenario);
+  EXPECT_EQ(r.meta.machine, want.machine);
+  EXPECT_EQ(r.meta.pile_scan, want.pile_scan);
+  EXPECT_EQ(r.meta.drive, want.drive);
+  EXPECT_EQ(r.meta.lift, want.lift);
+  EXPECT_EQ(r.meta.tilt, want.tilt);
+  EXPECT_DOUBLE_EQ(r.meta.loaded_mass_kg, 2700.0);
+  EXPECT_EQ(r.run.series.size(), test::reference_series().size());
+}
+
+TEST(MeasuredRun, MalformedMetadataNamesFileAndField) {
+  const std::vector<std::pair<std::string, std::function<void(nlohmann::json&)>>> cases = {
+      {"'format'", [](nlohmann::json& j) { j["format"] = "csv"; }},
+      {"'version'", [](nlohmann::json& j) { j["version"] = 2; }},
+      {"'machine': missing", [](nlohmann::json& j) { j.erase("machine"); }},
+      {"'sample_rate_hz'", [](nlohmann::json& j) { j["sample_rate_hz"] = -1; }},
+      {"'pile_scan[2]': goes back", [](nlohmann::json& j) { j["pile_scan"][2][0] = 1.0; }},
+      {"'operator_inputs.lift[1]': must be a pair", [](nlohmann::json& j) { j["operator_inputs"]["lift"][1] = "x"; }},
+      {"'operator_inputs.tilt': missing", [](nlohmann::json& j) { j["operator_inputs"].erase("tilt"); }},
+      {"'loaded_mass_kg': differs from summary.json", [](nlohmann::json& j) { j["loaded_mass_kg"] = 2600; }},
+      {"'work_J': must be a finite number", [](nlohmann::json& j) { j["work_J"] = "lots"; }},
+      {"'scenario': is 'FB35' but summary.json says 'HD27'", [](nlohmann::json& j) { j["scenario"] = "FB35"; }},
+  };
+  int k = 0;
+  for (const auto& [expected, change] : cases) {
+    const std::string e = error_after("measured_bad_" + std::to_string(k++), change);
+    EXPECT_NE(e.find("metadata.json"), std::string::npos) << e;
+    EXPECT_NE(e.find(expected), std::string::npos) << "expected '" << expected << "' in: " << e;
+  }
+}
+
+TEST(MeasuredRun, SampleRateMustMatchTheTimeColumn) {
+  const std::string e = error_after("measured_rate", [](nlohmann::json& j) { j["sample_rate_hz"] = 50.0; });
+  EXPECT_NE(e.find("timeseries.csv: line 3: field 't'"), std::string::npos) << e;
+}
+
+}  // namespace
+}  // namespace talus::sim2real
