@@ -174,11 +174,7 @@ void write_render(const std::string& path, const Particles& particles, const veh
 // a pile scenario: build the pile at the level, dig, write everything
 void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::EffectSet& effects) {
   const FidelityPreset& preset = fidelity_preset(o.fidelity);
-  const std::string profile_path = vehicle::find_data_file(sc.pile_profile, "piles");
-  if (profile_path.empty())
-    throw InputError(sc.path + ": field 'pile_profile' names '" + sc.pile_profile +
-                     "', which is neither a file nor data/piles/" + sc.pile_profile + ".json; fix the name");
-  const PileProfile profile = load_pile_profile(profile_path);
+  const PileProfile placed = scenario_pile_profile(sc);
   DiggingOptions options;
   options.pile.seed = o.seed;
   options.sweep = parse_sweep(o.sweep, "--sweep");
@@ -193,13 +189,10 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
   PileBuild pile;
   {
     Progress progress("pile " + preset.name, 1.5 * options.pile.max_time, !o.quiet);
-    pile = build_scenario_pile(dev, sc, profile, preset, options, &progress);
+    pile = build_scenario_pile(dev, sc, placed, preset, options, &progress);
     progress.finish(std::to_string(pile.particles.size()) + " particles");
   }
   const double pile_wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  PileProfile placed = profile;
-  for (Vec3& p : placed.points) p.x() += sc.pile_toe_x;
-  placed.rear_wall_x += sc.pile_toe_x;
   const PileScan scan = scan_pile(pile.particles, placed, preset.diameter);
   std::string scan_csv = "x,z\n";
   for (const auto& q : scan.points) scan_csv += std::to_string(q.x()) + "," + std::to_string(q.y()) + "\n";

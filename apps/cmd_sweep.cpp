@@ -119,16 +119,11 @@ LevelPile build_level_pile(Device& dev, const SweepOptions& o, const FidelityPre
   const vehicle::Scenario base = vehicle::load_scenario(o.scenario);
   LevelPile lp;
   lp.scenario = feedback_scenario(base, o.approach, o.max_time);
-  const std::string profile_path = vehicle::find_data_file(lp.scenario.pile_profile, "piles");
-  if (profile_path.empty())
-    throw InputError(lp.scenario.path + ": field 'pile_profile' names no pile file; fix the name");
-  PileProfile profile = load_pile_profile(profile_path);
+  const PileProfile placed = scenario_pile_profile(lp.scenario);
   Progress progress("pile " + preset.name, 1.5 * options.pile.max_time, verbose);
-  lp.pile = build_scenario_pile(dev, lp.scenario, profile, preset, options, &progress);
+  lp.pile = build_scenario_pile(dev, lp.scenario, placed, preset, options, &progress);
   progress.finish(std::to_string(lp.pile.particles.size()) + " particles");
-  for (Vec3& p : profile.points) p.x() += lp.scenario.pile_toe_x;
-  profile.rear_wall_x += lp.scenario.pile_toe_x;
-  for (const auto& q : scan_pile(lp.pile.particles, profile, preset.diameter).points)
+  for (const auto& q : scan_pile(lp.pile.particles, placed, preset.diameter).points)
     lp.surface.emplace_back(q.x(), q.y());
   if (lp.surface.empty()) throw Error("the pile's laser scan found no surface; the cycle cannot find the pile");
   // hits come in ray order; the surface is a function of x

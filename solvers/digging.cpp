@@ -20,13 +20,20 @@ constexpr double kCarryHeight = 5.5;
 constexpr double kVehicleSettle = 1.0;
 }  // namespace
 
-PileBuild build_scenario_pile(Device& dev, const vehicle::Scenario& scenario, const PileProfile& profile,
-                              const FidelityPreset& preset, const DiggingOptions& options, Progress* progress) {
-  if (!scenario.pile) throw InputError(scenario.path + ": scenario '" + scenario.name + "' has no pile (\"pile\": false)");
-  // the profile moved to the scenario's place, then built and settled there
-  PileProfile placed = profile;
+PileProfile scenario_pile_profile(const vehicle::Scenario& scenario) {
+  const std::string path = vehicle::find_data_file(scenario.pile_profile, "piles");
+  if (path.empty())
+    throw InputError(scenario.path + ": field 'pile_profile' names '" + scenario.pile_profile +
+                     "', which is neither a file nor data/piles/" + scenario.pile_profile + ".json; fix the name");
+  PileProfile placed = load_pile_profile(path);
   for (Vec3& p : placed.points) p.x() += scenario.pile_toe_x;
   placed.rear_wall_x += scenario.pile_toe_x;
+  return placed;
+}
+
+PileBuild build_scenario_pile(Device& dev, const vehicle::Scenario& scenario, const PileProfile& placed,
+                              const FidelityPreset& preset, const DiggingOptions& options, Progress* progress) {
+  if (!scenario.pile) throw InputError(scenario.path + ": scenario '" + scenario.name + "' has no pile (\"pile\": false)");
   PileBuild pile = build_pile(dev, placed, preset, gravel(), options.pile, progress);
   pile.bounds.lo.x() = std::min(pile.bounds.lo.x(), scenario.pile_toe_x - kCarryBack);
   pile.bounds.hi.z() = std::max(pile.bounds.hi.z(), kCarryHeight);

@@ -29,10 +29,14 @@ struct DiggingOptions {
   double max_particle_speed = 2.0;
 };
 
-// the scenario's pile at the level, settled and shifted to the scenario's place: particles,
+// the scenario's pile profile (data/piles/NAME.json or a path; InputError naming the scenario's
+// field), moved along x so that its toe lies at the scenario's pile_toe_x
+PileProfile scenario_pile_profile(const vehicle::Scenario& scenario);
+
+// the scenario's pile at the level, built and settled on `placed` (scenario_pile_profile): particles,
 // container (ground, sides, rear wall) and the broad-phase bounds, which also cover where the
 // machine carries gravel (back to 6 m in front of the toe, up to 5 m high)
-PileBuild build_scenario_pile(Device& dev, const vehicle::Scenario& scenario, const PileProfile& profile,
+PileBuild build_scenario_pile(Device& dev, const vehicle::Scenario& scenario, const PileProfile& placed,
                               const FidelityPreset& preset, const DiggingOptions& options, Progress* progress);
 
 class DiggingSimulation {

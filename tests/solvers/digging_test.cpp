@@ -22,7 +22,7 @@ TEST(Digging, Hd27AtD400FillsTheBucketWithinItsHeapedCapacity) {
   const vehicle::Scenario sc = vehicle::load_scenario("hd27");
   const FidelityPreset& preset = fidelity_preset("D400");
   DiggingOptions options;
-  PileBuild pile = build_scenario_pile(test::shared_device(), sc, default_pile_profile(), preset, options, nullptr);
+  PileBuild pile = build_scenario_pile(test::shared_device(), sc, scenario_pile_profile(sc), preset, options, nullptr);
   // the pile's toe lies where the scenario puts it, in front of the bucket
   double toe = 1e9;
   for (const Vec3& x : pile.particles.position) toe = std::min(toe, x.x());
