@@ -73,20 +73,12 @@ std::vector<reference::Row> make_bucket_rows(const std::vector<BucketContact>& c
   rows.reserve(contacts.size());
   const double h = p.dt;
   const double upsilon = 1.0 / (1.0 + 4.0 * p.damping_tau / h);
-  const Mat3d w_angular = bucket.mobility.block<3, 3>(3, 3);
   for (size_t k = 0; k < contacts.size(); ++k) {
     const BucketContact& c = contacts[k];
     const int a = c.particle;
     const Vec3& n = c.normal;
     const double r = particles.radius[a];
-    const double inv_m = particles.inv_mass[a];
-    const double inv_i = particles.inv_inertia[a];
     const Vec3 arm_b = c.point - com;
-
-    // the bucket's point mobility at the contact: K_b = E W E^T, E = [I, -[arm]x]
-    Eigen::Matrix<double, 3, 6> E;
-    E << Mat3d::Identity(), -skew(arm_b);
-    const Mat3d K = E * bucket.mobility * E.transpose();
 
     // normal velocity before the step, predicted overlap, SPOOK with secant Hertz compliance
     const Vec3 v_point = bucket.velocity + bucket.omega.cross(arm_b);
@@ -96,23 +88,14 @@ std::vector<reference::Row> make_bucket_rows(const std::vector<BucketContact>& c
     const double compliance = 1.0 / (stiffness * std::sqrt(overlap));
     const double sigma = 4.0 * compliance * upsilon / (h * h);
 
-    // effective masses: exact along n, an upper bound across (see the header)
-    const double d_n = inv_m + n.dot(K * n) + sigma;
-    const Mat3d tangential = (Mat3d::Identity() - n * n.transpose()) * K * (Mat3d::Identity() - n * n.transpose());
-    const double d_t = inv_m + inv_i * c.arm_particle.squaredNorm() + largest_eigenvalue(tangential);
-    const double d_r = inv_i + largest_eigenvalue(w_angular);
-
     reference::Row row;
     row.normal = n;
     row.rhs = -(4.0 / h) * upsilon * c.gap + upsilon * un;
     row.arm_a = c.arm_particle;
-    row.inv_dn = 1.0 / d_n;
     row.arm_b = arm_b;
     row.sigma = sigma;
-    row.inv_dt = d_t > 0.0 ? 1.0 / d_t : 0.0;
     row.friction = material.friction;
     row.rolling_limit = material.rolling * r;
-    row.inv_dr = d_r > 0.0 ? 1.0 / d_r : 0.0;
     row.a = a;
     row.b = TL_BUCKET_BODY;
     row.contact = static_cast<int>(k);
@@ -135,7 +118,31 @@ std::vector<reference::Row> make_bucket_rows(const std::vector<BucketContact>& c
     }
     rows.push_back(row);
   }
+  set_bucket_effective_masses(rows, contacts, particles, bucket.mobility);
   return rows;
+}
+
+void set_bucket_effective_masses(std::vector<reference::Row>& rows, const std::vector<BucketContact>& contacts,
+                                 const Particles& particles, const Mat6& mobility) {
+  const double d_r_bucket = largest_eigenvalue(mobility.block<3, 3>(3, 3));
+  for (reference::Row& row : rows) {
+    const BucketContact& c = contacts.at(row.contact);
+    const Vec3& n = row.normal;
+    const double inv_m = particles.inv_mass[row.a];
+    const double inv_i = particles.inv_inertia[row.a];
+    // the bucket's point mobility at the contact: K_b = E W E^T, E = [I, -[arm]x]
+    Eigen::Matrix<double, 3, 6> E;
+    E << Mat3d::Identity(), -skew(row.arm_b);
+    const Mat3d K = E * mobility * E.transpose();
+    // effective masses: exact along n, an upper bound across (see the header)
+    const Mat3d across = Mat3d::Identity() - n * n.transpose();
+    const double d_n = inv_m + n.dot(K * n) + row.sigma;
+    const double d_t = inv_m + inv_i * c.arm_particle.squaredNorm() + largest_eigenvalue(across * K * across);
+    const double d_r = inv_i + d_r_bucket;
+    row.inv_dn = 1.0 / d_n;
+    row.inv_dt = d_t > 0.0 ? 1.0 / d_t : 0.0;
+    row.inv_dr = d_r > 0.0 ? 1.0 / d_r : 0.0;
+  }
 }
 
 Vec6 bucket_wrench_impulse(const std::vector<reference::Row>& rows) {

@@ -77,6 +77,12 @@ std::vector<reference::Row> make_bucket_rows(const std::vector<BucketContact>& c
                                              const std::vector<BucketImpulse>& previous,
                                              const std::vector<int>& match);
 
+// the rows' effective masses (1/D of normal, friction and rolling) for the bucket's mobility W:
+// the only part of a row that depends on W, so a coupled step can make its rows (and take their
+// warm-start wrench) before the vehicle solve that gives W, then set these
+void set_bucket_effective_masses(std::vector<reference::Row>& rows, const std::vector<BucketContact>& contacts,
+                                 const Particles& particles, const Mat6& mobility);
+
 // the impulse wrench the rows put on the bucket about its centre of mass: sum of [P; arm x P + L]
 Vec6 bucket_wrench_impulse(const std::vector<reference::Row>& rows);
 

@@ -79,13 +79,15 @@ void SplitSolver::step() {
   BucketBody start;
   start.velocity = twist_before.head<3>();
   start.omega = twist_before.tail<3>();
-  const Vec6 warm_impulse =
-      bucket_wrench_impulse(make_bucket_rows(contacts, near, start, com, params, settings_.material, previous_, match));
+  // the rows' impulses do not depend on the mobility: make them, take their wrench, solve, and
+  // give them the effective masses of the mobility that solve yields
+  std::vector<reference::Row> rows =
+      make_bucket_rows(contacts, near, start, com, params, settings_.material, previous_, match);
+  const Vec6 warm_impulse = bucket_wrench_impulse(rows);
   loader_.set_bucket_wrench(warm_impulse / h);
   vehicle.solve();
   start.mobility = loader_.bucket_mobility();
-  std::vector<reference::Row> rows =
-      make_bucket_rows(contacts, near, start, com, params, settings_.material, previous_, match);
+  set_bucket_effective_masses(rows, contacts, near, start.mobility);
   std::vector<TlRow> device_rows;
   device_rows.reserve(rows.size());
   for (auto& r : rows) {
