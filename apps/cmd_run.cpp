@@ -87,11 +87,7 @@ void emit_summary(const RunOptions& o, const nlohmann::json& summary) {
 
 // a scenario without particles: the machine alone on flat ground
 void run_vehicle_only(const RunOptions& o, const vehicle::Scenario& sc, vehicle::EffectSet& effects) {
-  const std::string machine = vehicle::find_data_file(sc.machine, "machines");
-  if (machine.empty()) {
-    throw InputError(sc.path + ": field 'machine' names '" + sc.machine +
-                     "', which is neither a file nor data/machines/" + sc.machine + ".json; fix the name");
-  }
+  const std::string machine = vehicle::machine_file(sc);
   make_output_dir(o.out);
   vehicle::WheelLoader loader(machine, sc.payload);
   vehicle::SensorLog log(100.0);

@@ -45,11 +45,7 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
                                      vehicle::EffectSet* effects)
     : dev_(dev), scenario_(scenario), preset_(preset), log_(100.0), effects_(effects) {
   if (!scenario.pile) throw InputError(scenario.path + ": scenario '" + scenario.name + "' has no pile (\"pile\": false)");
-  const std::string machine = vehicle::find_data_file(scenario.machine, "machines");
-  if (machine.empty())
-    throw InputError(scenario.path + ": field 'machine' names '" + scenario.machine +
-                     "', which is neither a file nor data/machines/" + scenario.machine + ".json; fix the name");
-  loader_ = std::make_unique<vehicle::WheelLoader>(machine, scenario.payload);
+  loader_ = std::make_unique<vehicle::WheelLoader>(vehicle::machine_file(scenario), scenario.payload);
 
   // the machine settles on its tyres first, controls at rest
   const double h = preset.dt;

@@ -4,7 +4,6 @@
 #include <cmath>
 
 #include "host/error.hpp"
-#include "vehicle/data_file.hpp"
 
 namespace talus {
 
@@ -13,9 +12,7 @@ vehicle::Scenario feedback_scenario(const vehicle::Scenario& scenario, double ap
   if (!(approach > 0.0) || !(max_time > 0.0))
     throw InputError("force feedback: the approach distance and the time limit must be positive");
   // the machine's reference pose puts the bucket tip here (data/machines: "bucket.tip")
-  const std::string machine = vehicle::find_data_file(scenario.machine, "machines");
-  if (machine.empty()) throw InputError(scenario.path + ": field 'machine' names no machine file");
-  const vehicle::WheelLoader loader(machine);
+  const vehicle::WheelLoader loader(vehicle::machine_file(scenario));
   vehicle::Scenario s = scenario;
   s.pile_toe_x = loader.bucket_tip_world().x() + approach;
   s.duration = max_time;

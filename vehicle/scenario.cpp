@@ -92,4 +92,12 @@ Scenario load_scenario(const std::string& name_or_path) {
   return s;
 }
 
+std::string machine_file(const Scenario& scenario) {
+  const std::string path = find_data_file(scenario.machine, "machines");
+  if (path.empty())
+    throw InputError(scenario.path + ": field 'machine' names '" + scenario.machine +
+                     "', which is neither a file nor data/machines/" + scenario.machine + ".json; fix the name");
+  return path;
+}
+
 }  // namespace talus::vehicle

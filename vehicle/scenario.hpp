@@ -46,4 +46,8 @@ struct Scenario {
 // by name (data/scenarios/NAME.json) or path; InputError naming file, field and fix
 Scenario load_scenario(const std::string& name_or_path);
 
+// the path of the scenario's machine data file (data/machines/NAME.json or a path); InputError
+// naming the scenario's field 'machine' when there is none
+std::string machine_file(const Scenario& scenario);
+
 }  // namespace talus::vehicle

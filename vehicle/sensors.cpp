@@ -1,7 +1,6 @@
 #include "vehicle/sensors.hpp"
 
 #include <algorithm>
-
 #include <cmath>
 #include <ostream>
 #include <string>
