@@ -21,6 +21,7 @@
 #include "io/plot.hpp"
 #include "io/progress.hpp"
 #include "io/render.hpp"
+#include "sim2real/replay.hpp"
 #include "sim2real/timeseries.hpp"
 #include "solvers/digging.hpp"
 #include "vehicle/data_file.hpp"
@@ -89,34 +90,16 @@ void emit_summary(const RunOptions& o, const nlohmann::json& summary) {
 void run_vehicle_only(const RunOptions& o, const vehicle::Scenario& sc, vehicle::EffectSet& effects) {
   const std::string machine = vehicle::machine_file(sc);
   make_output_dir(o.out);
-  vehicle::WheelLoader loader(machine, sc.payload);
-  vehicle::SensorLog log(100.0);
   const int steps = static_cast<int>(std::llround(sc.duration / sc.timestep));
-  std::cerr << "talus run: " << sc.name << ", " << sc.duration << " s at h = " << sc.timestep * 1e3 << " ms on "
-            << loader.name() << " (" << loader.operating_mass() << " kg with payload)\n";
+  if (!o.quiet) {
+    const vehicle::WheelLoader loader(machine, sc.payload);
+    std::cerr << "talus run: " << sc.name << ", " << sc.duration << " s at h = " << sc.timestep * 1e3 << " ms on "
+              << loader.name() << " (" << loader.operating_mass() << " kg with payload)\n";
+  }
   const auto start = std::chrono::steady_clock::now();
-  if (!effects.empty()) std::cerr << "talus run: effects: " << effects_note(effects) << "\n";
+  if (!effects.empty() && !o.quiet) std::cerr << "talus run: effects: " << effects_note(effects) << "\n";
   Progress progress("run " + sc.name, sc.duration, !o.quiet);
-  if (effects.empty()) {
-    log.after_step(loader, 0.0, 0.0);
-  } else {
-    effects.reset(loader, 0.0);
-    log.after_step(effects.sensors(0.0, vehicle::read_sensors(loader, 0.0)), 0.0);
-  }
-  for (int k = 0; k < steps; ++k) {
-    // feedforward targets at the start of the step
-    const double t = k * sc.timestep;
-    if (effects.empty()) {
-      loader.set_drive_speed(sc.drive(t));
-      loader.set_lift_speed(sc.lift(t));
-      loader.set_tilt_speed(sc.tilt(t));
-      loader.step(sc.timestep);
-      log.after_step(loader, (k + 1) * sc.timestep, sc.timestep);
-    } else {
-      vehicle::step_with_effects(loader, effects, t, sc.timestep, {sc.drive(t), sc.lift(t), sc.tilt(t)}, &log);
-    }
-    progress.update((k + 1) * sc.timestep);
-  }
+  const vehicle::SensorLog log = sim2real::simulate_on_flat_ground(sc, effects, &progress);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   progress.finish();
   write_file_atomically((std::filesystem::path(o.out) / sim2real::kTimeseriesFile).string(), timeseries_csv(log));
@@ -128,9 +111,10 @@ void run_vehicle_only(const RunOptions& o, const vehicle::Scenario& sc, vehicle:
                                   {"realtime_factor", wall > 0 ? steps * sc.timestep / wall : 0.0},
                                   {"effects", effects.to_json()}};
   emit_summary(o, summary);
-  std::cerr << "talus run: wrote " << o.out << "/timeseries.csv (" << log.samples().size()
-            << " samples) and summary.json; work " << log.work() / 1e3 << " kJ, real-time factor "
-            << summary["realtime_factor"].get<double>() << "\n";
+  if (!o.quiet)
+    std::cerr << "talus run: wrote " << o.out << "/timeseries.csv (" << log.samples().size()
+              << " samples) and summary.json; work " << log.work() / 1e3 << " kJ, real-time factor "
+              << summary["realtime_factor"].get<double>() << "\n";
 }
 
 // a ParaView collection of the snapshots with their times (File > Open particles.pvd)
@@ -282,14 +266,7 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
 }  // namespace
 
 void run_scenario(const RunOptions& o) {
-  // a shipped name in any case (hd27, HD27) or a path
-  std::string name = o.scenario;
-  if (vehicle::find_data_file(name, "scenarios").empty()) {
-    std::string lower = name;
-    std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return std::tolower(c); });
-    if (!vehicle::find_data_file(lower, "scenarios").empty()) name = lower;
-  }
-  const vehicle::Scenario sc = vehicle::load_scenario(name);
+  const vehicle::Scenario sc = o.scenario_data ? *o.scenario_data : vehicle::load_scenario(o.scenario);
   const auto effects = make_run_effects(o);
   if (sc.pile) {
     run_digging(o, sc, effects->set);

@@ -1,8 +1,11 @@
 // The scenario run behind `talus run`, shared with `talus synth` (which runs a scenario, then
 // turns its output into a measured-run directory).
 #pragma once
+#include <memory>
 #include <string>
 #include <vector>
+
+#include "vehicle/scenario.hpp"
 
 namespace talus::app {
 
@@ -17,6 +20,8 @@ struct RunOptions {
   bool quiet = false;
   std::vector<std::string> effects;         // NAME:key=value,...
   std::vector<std::string> effect_plugins;  // shared libraries
+  // when set, this scenario instead of loading `scenario` (talus synth's varied operator inputs)
+  std::shared_ptr<const vehicle::Scenario> scenario_data;
 };
 
 // runs the scenario and writes its outputs into o.out (apps/cmd_run.cpp)

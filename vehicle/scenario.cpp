@@ -1,6 +1,7 @@
 #include "vehicle/scenario.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 
 #include "host/error.hpp"
@@ -45,7 +46,13 @@ PiecewiseLinear series(const DataFile& f, const std::string& key) {
 }  // namespace
 
 Scenario load_scenario(const std::string& name_or_path) {
-  const std::string path = find_data_file(name_or_path, "scenarios");
+  // a shipped name in any case (hd27, HD27: summaries and metadata spell it upper case) or a path
+  std::string path = find_data_file(name_or_path, "scenarios");
+  if (path.empty()) {
+    std::string lower = name_or_path;
+    std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return std::tolower(c); });
+    path = find_data_file(lower, "scenarios");
+  }
   if (path.empty()) {
     throw InputError("scenario '" + name_or_path + "': no such file, and no data/scenarios/" + name_or_path +
                      ".json under " + TALUS_SOURCE_DIR + " or the current directory; give a path or a shipped name");

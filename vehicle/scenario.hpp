@@ -43,7 +43,7 @@ struct Scenario {
   double field_loaded_mass_kg = 0.0, field_work_J = 0.0;  // 0 when not given
 };
 
-// by name (data/scenarios/NAME.json) or path; InputError naming file, field and fix
+// by name (data/scenarios/NAME.json, any case) or path; InputError naming file, field and fix
 Scenario load_scenario(const std::string& name_or_path);
 
 // the path of the scenario's machine data file (data/machines/NAME.json or a path); InputError

@@ -1,0 +1,151 @@
+#include "sim2real/replay.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "host/device.hpp"
+#include "host/error.hpp"
+#include "solvers/digging.hpp"
+#include "terrain/pile.hpp"
+#include "vehicle/data_file.hpp"
+#include "vehicle/wheel_loader.hpp"
+
+namespace talus::sim2real {
+
+TimeSeries to_timeseries(const std::vector<vehicle::SensorSample>& samples) {
+  TimeSeries ts;
+  for (auto& column : ts.columns) column.reserve(samples.size());
+  for (const auto& s : samples) {
+    const double row[kChannelCount] = {s.t,         s.f_lift,    s.f_tilt,    s.f_traction,   s.v_drive,
+                                       s.d_lift,    s.d_tilt,    s.boom_deg,  s.bucket_deg,   s.pitch_deg,
+                                       s.x_vehicle, s.bucket_tip_x, s.bucket_tip_z, s.power};
+    for (size_t c = 0; c < kChannelCount; ++c) ts.columns[c].push_back(row[c]);
+  }
+  return ts;
+}
+
+vehicle::SensorLog simulate_on_flat_ground(const vehicle::Scenario& sc, vehicle::EffectSet& effects,
+                                           Progress* progress) {
+  vehicle::WheelLoader loader(vehicle::machine_file(sc), sc.payload);
+  vehicle::SensorLog log(100.0);
+  const int steps = static_cast<int>(std::llround(sc.duration / sc.timestep));
+  // the first sample at rest, through the effects' sensors when there are any
+  if (effects.empty()) {
+    log.after_step(loader, 0.0, 0.0);
+  } else {
+    effects.reset(loader, 0.0);
+    log.after_step(effects.sensors(0.0, vehicle::read_sensors(loader, 0.0)), 0.0);
+  }
+  for (int k = 0; k < steps; ++k) {
+    // feedforward targets at the start of the step
+    const double t = k * sc.timestep;
+    if (effects.empty()) {
+      loader.set_drive_speed(sc.drive(t));
+      loader.set_lift_speed(sc.lift(t));
+      loader.set_tilt_speed(sc.tilt(t));
+      loader.step(sc.timestep);
+      log.after_step(loader, (k + 1) * sc.timestep, sc.timestep);
+    } else {
+      vehicle::step_with_effects(loader, effects, t, sc.timestep, {sc.drive(t), sc.lift(t), sc.tilt(t)}, &log);
+    }
+    if (progress) progress->update((k + 1) * sc.timestep);
+  }
+  return log;
+}
+
+vehicle::Scenario measured_scenario(const MeasuredRun& measured) {
+  vehicle::Scenario sc;
+  try {
+    sc = vehicle::load_scenario(measured.meta.scenario);
+  } catch (const InputError& e) {
+    throw InputError((measured.run.dir / kMetadataFile).string() + ": field 'scenario': " + e.what() +
+                     "; the loop simulates the run with that scenario's machine, pile and timing");
+  }
+  // the run's own inputs and pile position
+  sc.drive = vehicle::PiecewiseLinear(measured.meta.drive);
+  sc.lift = vehicle::PiecewiseLinear(measured.meta.lift);
+  sc.tilt = vehicle::PiecewiseLinear(measured.meta.tilt);
+  if (sc.pile) sc.pile_toe_x = measured.meta.pile_toe_x_m;
+  // as long as the measurement, so every measured sample has a simulated one
+  const auto& t = measured.run.series[Channel::t];
+  if (!t.empty()) sc.duration = std::max(sc.duration, t.back());
+  if (measured.run.summary.dig_start_s) sc.dig_start = *measured.run.summary.dig_start_s;
+  if (measured.run.summary.dig_end_s) sc.dig_end = *measured.run.summary.dig_end_s;
+  return sc;
+}
+
+namespace {
+
+// RMS of z_a - z_b over the x range both scans cover (linear between points, 1 cm spacing)
+std::optional<double> scan_difference(const Series2& a, const std::vector<Eigen::Vector2d>& b) {
+  if (a.size() < 2 || b.size() < 2) return std::nullopt;
+  std::vector<double> xa, za, xb, zb;
+  for (const auto& [x, z] : a) xa.push_back(x), za.push_back(z);
+  for (const auto& p : b) xb.push_back(p.x()), zb.push_back(p.y());
+  // b's x must increase strictly for interpolate(); the scanner's points do, except repeats
+  std::vector<double> xs, zs;
+  for (size_t i = 0; i < xb.size(); ++i)
+    if (xs.empty() || xb[i] > xs.back()) xs.push_back(xb[i]), zs.push_back(zb[i]);
+  const double lo = std::max(xa.front(), xs.front()), hi = std::min(xa.back(), xs.back());
+  if (!(hi > lo) || xs.size() < 2) return std::nullopt;
+  constexpr double kSpacing = 0.01;  // m
+  std::vector<double> at;
+  for (double x = lo; x <= hi; x += kSpacing) at.push_back(x);
+  const auto fa = interpolate(xa, za, at), fb = interpolate(xs, zs, at);
+  double sum = 0.0;
+  for (size_t i = 0; i < at.size(); ++i) sum += (fa[i] - fb[i]) * (fa[i] - fb[i]);
+  return std::sqrt(sum / at.size());
+}
+
+}  // namespace
+
+Replay::Replay(const MeasuredRun& measured, const ReplayOptions& options, Device* device)
+    : measured_(measured), scenario_(measured_scenario(measured)), options_(options), device_(device) {
+  if (scenario_.pile) {
+    fidelity_preset(options_.fidelity);  // an unknown level fails now, listing the known ones
+    if (!device_) throw Error("replay of " + measured.run.dir.string() + ": a pile scenario needs an OpenCL device");
+  }
+}
+
+Replay::~Replay() = default;
+
+Run Replay::simulate(vehicle::EffectSet& effects) {
+  const auto start = std::chrono::steady_clock::now();
+  Run run;
+  run.dir = measured_.run.dir;
+  run.summary.scenario = scenario_.name;
+  if (!scenario_.pile) {
+    // the machine alone: the payload is the load, the work that of the whole run
+    const vehicle::SensorLog log = simulate_on_flat_ground(scenario_, effects);
+    run.series = to_timeseries(log.samples());
+    run.summary.fidelity = "vehicle";
+    run.summary.loaded_mass_kg = scenario_.payload;
+    run.summary.work_J = log.work();
+  } else {
+    // the pile at the level, once; every simulation digs a copy of it
+    const FidelityPreset& preset = fidelity_preset(options_.fidelity);
+    DiggingOptions digging;
+    digging.pile.seed = options_.pile_seed;
+    if (!pile_) {
+      const PileProfile placed = scenario_pile_profile(scenario_);
+      Progress progress("pile " + preset.name, 1.5 * digging.pile.max_time, options_.progress);
+      pile_ = std::make_unique<PileBuild>(build_scenario_pile(*device_, scenario_, placed, preset, digging, &progress));
+      progress.finish(std::to_string(pile_->particles.size()) + " particles");
+      scan_rms_ = scan_difference(measured_.meta.pile_scan, scan_pile(pile_->particles, placed, preset.diameter).points);
+    }
+    DiggingSimulation sim(*device_, scenario_, preset, *pile_, digging, effects.empty() ? nullptr : &effects);
+    while (!sim.done()) sim.step();
+    run.series = to_timeseries(sim.log().samples());
+    run.summary.fidelity = preset.name;
+    run.summary.loaded_mass_kg = sim.loaded_mass();
+    run.summary.work_J = vehicle::work_between(sim.log().samples(), scenario_.dig_start, scenario_.dig_end);
+    run.summary.dig_start_s = scenario_.dig_start;
+    run.summary.dig_end_s = scenario_.dig_end;
+  }
+  ++simulations_;
+  wall_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return run;
+}
+
+}  // namespace talus::sim2real

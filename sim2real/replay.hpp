@@ -1,0 +1,78 @@
+// Replaying a measured run's inputs in simulation (issue 6, SPEC §6 "simulate the same inputs"):
+// the scenario its metadata names gives the machine, payload, timestep, duration, pile profile and
+// phase marks; the measured run gives the operator's target-speed series and where the pile's toe
+// lay. A pile scenario builds and settles its pile once, at the fidelity level, and every
+// simulation after that starts from the same settled particles, so two simulations differ only
+// by their effects. The pile is the scenario's profile, not one rebuilt from the measured laser
+// scan: the scan is compared with the simulated pile's scan instead (scan_rms_m), and a large
+// difference is reported, not hidden.
+#pragma once
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "io/progress.hpp"
+#include "sim2real/measured.hpp"
+#include "sim2real/timeseries.hpp"
+#include "vehicle/effect.hpp"
+#include "vehicle/scenario.hpp"
+#include "vehicle/sensors.hpp"
+
+namespace talus {
+class Device;
+struct PileBuild;
+}  // namespace talus
+
+namespace talus::sim2real {
+
+// the channel contract of logged sensor samples
+TimeSeries to_timeseries(const std::vector<vehicle::SensorSample>& samples);
+
+// a scenario without particles on flat ground with the effects (may be empty): the 100 Hz log
+// of what the sensors report
+vehicle::SensorLog simulate_on_flat_ground(const vehicle::Scenario& scenario, vehicle::EffectSet& effects,
+                                           Progress* progress = nullptr);
+
+// the scenario that metadata.json describes: the named scenario (data/scenarios, any case) with
+// the run's operator inputs and pile toe; InputError naming the metadata's field 'scenario'
+vehicle::Scenario measured_scenario(const MeasuredRun& measured);
+
+struct ReplayOptions {
+  std::string fidelity = "D400";  // particle level for pile scenarios
+  unsigned pile_seed = 1;         // the pile's particle sizes and jitter
+  bool progress = false;          // progress of the pile build on stderr
+};
+
+class Replay {
+ public:
+  // a pile scenario needs the device (not owned; outlives the replay); the pile is built lazily
+  Replay(const MeasuredRun& measured, const ReplayOptions& options, Device* device);
+  ~Replay();
+  Replay(const Replay&) = delete;
+  Replay& operator=(const Replay&) = delete;
+
+  // the measured inputs simulated with the effects (empty set: the baseline); the run carries the
+  // summary fields the metrics read (loaded mass, work of the digging phase, phase marks)
+  Run simulate(vehicle::EffectSet& effects);
+
+  const vehicle::Scenario& scenario() const { return scenario_; }
+  const MeasuredRun& measured() const { return measured_; }
+  // the root-mean-square height difference [m] between the measured scan and the simulated pile's
+  // scan over their common x range; nullopt before the first pile simulation or without a pile
+  std::optional<double> scan_rms_m() const { return scan_rms_; }
+  int simulations() const { return simulations_; }
+  double wall_s() const { return wall_s_; }  // time spent in simulate(), pile build included
+
+ private:
+  MeasuredRun measured_;
+  vehicle::Scenario scenario_;
+  ReplayOptions options_;
+  Device* device_ = nullptr;
+  std::unique_ptr<PileBuild> pile_;
+  std::optional<double> scan_rms_;
+  int simulations_ = 0;
+  double wall_s_ = 0.0;
+};
+
+}  // namespace talus::sim2real
