@@ -15,6 +15,7 @@ void add_bench_command(CLI::App& app);   // DEM throughput benchmarks
 void add_run_command(CLI::App& app);     // vehicle scenarios
 void add_compare_command(CLI::App& app); // sim-to-real error rows and tables (compare, table)
 void add_synth_command(CLI::App& app);   // field-like data with effects and noise (sim-to-real loop)
+void add_diagnose_command(CLI::App& app);  // the sim-to-real loop: residual -> missing effect
 void add_sweep_command(CLI::App& app);   // force-feedback sweep along the search line (MPI)
 void add_plot_command(CLI::App& app);    // paper-style PNG figures of runs
 

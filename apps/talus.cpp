@@ -14,6 +14,7 @@ int main(int argc, char** argv) {
   talus::app::add_run_command(app);
   talus::app::add_sweep_command(app);
   talus::app::add_synth_command(app);
+  talus::app::add_diagnose_command(app);
   talus::app::add_compare_command(app);
   talus::app::add_plot_command(app);
   try {

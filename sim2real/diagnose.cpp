@@ -1,0 +1,443 @@
+#include "sim2real/diagnose.hpp"
+
+#include <nlopt.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <exception>
+#include <memory>
+#include <sstream>
+
+#include "host/error.hpp"
+
+namespace talus::sim2real {
+
+namespace {
+
+// the power channel follows a changed force or speed reading (vehicle/effect.hpp), so a sensor
+// effect's signature always includes it
+constexpr std::size_t kPowerChannel = static_cast<std::size_t>(Channel::power);
+// a parameter whose range spans this ratio or more (and excludes zero) is searched in log scale
+constexpr double kLogScaleRatio = 10.0;
+// the fit stops when a step in the normalised box is below this (0.1 % of the range)
+constexpr double kFitTolerance = 1e-3;
+
+std::size_t channel_index(const std::string& name) {
+  for (std::size_t c = 1; c < kChannelCount; ++c)
+    if (name == kChannelNames[c]) return c;
+  throw Error("diagnose: no channel '" + name + "'");
+}
+
+std::string format_number(double v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.6g", v);
+  return text;
+}
+
+// an instance of the candidate with its channel set and parameter i at normalised x[i] in [0, 1]
+std::unique_ptr<vehicle::Effect> make_candidate(const Candidate& c, const std::vector<double>& x,
+                                                const vehicle::EffectPlugins& plugins) {
+  auto effect = vehicle::make_effect(c.effect, plugins);
+  if (!c.channel.empty()) effect->set_text("channel", c.channel);
+  const auto params = effect->parameters();
+  for (std::size_t i = 0; i < params.size() && i < x.size(); ++i) {
+    const auto& p = params[i];
+    const double u = std::clamp(x[i], 0.0, 1.0);
+    const bool log_scale = p.min > 0.0 && p.max >= kLogScaleRatio * p.min;
+    const double value = log_scale ? p.min * std::pow(p.max / p.min, u) : p.min + u * (p.max - p.min);
+    effect->set(p.name, std::clamp(value, p.min, p.max));
+  }
+  return effect;
+}
+
+// NAME:option=...,param=value,... that make_effect reads back (values to 17 digits)
+std::string effect_spec(const vehicle::Effect& e) {
+  std::string spec = e.name();
+  std::string list;
+  for (const auto& o : e.options()) list += (list.empty() ? "" : ",") + o.name + "=" + o.value;
+  for (const auto& p : e.parameters()) {
+    char v[40];
+    std::snprintf(v, sizeof v, "%.17g", p.value);
+    list += (list.empty() ? "" : ",") + p.name + "=" + v;
+  }
+  return list.empty() ? spec : spec + ":" + list;
+}
+
+int parameter_count(const Candidate& c, const vehicle::EffectPlugins& plugins) {
+  auto e = vehicle::make_effect(c.effect, plugins);
+  if (!c.channel.empty()) e->set_text("channel", c.channel);
+  return static_cast<int>(e->parameters().size());
+}
+
+// the scan's values of one normalised parameter: cell centres of n equal cells
+std::vector<double> scan_axis(int n) {
+  std::vector<double> u(n);
+  for (int i = 0; i < n; ++i) u[i] = (i + 0.5) / n;
+  return u;
+}
+
+// NLopt's C callback around a std::function; an exception stops the optimiser and is rethrown
+struct Objective {
+  std::function<double(const std::vector<double>&)> f;
+  std::exception_ptr error;
+  nlopt_opt opt = nullptr;
+};
+
+double nlopt_objective(unsigned n, const double* x, double* gradient, void* data) {
+  (void)gradient;  // derivative free
+  auto* o = static_cast<Objective*>(data);
+  try {
+    return o->f(std::vector<double>(x, x + n));
+  } catch (...) {
+    o->error = std::current_exception();
+    nlopt_force_stop(o->opt);
+    return HUGE_VAL;
+  }
+}
+
+// bounded derivative-free minimisation in [0, 1]^n from x (changed in place); returns f(x)
+double minimise(const std::function<double(const std::vector<double>&)>& f, std::vector<double>& x, double step,
+                int max_evaluations) {
+  const unsigned n = static_cast<unsigned>(x.size());
+  Objective o{f, nullptr, nlopt_create(NLOPT_LN_BOBYQA, n)};
+  if (!o.opt) throw Error("diagnose: NLopt could not create a BOBYQA optimiser");
+  std::unique_ptr<std::remove_pointer_t<nlopt_opt>, decltype(&nlopt_destroy)> guard(o.opt, &nlopt_destroy);
+  nlopt_set_lower_bounds1(o.opt, 0.0);
+  nlopt_set_upper_bounds1(o.opt, 1.0);
+  nlopt_set_min_objective(o.opt, &nlopt_objective, &o);
+  nlopt_set_maxeval(o.opt, max_evaluations);
+  nlopt_set_xtol_abs1(o.opt, kFitTolerance);
+  nlopt_set_initial_step1(o.opt, step);
+  double best = HUGE_VAL;
+  const nlopt_result r = nlopt_optimize(o.opt, x.data(), &best);
+  if (o.error) std::rethrow_exception(o.error);
+  // running out of evaluations or meeting a tolerance both leave the best point found
+  if (r < 0 && r != NLOPT_ROUNDOFF_LIMITED) throw Error("diagnose: NLopt BOBYQA failed (code " + std::to_string(r) + ")");
+  return best;
+}
+
+double mean_of(const std::vector<double>& v) {
+  double s = 0.0;
+  for (double x : v) s += x;
+  return v.empty() ? 0.0 : s / v.size();
+}
+
+}  // namespace
+
+std::string Candidate::label() const { return channel.empty() ? effect : effect + "[" + channel + "]"; }
+
+std::vector<Candidate> candidate_set(const vehicle::EffectPlugins& plugins) {
+  std::vector<Candidate> out;
+  for (const auto& name : vehicle::builtin_effect_names()) {
+    const auto effect = vehicle::make_builtin_effect(name);
+    // an effect with a channel option: one candidate per channel, which is all it can change
+    const auto& options = effect->options();
+    const auto channel = std::find_if(options.begin(), options.end(), [](const auto& o) { return o.name == "channel"; });
+    if (channel != options.end()) {
+      for (const auto& ch : channel->choices) {
+        std::vector<std::size_t> signature = {channel_index(ch)};
+        if (signature[0] != kPowerChannel) signature.push_back(kPowerChannel);
+        out.push_back({name, ch, signature});
+      }
+    } else if (name == "wheel_slip_sensor") {
+      // it changes the speed reading alone (and the power that follows it)
+      out.push_back({name, "", {static_cast<std::size_t>(Channel::v_drive), kPowerChannel}});
+    } else {
+      out.push_back({name, "", {}});
+    }
+  }
+  for (const auto& plugin : plugins)
+    for (const auto& name : plugin->effect_names()) out.push_back({name, "", {}});
+  return out;
+}
+
+TableRow mean_row(const std::vector<TableRow>& rows, const std::string& name) {
+  TableRow m;
+  m.name = name;
+  std::array<double, 7> sum{};
+  for (const auto& r : rows) {
+    const auto a = r.e.as_array();
+    for (std::size_t i = 0; i < 7; ++i) sum[i] += std::abs(a[i]);
+  }
+  const double n = rows.empty() ? 1.0 : double(rows.size());
+  m.e = {sum[0] / n, sum[1] / n, sum[2] / n, sum[3] / n, sum[4] / n, sum[5] / n, sum[6] / n};
+  double means = 0.0;
+  for (const auto& r : rows) means += r.mean;
+  m.mean = means / n;
+  return m;
+}
+
+Diagnosis diagnose(const std::vector<MeasuredRun>& runs, const DiagnoseOptions& options, Device* device,
+                   const std::function<void(const std::string&)>& note) {
+  if (runs.empty()) throw InputError("diagnose: no measured runs; give one or more run folders with --data");
+  const auto start = std::chrono::steady_clock::now();
+  auto say = [&](const std::string& line) {
+    if (note) note(line);
+  };
+  Diagnosis d;
+
+  // the replays, their noise, and the calibration / validation split
+  std::vector<std::unique_ptr<Replay>> replays;
+  std::vector<std::vector<double>> sigma;
+  for (const auto& run : runs) {
+    replays.push_back(std::make_unique<Replay>(run, options.replay, device));
+    sigma.push_back(noise_sigmas(run.run.series));
+    d.runs.push_back(run.run.dir.string());
+  }
+  const std::size_t n = runs.size();
+  std::size_t held = options.validation_runs >= 0 ? static_cast<std::size_t>(options.validation_runs)
+                                                  : (n >= 2 ? std::max<std::size_t>(1, n / 3) : 0);
+  if (held >= n) throw InputError("diagnose: --validation " + std::to_string(held) + " leaves no calibration run among " +
+                                  std::to_string(n) + "; hold out fewer");
+  for (std::size_t i = 0; i < n; ++i) (i < n - held ? d.calibration : d.validation).push_back(i);
+  if (d.validation.empty()) d.validation = d.calibration;
+
+  // the model under test: the effects found so far plus, optionally, a candidate
+  std::vector<std::string> found_specs;
+  auto simulate = [&](std::size_t i, std::unique_ptr<vehicle::Effect> extra) {
+    vehicle::EffectSet set;
+    for (const auto& spec : found_specs) set.add(vehicle::make_effect(spec, options.plugins));
+    if (extra) set.add(std::move(extra));
+    Run r = replays[i]->simulate(set);
+    ++d.simulations;
+    return r;
+  };
+  // the mean excess and log-ratio per run of the runs `which` with the candidate at x
+  struct Score {
+    double excess = HUGE_VAL, log_ratio = HUGE_VAL;
+    bool operator<(const Score& o) const { return excess < o.excess || (excess == o.excess && log_ratio < o.log_ratio); }
+  };
+  auto score_runs = [&](const std::vector<std::size_t>& which, const Candidate* c, const std::vector<double>& x) {
+    std::vector<double> e, l;
+    for (std::size_t i : which) {
+      const Run r = simulate(i, c ? make_candidate(*c, x, options.plugins) : nullptr);
+      const Residuals res = compute_residuals(r, runs[i].run, sigma[i]);
+      e.push_back(res.excess);
+      l.push_back(res.log_ratio);
+    }
+    return Score{mean_of(e), mean_of(l)};
+  };
+
+  // the baseline: residuals and the paper's error rows
+  std::vector<double> baseline_excess(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    Run r = simulate(i, nullptr);
+    r.summary.fidelity = "baseline";
+    d.simulated_before.push_back(r);
+    d.residuals_before.push_back(compute_residuals(r, runs[i].run, sigma[i]));
+    baseline_excess[i] = d.residuals_before.back().excess;
+    const Comparison c = compare_runs(r, runs[i].run, CompareOptions{});
+    d.error_before.push_back({runs[i].run.label(), c.e, c.mean});
+    d.scan_rms_m.push_back(replays[i]->scan_rms_m());
+  }
+  d.excess_before = mean_of(baseline_excess);
+  say("baseline: excess " + format_number(d.excess_before) + " per run (within noise below " +
+      format_number(kSignificantExcess) + "), mean error " + format_number(mean_row(d.error_before, "").mean));
+  auto mean_over = [&](const std::vector<std::size_t>& which, const std::vector<double>& per_run) {
+    std::vector<double> v;
+    for (std::size_t i : which) v.push_back(per_run[i]);
+    return mean_of(v);
+  };
+  double current_cal = mean_over(d.calibration, baseline_excess);
+  double current_val = mean_over(d.validation, baseline_excess);
+  std::vector<Residuals> current_residuals = d.residuals_before;
+  const bool disjoint = d.validation != d.calibration;
+  auto overall = [&] {
+    return disjoint ? (current_cal * d.calibration.size() + current_val * d.validation.size()) / n : current_cal;
+  };
+
+  // rounds: one effect more each, while an excess beyond noise is left
+  const std::vector<Candidate> candidates = candidate_set(options.plugins);
+  for (int round = 0; round < options.max_effects && overall() >= kSignificantExcess; ++round) {
+    DiagnosisRound dr;
+    dr.excess_before = current_val;
+    // 1. the signature screen
+    std::vector<const Candidate*> screened;
+    for (const auto& c : candidates) {
+      const bool taken = std::any_of(d.found.begin(), d.found.end(), [&](const auto& f) { return f.candidate.label() == c.label(); });
+      if (taken) continue;
+      if (!c.signature.empty()) {
+        // it can remove no more than its channels' excess, and nothing unless the channel it acts
+        // on (the first) departs from the data: power follows a reading, it does not lead it
+        std::vector<double> bound, own;
+        for (std::size_t i : d.calibration) {
+          bound.push_back(current_residuals[i].excess_of(c.signature));
+          own.push_back(current_residuals[i].excess_of({c.signature.front()}));
+        }
+        if (mean_of(bound) < kMinExplained * current_cal || mean_of(own) < kSignificantExcess) {
+          dr.screened_out.push_back(c.label());
+          continue;
+        }
+      }
+      screened.push_back(&c);
+    }
+    say("round " + std::to_string(round + 1) + ": " + std::to_string(screened.size()) + " candidates to scan, " +
+        std::to_string(dr.screened_out.size()) + " screened out by their signature");
+
+    // 2. the coarse scan on the calibration runs
+    struct Scanned {
+      const Candidate* c;
+      std::vector<double> x;
+      Score score;
+      int parameters;
+    };
+    std::vector<Scanned> scanned;
+    for (const Candidate* c : screened) {
+      const int k = parameter_count(*c, options.plugins);
+      if (k == 0 || k > 2) {
+        say("  " + c->label() + ": " + std::to_string(k) + " parameters; only effects with 1 or 2 are fitted, skipped");
+        continue;
+      }
+      std::vector<std::vector<double>> points;
+      if (k == 1) {
+        for (double u : scan_axis(kScanPoints)) points.push_back({u});
+      } else {
+        for (double u : scan_axis(kScanPointsPerAxis2))
+          for (double v : scan_axis(kScanPointsPerAxis2)) points.push_back({u, v});
+      }
+      Scanned best{c, points[0], Score{}, k};
+      for (const auto& x : points) {
+        const Score e = score_runs(d.calibration, c, x);
+        if (e < best.score) best = {c, x, e, k};
+      }
+      say("  scan " + c->label() + ": best excess " + format_number(best.score.excess) + " (now " + format_number(current_cal) + ")");
+      scanned.push_back(best);
+    }
+    std::sort(scanned.begin(), scanned.end(), [](const auto& a, const auto& b) { return a.score < b.score; });
+
+    // 3. fit the best few; 4. validate them with the parameter penalty
+    for (std::size_t j = 0; j < scanned.size() && j < static_cast<std::size_t>(kFitted); ++j) {
+      Scanned& s = scanned[j];
+      if (!(s.score.excess < current_cal)) break;  // no better than the model without it
+      const int before = d.simulations;
+      // the likelihood's optimum from the best scan point, kept only if its excess is no worse
+      const double step = 0.5 / (s.parameters == 1 ? kScanPoints : kScanPointsPerAxis2);
+      std::vector<double> x = s.x;
+      minimise([&](const std::vector<double>& y) { return score_runs(d.calibration, s.c, y).log_ratio; }, x, step,
+               kFitEvaluations);
+      const Score fitted = score_runs(d.calibration, s.c, x);
+      if (fitted.excess <= s.score.excess) s.x = x;
+      FittedEffect f;
+      f.candidate = *s.c;
+      const auto effect = make_candidate(*s.c, s.x, options.plugins);
+      f.effect = effect->to_json();
+      f.spec = effect_spec(*effect);
+      f.parameters = s.parameters;
+      f.excess_calibration = std::min(fitted.excess, s.score.excess);
+      f.excess_validation = disjoint ? score_runs(d.validation, s.c, s.x).excess : f.excess_calibration;
+      f.explained = current_val > 0.0 ? (current_val - f.excess_validation) / current_val : 0.0;
+      f.score = f.excess_validation + kParameterPenalty * f.parameters;
+      f.simulations = d.simulations - before;
+      say("  fit " + f.spec + ": excess calibration " + format_number(f.excess_calibration) + ", validation " +
+          format_number(f.excess_validation) + " (explains " + format_number(100.0 * f.explained) + " %)");
+      dr.fitted.push_back(f);
+    }
+    std::sort(dr.fitted.begin(), dr.fitted.end(), [](const auto& a, const auto& b) { return a.score < b.score; });
+
+    // 5. add the winner only when it explains enough of what is left
+    if (!dr.fitted.empty() && dr.fitted[0].explained >= kMinExplained) {
+      dr.added = true;
+      d.found.push_back(dr.fitted[0]);
+      found_specs.push_back(dr.fitted[0].spec);
+      current_cal = dr.fitted[0].excess_calibration;
+      current_val = dr.fitted[0].excess_validation;
+      current_residuals.clear();
+      for (std::size_t i = 0; i < n; ++i) {
+        const bool needed = std::find(d.calibration.begin(), d.calibration.end(), i) != d.calibration.end();
+        current_residuals.push_back(needed ? compute_residuals(simulate(i, nullptr), runs[i].run, sigma[i]) : Residuals{});
+      }
+      say("round " + std::to_string(round + 1) + ": added " + dr.fitted[0].spec);
+    } else {
+      say("round " + std::to_string(round + 1) + ": no candidate explains " + format_number(100.0 * kMinExplained) +
+          " % of the excess left; nothing added");
+    }
+    d.rounds.push_back(dr);
+    if (!d.rounds.back().added) break;
+  }
+
+  // after: every run with the effects found
+  std::vector<double> after_excess(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (d.found.empty()) {
+      d.simulated_after.push_back(d.simulated_before[i]);
+      d.residuals_after.push_back(d.residuals_before[i]);
+      d.error_after.push_back(d.error_before[i]);
+    } else {
+      Run r = simulate(i, nullptr);
+      r.summary.fidelity = "with-effects";
+      d.simulated_after.push_back(r);
+      d.residuals_after.push_back(compute_residuals(r, runs[i].run, sigma[i]));
+      const Comparison c = compare_runs(r, runs[i].run, CompareOptions{});
+      d.error_after.push_back({runs[i].run.label(), c.e, c.mean});
+    }
+    after_excess[i] = d.residuals_after.back().excess;
+  }
+  d.excess_after = mean_of(after_excess);
+  d.unexplained = d.excess_after >= kSignificantExcess;
+  d.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return d;
+}
+
+nlohmann::json diagnosis_json(const Diagnosis& d) {
+  using nlohmann::json;
+  auto row_json = [](const TableRow& r) {
+    return json{{"name", r.name}, {"E_x", r.e.e_x}, {"E_v", r.e.e_v}, {"E_tr", r.e.e_tr}, {"E_l", r.e.e_l},
+                {"E_t", r.e.e_t}, {"E_M", r.e.e_m}, {"E_W", r.e.e_w}, {"mean", r.mean}};
+  };
+  auto table_json = [&](const std::vector<TableRow>& rows) {
+    json t = row_json(mean_row(rows, "mean over runs"));
+    t["runs"] = json::array();
+    for (const auto& r : rows) t["runs"].push_back(row_json(r));
+    return t;
+  };
+  auto residuals_json = [](const std::vector<Residuals>& per_run) {
+    json a = json::array();
+    for (const auto& res : per_run) {
+      json cells = json::array();
+      for (const auto& c : res.cells)
+        cells.push_back({{"channel", kChannelNames[c.channel]}, {"phase", res.phases[c.phase].name},
+                         {"rms", c.rms}, {"mean", c.mean}, {"sigma", c.sigma}, {"excess", c.excess}});
+      a.push_back({{"excess", res.excess}, {"cells", cells}});
+    }
+    return a;
+  };
+  auto fitted_json = [](const FittedEffect& f) {
+    return json{{"candidate", f.candidate.label()}, {"effect", f.effect}, {"spec", f.spec},
+                {"parameters", f.parameters}, {"excess_calibration", f.excess_calibration},
+                {"excess_validation", f.excess_validation}, {"explained", f.explained}, {"score", f.score},
+                {"simulations", f.simulations}};
+  };
+  json found = json::array();
+  for (const auto& f : d.found) found.push_back({{"name", f.effect["name"]}, {"params", f.effect["params"]}});
+  json rounds = json::array();
+  for (const auto& r : d.rounds) {
+    json fitted = json::array();
+    for (const auto& f : r.fitted) fitted.push_back(fitted_json(f));
+    rounds.push_back({{"excess_before", r.excess_before}, {"screened_out", r.screened_out}, {"fitted", fitted}, {"added", r.added}});
+  }
+  json runs = json::array();
+  for (std::size_t i = 0; i < d.runs.size(); ++i) {
+    const bool cal = std::find(d.calibration.begin(), d.calibration.end(), i) != d.calibration.end();
+    const bool val = std::find(d.validation.begin(), d.validation.end(), i) != d.validation.end();
+    json r = {{"dir", d.runs[i]}, {"role", cal && val ? "calibration and validation" : cal ? "calibration" : "validation"}};
+    if (d.scan_rms_m[i]) r["scan_rms_m"] = *d.scan_rms_m[i];
+    runs.push_back(r);
+  }
+  return {{"effects_found", found},
+          {"error_before", table_json(d.error_before)},
+          {"error_after", table_json(d.error_after)},
+          {"unexplained", d.unexplained},
+          {"excess_before", d.excess_before},
+          {"excess_after", d.excess_after},
+          {"significant_excess", kSignificantExcess},
+          {"runs", runs},
+          {"rounds", rounds},
+          {"residuals_before", residuals_json(d.residuals_before)},
+          {"residuals_after", residuals_json(d.residuals_after)},
+          {"simulations", d.simulations},
+          {"wall_s", d.wall_s}};
+}
+
+}  // namespace talus::sim2real

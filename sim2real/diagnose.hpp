@@ -1,0 +1,123 @@
+// The sim-to-real loop (issue 6, SPEC §6; docs/sim2real.md): given measured runs, simulate their
+// inputs with the baseline model, measure the residual per channel and phase against the data's
+// own noise (sim2real/residuals.hpp), and look for the effect the model lacks among candidates
+// (the built-in effects, vehicle/effect.hpp, and any a plug-in brings).
+//
+// One round of the search:
+//  1. signature screen: a candidate that can change only some channels (a sensor's bias or delay,
+//     the wheel-slip speed reading) can at most remove the excess of those channels; when that
+//     bound is below the share a winner must explain, or the channel it acts on shows no excess
+//     of its own, it is not simulated at all
+//  2. coarse scan: each remaining candidate at kScanPoints values across its range, on the
+//     calibration runs
+//  3. fit: the best kFitted candidates' parameters from their best scan point with NLopt's BOBYQA
+//     (derivative free, bounded; Powell 2009) in a box normalised to [0, 1] (logarithmic for
+//     ranges spanning a decade or more), at most kFitEvaluations simulations each; the fit
+//     maximises the likelihood (Residuals::log_ratio), the scan and the decisions use the excess
+//  4. validation: each fitted candidate on the held-out runs; its score is the validation excess
+//     plus kParameterPenalty per fitted parameter, so a richer effect must earn its parameters
+//  5. decision: the best-scoring candidate is added when it removes at least kMinExplained of the
+//     validation excess that is left, else the round adds nothing
+// Rounds repeat (each fits one more effect on top of those added, which keep their values) until
+// the excess left is within noise, nothing qualifies, or max_effects are added. "Unexplained"
+// means an excess beyond noise remains at the end.
+#pragma once
+#include <cstddef>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "sim2real/measured.hpp"
+#include "sim2real/replay.hpp"
+#include "sim2real/residuals.hpp"
+#include "sim2real/table.hpp"
+#include "vehicle/effect_plugin.hpp"
+
+namespace talus::sim2real {
+
+// values along one parameter in the coarse scan (2 parameters: 5 x 5)
+inline constexpr int kScanPoints = 9;
+inline constexpr int kScanPointsPerAxis2 = 5;
+// candidates fitted per round, and the simulations each fit may use
+inline constexpr int kFitted = 3;
+inline constexpr int kFitEvaluations = 24;
+// a winner must remove this share of the excess left (on the validation runs)
+inline constexpr double kMinExplained = 0.5;
+// the excess one fitted parameter must pay for, per run (in the units of Residuals::excess: one
+// channel-phase cell whose residual is 1.2 times the noise allowance)
+inline constexpr double kParameterPenalty = 0.2;
+// a run's excess below this counts as within noise (one cell at 1.28 times the allowance, or a
+// few cells barely above it)
+inline constexpr double kSignificantExcess = 0.5;
+
+// one candidate: an effect, with its channel option fixed for channel-bound effects
+struct Candidate {
+  std::string effect;                 // built-in or plug-in effect name
+  std::string channel;                // the value of its option "channel", or empty
+  // channels it can change, the one it acts on first (power follows it); empty: all (it acts on
+  // the machine)
+  std::vector<std::size_t> signature;
+  std::string label() const;          // "hydraulic_lag", "sensor_bias[f_lift]"
+};
+
+// the built-in effects (soil_cohesion not yet), channel-bound ones once per channel, then every
+// effect of the plug-ins
+std::vector<Candidate> candidate_set(const vehicle::EffectPlugins& plugins);
+
+struct DiagnoseOptions {
+  ReplayOptions replay;
+  int max_effects = 2;
+  // how many of the runs (the last ones) are held out for validation; -1: a third, at least one
+  // when there are two or more runs; with one run the fit is validated on the run it was fitted to
+  int validation_runs = -1;
+  vehicle::EffectPlugins plugins;  // their effects join the candidates
+};
+
+struct FittedEffect {
+  Candidate candidate;
+  nlohmann::json effect;       // {"name": ..., "params": {...}} as the effect reports itself
+  std::string spec;            // NAME:key=value,... (talus run --effect)
+  int parameters = 0;          // fitted parameters
+  double excess_calibration = 0.0;  // mean per calibration run, with this effect added
+  double excess_validation = 0.0;   // mean per validation run
+  double explained = 0.0;      // share of the validation excess left that it removes
+  double score = 0.0;          // excess_validation + penalty
+  int simulations = 0;
+};
+
+struct DiagnosisRound {
+  double excess_before = 0.0;            // mean validation excess per run before the round
+  std::vector<std::string> screened_out; // labels the signature screen skipped
+  std::vector<FittedEffect> fitted;      // best score first
+  bool added = false;                    // fitted[0] was added
+};
+
+struct Diagnosis {
+  std::vector<std::string> runs;          // directories, in the given order
+  std::vector<std::size_t> calibration, validation;  // indices into runs
+  std::vector<Residuals> residuals_before, residuals_after;  // per run
+  // the simulations behind them, labelled "<scenario>-baseline" and "<scenario>-with-effects"
+  std::vector<Run> simulated_before, simulated_after;
+  std::vector<TableRow> error_before, error_after;            // per run (paper's seven metrics)
+  std::vector<DiagnosisRound> rounds;
+  std::vector<FittedEffect> found;        // the effects added, in order
+  double excess_before = 0.0, excess_after = 0.0;  // mean per run, all runs
+  bool unexplained = false;
+  std::vector<std::optional<double>> scan_rms_m;   // per run (pile scenarios)
+  int simulations = 0;
+  double wall_s = 0.0;
+};
+
+// progress notes (one line each) go to `note` when given
+Diagnosis diagnose(const std::vector<MeasuredRun>& runs, const DiagnoseOptions& options, Device* device,
+                   const std::function<void(const std::string&)>& note = {});
+
+// the mean row of per-run error rows: each metric's mean absolute value, and the mean of the means
+TableRow mean_row(const std::vector<TableRow>& rows, const std::string& name);
+
+// the JSON of `talus diagnose --json`: effects_found [{name, params}], error_before, error_after
+// (E_x .. E_W and mean, averaged over runs, with per-run rows), unexplained, and the details
+nlohmann::json diagnosis_json(const Diagnosis& d);
+
+}  // namespace talus::sim2real

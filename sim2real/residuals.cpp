@@ -1,0 +1,174 @@
+#include "sim2real/residuals.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+#include "host/error.hpp"
+
+namespace talus::sim2real {
+
+namespace {
+
+// 1.4826 MAD estimates σ of a normal distribution (the MAD of N(0, σ²) is 0.6745 σ)
+constexpr double kMadToSigma = 1.4826;
+// the floor of σ relative to the channel's largest magnitude (see noise_sigma)
+constexpr double kSigmaFloor = 1e-6;
+// derivatives of measured channels by central differences over ±this many samples (0.2 s at
+// 100 Hz): long enough that 1 mm of stroke noise makes only 7 mm/s of rate noise
+constexpr int kDerivativeHalfWidth = 10;
+
+double median(std::vector<double> v) {
+  const size_t mid = v.size() / 2;
+  std::nth_element(v.begin(), v.begin() + mid, v.end());
+  return v[mid];
+}
+
+// d/dt by central differences over ±k samples (one-sided at the ends)
+std::vector<double> derivative(const std::vector<double>& t, const std::vector<double>& x) {
+  const int n = static_cast<int>(x.size());
+  std::vector<double> d(n, 0.0);
+  for (int i = 0; i < n; ++i) {
+    const int a = std::max(0, i - kDerivativeHalfWidth), b = std::min(n - 1, i + kDerivativeHalfWidth);
+    if (b > a) d[i] = (x[b] - x[a]) / (t[b] - t[a]);
+  }
+  return d;
+}
+
+double pearson(const std::vector<double>& a, const std::vector<double>& b) {
+  const size_t n = a.size();
+  double ma = 0.0, mb = 0.0;
+  for (size_t i = 0; i < n; ++i) ma += a[i], mb += b[i];
+  ma /= n;
+  mb /= n;
+  double sab = 0.0, saa = 0.0, sbb = 0.0;
+  for (size_t i = 0; i < n; ++i) {
+    sab += (a[i] - ma) * (b[i] - mb);
+    saa += (a[i] - ma) * (a[i] - ma);
+    sbb += (b[i] - mb) * (b[i] - mb);
+  }
+  return saa > 0.0 && sbb > 0.0 ? sab / std::sqrt(saa * sbb) : 0.0;
+}
+
+}  // namespace
+
+double noise_sigma(const std::vector<double>& x) {
+  if (x.size() < 3) throw Error("noise_sigma: needs at least 3 samples");
+  std::vector<double> d2(x.size() - 2);
+  double largest = 0.0;
+  for (size_t i = 0; i < x.size(); ++i) largest = std::max(largest, std::abs(x[i]));
+  for (size_t i = 1; i + 1 < x.size(); ++i) d2[i - 1] = x[i + 1] - 2.0 * x[i] + x[i - 1];
+  const double centre = median(d2);
+  for (double& v : d2) v = std::abs(v - centre);
+  const double sigma = kMadToSigma * median(d2) / std::sqrt(6.0);
+  return std::max(sigma, kSigmaFloor * largest + 1e-300);
+}
+
+std::vector<double> noise_sigmas(const TimeSeries& measured) {
+  std::vector<double> sigma(kChannelCount, 0.0);
+  for (size_t c = 1; c < kChannelCount; ++c) sigma[c] = noise_sigma(measured.columns[c]);
+  return sigma;
+}
+
+std::vector<Phase> run_phases(const Run& measured) {
+  const auto& t = measured.series[Channel::t];
+  const double start = t.front(), end = t.back();
+  const auto& s = measured.summary;
+  if (!s.dig_start_s || !s.dig_end_s || !(*s.dig_end_s > *s.dig_start_s)) return {{"run", start, end}};
+  std::vector<Phase> phases;
+  // the digging phase's ends belong to it; a phase needs samples of its own to count
+  const double d0 = std::clamp(*s.dig_start_s, start, end), d1 = std::clamp(*s.dig_end_s, start, end);
+  if (d0 > start) phases.push_back({"approach", start, d0});
+  phases.push_back({"dig", d0, d1});
+  if (d1 < end) phases.push_back({"after", d1, end});
+  return phases;
+}
+
+std::vector<double> residual_series(const Run& simulated, const Run& measured, std::size_t channel) {
+  const auto& tm = measured.series[Channel::t];
+  const auto& ts = simulated.series[Channel::t];
+  if (ts.empty() || ts.front() > tm.front() + 1e-9 || ts.back() < tm.back() - 1e-9)
+    throw InputError("the simulation of " + measured.dir.string() + " covers " +
+                     (ts.empty() ? std::string("nothing") : std::to_string(ts.front()) + "-" + std::to_string(ts.back()) + " s") +
+                     " but the measurement " + std::to_string(tm.front()) + "-" + std::to_string(tm.back()) +
+                     " s; the scenario's duration must cover the measured run");
+  std::vector<double> at(tm.begin(), tm.end());
+  for (double& v : at) v = std::clamp(v, ts.front(), ts.back());
+  const auto sim = interpolate(ts, simulated.series.columns[channel], at);
+  std::vector<double> r(tm.size());
+  for (size_t i = 0; i < tm.size(); ++i) r[i] = measured.series.columns[channel][i] - sim[i];
+  return r;
+}
+
+Residuals compute_residuals(const Run& simulated, const Run& measured, const std::vector<double>& sigma) {
+  Residuals out;
+  out.phases = run_phases(measured);
+  const auto& tm = measured.series[Channel::t];
+  for (size_t c = 1; c < kChannelCount; ++c) {
+    const std::vector<double> r = residual_series(simulated, measured, c);
+    for (size_t p = 0; p < out.phases.size(); ++p) {
+      // samples of the phase: [t0, t1) except the last phase, which keeps its end
+      const Phase& ph = out.phases[p];
+      const bool last = p + 1 == out.phases.size();
+      ResidualCell cell;
+      cell.channel = c;
+      cell.phase = p;
+      cell.sigma = sigma[c];
+      double sum = 0.0, sum2 = 0.0;
+      for (size_t i = 0; i < tm.size(); ++i) {
+        if (tm[i] < ph.t0 || tm[i] > ph.t1 || (!last && tm[i] >= ph.t1)) continue;
+        sum += r[i];
+        sum2 += r[i] * r[i];
+        ++cell.samples;
+      }
+      if (cell.samples == 0) continue;
+      cell.mean = sum / cell.samples;
+      const double mse = sum2 / cell.samples;
+      cell.rms = std::sqrt(mse);
+      cell.excess = std::log(std::max(mse / (kNoiseAllowance * sigma[c] * sigma[c]), 1.0));
+      out.excess += cell.excess;
+      // the smallest ratio counted: a residual a thousandth of the noise is as good as none
+      constexpr double kSmallestRatio = 1e-6;
+      out.log_ratio += std::log(std::max(mse / (sigma[c] * sigma[c]), kSmallestRatio));
+      out.cells.push_back(cell);
+    }
+  }
+  return out;
+}
+
+double Residuals::excess_of(const std::vector<std::size_t>& channels) const {
+  double sum = 0.0;
+  for (const auto& cell : cells)
+    if (std::find(channels.begin(), channels.end(), cell.channel) != channels.end()) sum += cell.excess;
+  return sum;
+}
+
+Correlate strongest_correlate(const std::vector<double>& residual, const Run& measured) {
+  const TimeSeries& m = measured.series;
+  const auto& t = m[Channel::t];
+  // the channels, then quantities derived from them
+  std::vector<std::pair<std::string, std::vector<double>>> quantities;
+  for (size_t c = 1; c < kChannelCount; ++c) quantities.emplace_back(kChannelNames[c], m.columns[c]);
+  const auto lift_rate = derivative(t, m[Channel::d_lift]);
+  const auto tilt_rate = derivative(t, m[Channel::d_tilt]);
+  const auto acceleration = derivative(t, m[Channel::v_drive]);
+  std::vector<double> hydraulic(t.size()), speed(t.size());
+  for (size_t i = 0; i < t.size(); ++i) {
+    hydraulic[i] = m[Channel::f_lift][i] * lift_rate[i] + m[Channel::f_tilt][i] * tilt_rate[i];
+    speed[i] = std::abs(m[Channel::v_drive][i]);
+  }
+  quantities.emplace_back("lift_rate", lift_rate);
+  quantities.emplace_back("tilt_rate", tilt_rate);
+  quantities.emplace_back("drive_acceleration", acceleration);
+  quantities.emplace_back("hydraulic_power", hydraulic);
+  quantities.emplace_back("drive_speed_magnitude", speed);
+  quantities.emplace_back("time", t);
+  Correlate best;
+  for (const auto& [name, q] : quantities) {
+    const double r = pearson(residual, q);
+    if (std::abs(r) > std::abs(best.r)) best = {name, r};
+  }
+  return best;
+}
+
+}  // namespace talus::sim2real

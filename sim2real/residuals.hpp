@@ -1,0 +1,82 @@
+// Residuals of a simulated run against a measured one, per channel and phase (issue 6, SPEC §6):
+// how far the simulation departs from the data, in units of the data's own sensor noise, so that
+// "explained" and "unexplained" mean something measurable.
+//
+// Noise: each measured channel's noise σ is estimated from the data alone, from its second
+// differences. For white noise n of variance σ², Δ²n = n[i+1] − 2n[i] + n[i−1] has variance 6σ²;
+// a smooth signal sampled at 100 Hz adds almost nothing to Δ², and the robust scale (1.4826 times
+// the median absolute deviation) ignores the few samples where the signal bends sharply (a
+// command's ramp, a contact). Channels with fast physics of their own (particle forces) read as
+// noisier than their sensor: the estimate errs on the side of calling a residual noise.
+//
+// Excess: in a cell (channel c, phase p) with mean-square residual MSE and noise σ_c, the excess
+// is e = ln max(MSE / (κ σ_c²), 1), κ = kNoiseAllowance. A perfect model leaves MSE ≈ σ² and e = 0;
+// a residual twice the noise leaves e = ln(4/κ) ≈ 1. The excess of a run is the sum over its
+// cells; it is the quantity the loop fits effects to and calls explained or not.
+#pragma once
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "sim2real/timeseries.hpp"
+
+namespace talus::sim2real {
+
+// a residual whose mean square is up to κ = 1.5 times the noise variance counts as noise: room for
+// the ±10 % error of σ estimated from about a thousand samples and for the interpolation of a
+// simulation logged at 100 Hz from 20 ms steps (docs/sim2real.md)
+inline constexpr double kNoiseAllowance = 1.5;
+
+// the noise standard deviation of a uniformly sampled signal (at least 3 samples), never below
+// 1e-6 of its largest magnitude (noise-free data would otherwise make any residual infinite)
+double noise_sigma(const std::vector<double>& x);
+// σ of every channel of a measured run (index as kChannelNames; t's entry is 0)
+std::vector<double> noise_sigmas(const TimeSeries& measured);
+
+// a phase of a run: approach [start, dig_start), dig [dig_start, dig_end], after (dig_end, end];
+// a run without phase marks is one phase, "run"
+struct Phase {
+  std::string name;
+  double t0 = 0.0, t1 = 0.0;  // s
+};
+std::vector<Phase> run_phases(const Run& measured);
+
+struct ResidualCell {
+  std::size_t channel = 0;  // index into kChannelNames
+  std::size_t phase = 0;    // index into the phases
+  int samples = 0;
+  double rms = 0.0;         // root-mean-square residual, measured minus simulated [channel unit]
+  double mean = 0.0;        // mean residual [channel unit]
+  double sigma = 0.0;       // the measured channel's noise [channel unit]
+  double excess = 0.0;      // ln max(MSE / (κ σ²), 1)
+};
+
+struct Residuals {
+  std::vector<Phase> phases;
+  std::vector<ResidualCell> cells;  // channel-major: (f_lift, phase 0), (f_lift, phase 1), ...
+  double excess = 0.0;              // summed over the cells
+  // Σ ln(MSE / σ²) over the cells, not floored: the Gaussian log-likelihood with one variance per
+  // cell up to constants, which fits take as their objective (the floored excess is flat near the
+  // optimum and would leave a parameter anywhere within the noise)
+  double log_ratio = 0.0;
+  // the excess of the cells of these channels (an effect's signature)
+  double excess_of(const std::vector<std::size_t>& channels) const;
+};
+
+// the simulated run interpolated at the measured times of each phase (InputError when it does
+// not cover them); sigma from noise_sigmas(measured)
+Residuals compute_residuals(const Run& simulated, const Run& measured, const std::vector<double>& sigma);
+
+// the residual series of one channel at the measured times (measured minus simulated)
+std::vector<double> residual_series(const Run& simulated, const Run& measured, std::size_t channel);
+
+// what a channel's residual moves with: the measured quantity (a channel, or one derived from the
+// channels: lift and tilt rates, hydraulic power, drive acceleration) whose Pearson correlation
+// with the residual is the largest in magnitude
+struct Correlate {
+  std::string quantity;
+  double r = 0.0;
+};
+Correlate strongest_correlate(const std::vector<double>& residual, const Run& measured);
+
+}  // namespace talus::sim2real
