@@ -35,18 +35,49 @@ struct SynthOptions {
   std::string noise = "default";
   std::string answer_key;
   unsigned noise_seed = 1;
+  double vary_inputs = 0.0;  // the operator's variation between repetitions (0: the scenario's inputs)
 };
+
+// how far a repetition's commands may shift in time at --vary-inputs 1 [s]: an operator repeats a
+// cycle to within a fraction of a second (a guess; the paper publishes one run per test)
+constexpr double kTimingShiftPerVariation = 1.0;
+
+// one repetition of the scenario by an operator who varies: each target-speed series scaled by
+// 1 + v u and its inner breakpoints shifted by v u' kTimingShiftPerVariation (u, u' uniform in
+// [-1, 1], drawn per series), kept inside (0, duration) and in order
+vehicle::Scenario varied_inputs(vehicle::Scenario sc, double v, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (vehicle::PiecewiseLinear* series : {&sc.drive, &sc.lift, &sc.tilt}) {
+    auto points = series->points();
+    const double scale = 1.0 + v * u(rng);
+    double shift = v * u(rng) * kTimingShiftPerVariation;
+    if (points.size() > 2) {
+      // the inner points move together; the first and last stay
+      const double first = points[1].first, last = points[points.size() - 2].first;
+      shift = std::clamp(shift, -0.5 * first, 0.5 * (std::min(sc.duration, points.back().first) - last));
+    }
+    for (size_t i = 0; i < points.size(); ++i) {
+      points[i].second *= scale;
+      if (i > 0 && i + 1 < points.size()) points[i].first += shift;
+    }
+    *series = vehicle::PiecewiseLinear(points);
+  }
+  return sc;
+}
 
 // the sensor noise of `--noise default`, one standard deviation per channel in its SI unit:
 // load-cell and pressure-derived forces about 1 % of their range, a wheel-revolution speed
 // sensor a few cm/s, draw-wire extensions a millimetre, potentiometer angles a fifth of a degree,
-// laser positions a couple of centimetres (orders of magnitude of the paper's instrumentation,
-// Table 1; no per-sensor data is published)
+// laser positions a couple of centimetres, power (computed from forces and speeds) about 1 kW, a
+// percent of the engine's (orders of magnitude of the paper's instrumentation, Table 1; no
+// per-sensor data is published)
 const std::map<std::string, double>& default_noise() {
   static const std::map<std::string, double> sigma = {
       {"f_lift", 5e3},    {"f_tilt", 3e3},      {"f_traction", 2e3}, {"v_drive", 0.02},
       {"d_lift", 1e-3},   {"d_tilt", 1e-3},     {"boom_deg", 0.2},   {"bucket_deg", 0.2},
-      {"pitch_deg", 0.1}, {"x_vehicle", 0.02},  {"bucket_tip_x", 0.02}, {"bucket_tip_z", 0.02}};
+      {"pitch_deg", 0.1}, {"x_vehicle", 0.02},  {"bucket_tip_x", 0.02}, {"bucket_tip_z", 0.02},
+      {"power", 1e3}};
   return sigma;
 }
 
@@ -107,7 +138,7 @@ sim2real::Series2 read_scan(const fs::path& file) {
 void synth(const SynthOptions& o) {
   // everything checked before the simulation: noise, scenario, answer key outside the data
   const std::map<std::string, double> sigma = parse_noise(o.noise);
-  const vehicle::Scenario sc = vehicle::load_scenario(o.run.scenario);
+  const vehicle::Scenario sc = varied_inputs(vehicle::load_scenario(o.run.scenario), o.vary_inputs, o.noise_seed ^ 0x5eedu);
   const fs::path out = fs::absolute(o.run.out).lexically_normal();
   const fs::path key = fs::absolute(o.answer_key.empty() ? out.string() + ".answer.json" : o.answer_key).lexically_normal();
   const auto rel = key.lexically_relative(out);
@@ -120,6 +151,7 @@ void synth(const SynthOptions& o) {
   const fs::path work = out.string() + ".work-" + std::to_string(::getpid());
   run.out = work.string();
   run.snapshot_interval = 0.0;
+  run.scenario_data = std::make_shared<const vehicle::Scenario>(sc);
   run_scenario(run);
 
   // the channels with noise; mass and work as the sensors measured them
@@ -165,6 +197,7 @@ void synth(const SynthOptions& o) {
                                  {"effect_plugins", o.run.effect_plugins},
                                  {"noise_sigma", noise_json},
                                  {"noise_seed", o.noise_seed},
+                                 {"vary_inputs", o.vary_inputs},
                                  {"pile_seed", o.run.seed}};
   write_json(key.string(), answer);
   fs::remove_all(work);
@@ -186,6 +219,10 @@ void add_synth_command(CLI::App& app) {
   cmd->add_option("--noise", o->noise, "sensor noise: none, default, or CHANNEL=SIGMA,... (SI units; "
                                        "'default,f_lift=1e4' changes one)")->capture_default_str();
   cmd->add_option("--seed", o->noise_seed, "random seed of the noise")->capture_default_str();
+  cmd->add_option("--vary-inputs", o->vary_inputs, "vary the operator's inputs like a repetition of the test: "
+                                                   "each series scaled by up to this fraction and shifted by up to "
+                                                   "this many seconds (drawn from --seed; metadata.json records them)")
+      ->capture_default_str()->check(CLI::Range(0.0, 0.5));
   cmd->add_option("--pile-seed", o->run.seed, "random seed of the pile's particles")->capture_default_str();
   cmd->add_option("--out", o->run.out, "the measured-run folder to write")->required();
   cmd->add_option("--answer-key", o->answer_key, "where the answer key goes (default: OUT.answer.json, beside OUT)");

@@ -1,0 +1,150 @@
+// `talus diagnose` end to end on the load-carry scenario (the machine alone, 0.4 s a simulation):
+// data made by `talus synth` with an effect the loop is not told about, then the loop given only
+// the data folders. The answer key stays outside and only this test reads it.
+#include <sys/wait.h>
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <random>
+#include <string>
+
+namespace {
+
+namespace fs = std::filesystem;
+const std::string kTalus = std::string(TALUS_BINARY_DIR) + "/talus";
+const std::string kPlugin = std::string(TALUS_BINARY_DIR) + "/libtalus_example_effect.so";
+
+int exit_code(const std::string& cmd) {
+  const int status = std::system(cmd.c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+// the seed of the random draws: TALUS_TEST_SEED when set (to repeat a failure), else fresh
+unsigned test_seed() {
+  if (const char* s = std::getenv("TALUS_TEST_SEED")) return static_cast<unsigned>(std::stoul(s));
+  return std::random_device{}();
+}
+
+struct Draw {
+  std::string effect;   // built-in name
+  std::string channel;  // for sensor_bias and sensor_delay
+  std::string spec;     // --effect NAME:key=value
+};
+
+// one built-in effect at a random magnitude that shows above the default sensor noise in
+// load-carry (the lower ends were chosen so; docs/sim2real.md lists the rates measured over many
+// draws). Channel-bound effects draw among the channels the paper's seven metrics read, for a
+// delay among those read by a mean absolute error (a bias or delay on a channel the metrics do not
+// read cannot cut their mean error, and the trajectory's DTW forgives a delay by design)
+Draw draw_effect(std::mt19937_64& rng) {
+  auto uniform = [&](double a, double b) { return std::uniform_real_distribution<double>(a, b)(rng); };
+  const std::vector<std::string> names = {"engine_power_sharing", "hydraulic_lag",   "pump_flow_limit",
+                                          "cylinder_friction",    "wheel_slip_sensor", "tyre_rolling_resistance",
+                                          "sensor_bias",          "sensor_delay"};
+  const std::vector<std::pair<std::string, double>> channels = {
+      {"f_lift", 100e3}, {"f_tilt", 100e3}, {"f_traction", 20e3}, {"v_drive", 0.5},
+      {"bucket_tip_x", 1.0}, {"bucket_tip_z", 1.0}, {"power", 20e3}};  // with their largest bias
+  Draw d;
+  d.effect = names[std::uniform_int_distribution<size_t>(0, names.size() - 1)(rng)];
+  const auto& [channel, max_bias] = channels[std::uniform_int_distribution<size_t>(0, channels.size() - 1)(rng)];
+  // f_lift, f_tilt, f_traction, v_drive: the first four
+  const std::string delayed = channels[std::uniform_int_distribution<size_t>(0, 3)(rng)].first;
+  auto num = [](double v) { return std::to_string(v); };
+  if (d.effect == "engine_power_sharing") d.spec = d.effect + ":efficiency=" + num(uniform(0.5, 0.9));
+  if (d.effect == "hydraulic_lag") d.spec = d.effect + ":time_constant=" + num(uniform(0.15, 1.0));
+  if (d.effect == "pump_flow_limit") d.spec = d.effect + ":max_flow=" + num(uniform(2e-3, 4.5e-3));
+  if (d.effect == "cylinder_friction") d.spec = d.effect + ":force=" + num(uniform(5e3, 30e3));
+  if (d.effect == "wheel_slip_sensor") d.spec = d.effect + ":slip_at_limit=" + num(uniform(0.1, 0.5));
+  if (d.effect == "tyre_rolling_resistance") d.spec = d.effect + ":coefficient=" + num(uniform(0.02, 0.15));
+  if (d.effect == "sensor_bias") {
+    d.channel = channel;
+    const double sign = uniform(0.0, 1.0) < 0.5 ? -1.0 : 1.0;
+    d.spec = d.effect + ":channel=" + channel + ",bias=" + num(sign * uniform(0.3, 1.0) * max_bias);
+  }
+  if (d.effect == "sensor_delay") {
+    d.channel = delayed;
+    d.spec = d.effect + ":channel=" + delayed + ",delay=" + num(uniform(0.1, 0.5));
+  }
+  return d;
+}
+
+// two repetitions of load-carry by a varying operator, with default noise: one to calibrate on,
+// one to validate on
+void synthesise(const fs::path& base, const std::string& effect_args, unsigned seed) {
+  for (int k = 0; k < 2; ++k) {
+    const std::string cmd = kTalus + " synth --scenario load-carry --noise default --vary-inputs 0.1 --quiet --seed " +
+                            std::to_string(seed + k) + effect_args + " --out " + (base / ("run" + std::to_string(k))).string() +
+                            " 2>/dev/null";
+    ASSERT_EQ(exit_code(cmd), 0) << cmd;
+  }
+}
+
+nlohmann::json diagnose(const fs::path& base) {
+  const fs::path json = base / "diagnosis.json";
+  const std::string cmd = kTalus + " diagnose --quiet --data " + (base / "run0").string() + " " + (base / "run1").string() +
+                          " --json " + json.string() + " > " + (base / "report.md").string();
+  EXPECT_EQ(exit_code(cmd), 0) << cmd;
+  return nlohmann::json::parse(std::ifstream(json));
+}
+
+TEST(DiagnoseTest, NamesARandomBuiltInEffectAndCutsTheMeanErrorByAThird) {
+  const unsigned seed = test_seed();
+  std::mt19937_64 rng(seed);
+  const Draw d = draw_effect(rng);
+  RecordProperty("seed", std::to_string(seed));
+  const std::string context = "TALUS_TEST_SEED=" + std::to_string(seed) + ", effect " + d.spec;
+  std::cerr << "diagnose test: " << context << "\n";
+  const fs::path base = fs::temp_directory_path() / ("talus_diagnose_blind_" + std::to_string(seed));
+  fs::remove_all(base);
+  synthesise(base, " --effect " + d.spec, seed);
+  const auto j = diagnose(base);
+
+  // the effect named (with its channel), and the paper's mean error cut by at least 30 %
+  ASSERT_GE(j["effects_found"].size(), 1u) << context;
+  EXPECT_EQ(j["effects_found"][0]["name"], d.effect) << context;
+  if (!d.channel.empty()) {
+    EXPECT_EQ(j["effects_found"][0]["params"]["channel"], d.channel) << context;
+  }
+  const double before = j["error_before"]["mean"], after = j["error_after"]["mean"];
+  EXPECT_LE(after, 0.7 * before) << context << ": mean error " << before << " -> " << after;
+  fs::remove_all(base);
+}
+
+TEST(DiagnoseTest, AddsNothingToEffectFreeDataWithNoise) {
+  const unsigned seed = test_seed();
+  const fs::path base = fs::temp_directory_path() / ("talus_diagnose_noise_" + std::to_string(seed));
+  fs::remove_all(base);
+  synthesise(base, "", seed);
+  const auto j = diagnose(base);
+  EXPECT_TRUE(j["effects_found"].empty()) << "TALUS_TEST_SEED=" << seed << ": " << j["effects_found"].dump();
+  EXPECT_FALSE(j["unexplained"].get<bool>()) << "TALUS_TEST_SEED=" << seed;
+  EXPECT_EQ(j["error_before"]["mean"], j["error_after"]["mean"]);
+  fs::remove_all(base);
+}
+
+TEST(DiagnoseTest, AnEffectOutsideTheCandidatesIsUnexplainedOrAClearlyWorseFit) {
+  // the example plug-in's flow_relief (not a candidate: the loop is not given the plug-in), strong
+  // enough that the boom slows visibly under the loaded bucket
+  const unsigned seed = test_seed();
+  std::mt19937_64 rng(seed);
+  const double speed = std::uniform_real_distribution<double>(0.08, 0.12)(rng);
+  const double droop = std::uniform_real_distribution<double>(3.0, 6.0)(rng);
+  const std::string spec = "flow_relief:speed=" + std::to_string(speed) + ",droop=" + std::to_string(droop);
+  const std::string context = "TALUS_TEST_SEED=" + std::to_string(seed) + ", effect " + spec;
+  const fs::path base = fs::temp_directory_path() / ("talus_diagnose_plugin_" + std::to_string(seed));
+  fs::remove_all(base);
+  synthesise(base, " --effect-plugin " + kPlugin + " --effect " + spec, seed);
+  const auto j = diagnose(base);
+  // never a confident wrong answer: it says unexplained, or what it adds fits clearly worse than a
+  // candidate that is the cause (which cuts the mean error by 30 % or more)
+  const double before = j["error_before"]["mean"], after = j["error_after"]["mean"];
+  EXPECT_TRUE(j["unexplained"].get<bool>() || after > 0.7 * before)
+      << context << ": found " << j["effects_found"].dump() << ", mean error " << before << " -> " << after;
+  fs::remove_all(base);
+}
+
+}  // namespace
