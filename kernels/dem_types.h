@@ -49,7 +49,10 @@ typedef struct {
   tl_int particles;       // number of particles
   tl_int geoms;           // number of static geometries
   tl_float speculative;   // extra contact distance for fast approach, 2 h v_max [m]
-  tl_int pad1;
+  // cohesion of particle pairs within the contact margin: the tensile force a pair holds is
+  // cohesion R*^2 [N]
+  // (terrain/particles.hpp Material::cohesion, Rumpf's law); 0 for dry gravel
+  tl_float cohesion;
 } TlStepParams;
 
 // a contact as found by the narrow phase, grouped by its owner particle a (b > a, or static).
@@ -73,7 +76,8 @@ typedef struct {
   tl_float4 arm_b;      // xyz lever arm of b; w = Sigma_n [m/(N s)]
   tl_float4 impulse_t;  // xyz friction impulse; w = normal impulse lambda_n
   tl_float4 impulse_r;  // xyz rolling impulse; w = 1/D_t (friction effective mass)
-  tl_float4 coef;       // x = mu, y = mu_r R* [m], z = 1/D_r (rolling effective mass), w unused
+  tl_float4 coef;       // x = mu, y = mu_r R* [m], z = 1/D_r (rolling effective mass),
+                        // w = the tensile impulse the contact holds, h F_c [N s] (0: no cohesion)
   tl_int a, b;          // bodies (b < 0 static)
   tl_int contact;       // index of the TlContact this row was made from
   tl_int pad0;

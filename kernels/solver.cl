@@ -41,20 +41,27 @@ __kernel void prepare_rows(__global const TlContact* contacts, __global const in
   float d_t = inv_m + wa.w * dot(arm_a, arm_a) + wb.w * dot(arm_b, arm_b);
   float d_r = wa.w + wb.w;
 
+  // cohesion: a particle pair closer than the contact margin (margin_rel R*, a liquid bridge's
+  // reach) holds a tensile impulse up to h F_c, F_c = cohesion R*^2. The margin, not touch, since
+  // the compliant row holds a pulled pair a hair apart (gap = eps F_c > 0). A speculative contact
+  // further apart, or one with the ground, a wall or the bucket, holds none: a bond breaks when
+  // the pair separates
+  float cohesion = con.b >= 0 && gap <= p.margin_rel * reduced ? h * p.cohesion * reduced * reduced : 0.0f;
+
   // warm start: last step's impulses carried into the new frame, within the new cones
   float ln = 0.0f;
   float3 lt = (float3)(0.0f);
   float3 lr = (float3)(0.0f);
   if (warm_start) {
-    ln = con.impulse_t.w;
+    ln = fmax(con.impulse_t.w, -cohesion);
     float3 old_t = con.impulse_t.xyz;
     float mag = length(old_t);
     float3 proj = old_t - dot(old_t, n) * n;
     float pm = length(proj);
-    lt = pm > 0.0f ? proj * (fmin(mag, p.friction * ln) / pm) : (float3)(0.0f);
+    lt = pm > 0.0f ? proj * (fmin(mag, p.friction * (ln + cohesion)) / pm) : (float3)(0.0f);
     // rolling: the tangential part onto the new disc, the twist about the new normal clamped
     float3 old_r = con.impulse_r.xyz;
-    float rmax = p.rolling * reduced * ln;
+    float rmax = p.rolling * reduced * (ln + cohesion);
     float twist = clamp(dot(old_r, n), -rmax, rmax);
     float3 roll = old_r - dot(old_r, n) * n;
     float rm = length(roll);
@@ -68,7 +75,7 @@ __kernel void prepare_rows(__global const TlContact* contacts, __global const in
   row.arm_b = (float4)(arm_b, sigma);
   row.impulse_t = (float4)(lt, ln);
   row.impulse_r = (float4)(lr, d_t > 0.0f ? 1.0f / d_t : 0.0f);
-  row.coef = (float4)(p.friction, p.rolling * reduced, d_r > 0.0f ? 1.0f / d_r : 0.0f, 0.0f);
+  row.coef = (float4)(p.friction, p.rolling * reduced, d_r > 0.0f ? 1.0f / d_r : 0.0f, cohesion);
   row.a = con.a;
   row.b = con.b;
   row.contact = c;
@@ -128,20 +135,22 @@ void solve_contact(TlRow* row, float3* va, float3* wa, float3* vb, float3* wb, f
   float sigma = row->arm_b.w;
   float ln = row->impulse_t.w;
 
-  // normal: SPOOK row with compliance, lambda_n >= 0
+  // normal: SPOOK row with compliance, lambda_n >= -h F_c (0 without cohesion)
+  float cohesion = row->coef.w;
   float un = dot(n, *vb - *va);
-  float ln_new = fmax(0.0f, ln + (row->normal.w - un - sigma * ln) * inv_dn);
+  float ln_new = fmax(-cohesion, ln + (row->normal.w - un - sigma * ln) * inv_dn);
   float dln = ln_new - ln;
   *va -= inv_ma * dln * n;
   *vb += inv_mb * dln * n;
   ln = ln_new;
 
-  // friction: tangential relative velocity at the contact point, impulse on the disc mu lambda_n
+  // friction: tangential relative velocity at the contact point, impulse on the disc
+  // mu (lambda_n + h F_c): cohesion adds to the normal load friction sees (Mohr-Coulomb)
   float3 u = (*vb + cross(*wb, arm_b)) - (*va + cross(*wa, arm_a));
   float3 ut = u - dot(u, n) * n;
   float3 lt = row->impulse_t.xyz;
   float3 lt_new = lt - ut * inv_dt;
-  float tmax = row->coef.x * ln;
+  float tmax = row->coef.x * (ln + cohesion);
   float tm = length(lt_new);
   if (tm > tmax) lt_new *= tm > 0.0f ? tmax / tm : 0.0f;
   float3 dlt = lt_new - lt;
@@ -150,10 +159,11 @@ void solve_contact(TlRow* row, float3* va, float3* wa, float3* vb, float3* wb, f
   *vb += inv_mb * dlt;
   *wb += inv_ib * cross(arm_b, dlt);
 
-  // rolling (tangential, on the disc) and twisting (about n), both bounded by mu_r R* lambda_n
+  // rolling (tangential, on the disc) and twisting (about n), both bounded by
+  // mu_r R* (lambda_n + h F_c)
   float3 wrel = *wb - *wa;
   float3 lr = row->impulse_r.xyz;
-  float rmax = row->coef.y * ln;
+  float rmax = row->coef.y * (ln + cohesion);
   float3 lr_n = dot(lr, n) * n;
   float3 lr_t = lr - lr_n;
   float3 lr_t_new = lr_t - (wrel - dot(wrel, n) * n) * inv_dr;
@@ -278,7 +288,8 @@ __kernel void row_residual(__global const TlRow* rows, int n_rows, __global cons
   float ln = row.impulse_t.w;
   float dn = 1.0f / row.arm_a.w;
   float un = dot(n, vb4.xyz - va4.xyz);
-  float rn = (fmax(0.0f, ln + (row.normal.w - un - row.arm_b.w * ln) / dn) - ln) * dn;
+  float cohesion = row.coef.w;
+  float rn = (fmax(-cohesion, ln + (row.normal.w - un - row.arm_b.w * ln) / dn) - ln) * dn;
   float3 u = (vb4.xyz + cross(wb4.xyz, row.arm_b.xyz)) - (va4.xyz + cross(wa4.xyz, row.arm_a.xyz));
   float3 ut = u - dot(u, n) * n;
   float rt = 0.0f;
@@ -286,7 +297,7 @@ __kernel void row_residual(__global const TlRow* rows, int n_rows, __global cons
     float dt_ = 1.0f / row.impulse_r.w;
     float3 lt = row.impulse_t.xyz;
     float3 lt_new = lt - ut / dt_;
-    float tmax = row.coef.x * ln;
+    float tmax = row.coef.x * (ln + cohesion);
     float tm = length(lt_new);
     if (tm > tmax) lt_new *= tm > 0.0f ? tmax / tm : 0.0f;
     rt = length(lt_new - lt) * dt_;
@@ -297,7 +308,7 @@ __kernel void row_residual(__global const TlRow* rows, int n_rows, __global cons
     float dr = 1.0f / row.coef.z;
     float3 wrel = wb4.xyz - wa4.xyz;
     float3 lr = row.impulse_r.xyz;
-    float rmax = row.coef.y * ln;
+    float rmax = row.coef.y * (ln + cohesion);
     float3 lr_t = lr - dot(lr, n) * n;
     float3 lr_t_new = lr_t - (wrel - dot(wrel, n) * n) / dr;
     float rm = length(lr_t_new);

@@ -88,30 +88,32 @@ void solve_contact(Row& row, Vec3& va, Vec3& wa, Vec3& vb, Vec3& wb, const Solve
   const Vec3& n = row.normal;
   double ln = row.impulse_n;
 
-  // normal: SPOOK row with compliance, lambda_n >= 0
+  // normal: SPOOK row with compliance, lambda_n >= -h F_c (0 without cohesion)
   double un = n.dot(vb - va);
-  double ln_new = std::max(0.0, ln + (row.rhs - un - row.sigma * ln) * m.inv_dn);
+  double ln_new = std::max(-row.cohesion, ln + (row.rhs - un - row.sigma * ln) * m.inv_dn);
   double dln = ln_new - ln;
   va -= m.inv_ma * dln * n;
   vb += m.inv_mb * dln * n;
   ln = ln_new;
 
-  // friction: tangential relative velocity at the contact point, impulse on the disc mu lambda_n
+  // friction: tangential relative velocity at the contact point, impulse on the disc
+  // mu (lambda_n + h F_c)
   Vec3 u = (vb + wb.cross(row.arm_b)) - (va + wa.cross(row.arm_a));
   Vec3 ut = u - u.dot(n) * n;
   Vec3 lt = row.impulse_t;
   Vec3 lt_new = lt - ut * m.inv_dt;
-  clamp_to_disc(lt_new, row.friction * ln);
+  clamp_to_disc(lt_new, row.friction * (ln + row.cohesion));
   Vec3 dlt = lt_new - lt;
   va -= m.inv_ma * dlt;
   wa -= m.inv_ia * row.arm_a.cross(dlt);
   vb += m.inv_mb * dlt;
   wb += m.inv_ib * row.arm_b.cross(dlt);
 
-  // rolling (tangential, on the disc) and twisting (about n), both bounded by mu_r R* lambda_n
+  // rolling (tangential, on the disc) and twisting (about n), both bounded by
+  // mu_r R* (lambda_n + h F_c)
   Vec3 wrel = wb - wa;
   Vec3 lr = row.impulse_r;
-  double rmax = row.rolling_limit * ln;
+  double rmax = row.rolling_limit * (ln + row.cohesion);
   Vec3 lr_t = lr - lr.dot(n) * n;
   Vec3 lr_t_new = lr_t - (wrel - wrel.dot(n) * n) * m.inv_dr;
   clamp_to_disc(lr_t_new, rmax);
@@ -149,6 +151,7 @@ StepParams from_device(const TlStepParams& p) {
   out.margin_rel = p.margin_rel;
   out.overlap_floor_rel = p.overlap_floor_rel;
   out.speculative = p.speculative;
+  out.cohesion = p.cohesion;
   out.particles = p.particles;
   out.geoms = p.geoms;
   return out;
@@ -196,6 +199,7 @@ Row from_device(const TlRow& r) {
   out.friction = r.coef.s[0];
   out.rolling_limit = r.coef.s[1];
   out.inv_dr = r.coef.s[2];
+  out.cohesion = r.coef.s[3];
   out.a = r.a;
   out.b = r.b;
   out.contact = r.contact;
@@ -489,19 +493,25 @@ std::vector<Row> prepare_rows(const std::vector<Contact>& contacts, const std::v
                  b.inv_inertia * con.arm_b.squaredNorm();
     double d_r = a.inv_inertia + b.inv_inertia;
 
+    // cohesion: a particle pair within the contact margin (margin_rel R*) holds a tensile impulse
+    // up to h F_c, F_c = cohesion R*^2 (kernels/solver.cl explains the margin)
+    double cohesion = con.b >= 0 && con.gap <= p.margin_rel * con.reduced_radius
+                          ? h * p.cohesion * con.reduced_radius * con.reduced_radius
+                          : 0.0;
+
     // warm start: last step's impulses carried into the new frame, within the new cones
     double ln = 0.0;
     Vec3 lt = Vec3::Zero();
     Vec3 lr = Vec3::Zero();
     if (warm_start) {
-      ln = con.impulse_n;
+      ln = std::max(con.impulse_n, -cohesion);
       const Vec3& old_t = con.impulse_t;
       Vec3 projected = old_t - old_t.dot(n) * n;
       double pm = projected.norm();
-      lt = pm > 0.0 ? Vec3(projected * (std::min(old_t.norm(), p.friction * ln) / pm))
+      lt = pm > 0.0 ? Vec3(projected * (std::min(old_t.norm(), p.friction * (ln + cohesion)) / pm))
                     : Vec3::Zero();
       // rolling onto the new disc, twist about the new normal clamped
-      double rmax = p.rolling * con.reduced_radius * ln;
+      double rmax = p.rolling * con.reduced_radius * (ln + cohesion);
       double twist = std::clamp(con.impulse_r.dot(n), -rmax, rmax);
       Vec3 roll = con.impulse_r - con.impulse_r.dot(n) * n;
       double rm = roll.norm();
@@ -523,6 +533,7 @@ std::vector<Row> prepare_rows(const std::vector<Contact>& contacts, const std::v
     row.friction = p.friction;
     row.rolling_limit = p.rolling * con.reduced_radius;
     row.inv_dr = d_r > 0.0 ? 1.0 / d_r : 0.0;
+    row.cohesion = cohesion;
     row.a = con.a;
     row.b = con.b;
     row.contact = c;
@@ -629,7 +640,7 @@ std::vector<double> row_residuals(const std::vector<Row>& rows, const Particles&
     // normal: one projection step, times the effective mass
     double dn = 1.0 / row.inv_dn;
     double un = n.dot(b.v - a.v);
-    double rn = (std::max(0.0, ln + (row.rhs - un - row.sigma * ln) / dn) - ln) * dn;
+    double rn = (std::max(-row.cohesion, ln + (row.rhs - un - row.sigma * ln) / dn) - ln) * dn;
     // friction: the same for the tangential impulse (rows with an effective mass only)
     Vec3 u = (b.v + b.w.cross(row.arm_b)) - (a.v + a.w.cross(row.arm_a));
     Vec3 ut = u - u.dot(n) * n;
@@ -637,7 +648,7 @@ std::vector<double> row_residuals(const std::vector<Row>& rows, const Particles&
     if (row.inv_dt > 0.0) {
       double dt = 1.0 / row.inv_dt;
       Vec3 lt_new = row.impulse_t - ut / dt;
-      clamp_to_disc(lt_new, row.friction * ln);
+      clamp_to_disc(lt_new, row.friction * (ln + row.cohesion));
       rt = (lt_new - row.impulse_t).norm() * dt;
     }
     // rolling and twist, turned into a velocity by the lever arm's length
@@ -646,7 +657,7 @@ std::vector<double> row_residuals(const std::vector<Row>& rows, const Particles&
       double dr = 1.0 / row.inv_dr;
       Vec3 wrel = b.w - a.w;
       const Vec3& lr = row.impulse_r;
-      double rmax = row.rolling_limit * ln;
+      double rmax = row.rolling_limit * (ln + row.cohesion);
       Vec3 lr_t_new = (lr - lr.dot(n) * n) - (wrel - wrel.dot(n) * n) / dr;
       clamp_to_disc(lr_t_new, rmax);
       double twist = std::clamp(lr.dot(n) - wrel.dot(n) / dr, -rmax, rmax);

@@ -32,6 +32,7 @@ struct StepParams {
   double margin_rel = 0.0;
   double overlap_floor_rel = 0.0;
   double speculative = 0.0;  // extra contact distance 2 h v_max [m]
+  double cohesion = 0.0;     // a touching particle pair's tensile force per R*^2 [N/m^2]
   int particles = 0;
   int geoms = 0;
 
@@ -94,6 +95,7 @@ struct Row {
   double friction = 0.0;          // mu
   double rolling_limit = 0.0;     // mu_r R* [m]
   double inv_dr = 0.0;            // rolling effective mass 1/D_r
+  double cohesion = 0.0;          // tensile impulse the contact holds, h F_c [N s]
   int a = 0, b = 0;
   int contact = 0;                // the contact this row was made from
 };

@@ -125,6 +125,7 @@ void DemWorld::update_params() {
   p.particles = static_cast<int>(particle_count_);
   p.geoms = static_cast<int>(geoms_.size());
   p.speculative = static_cast<float>(speculative);
+  p.cohesion = static_cast<float>(kRumpfPerR2 * material_.cohesion);
   if (!sweep_ || sweep_kind_ != settings_.sweep) {
     sweep_kind_ = settings_.sweep;
     sweep_ = make_sweep(sweep_kind_, dev_, p.particles);

@@ -22,7 +22,16 @@ struct Material {
   // (heap test, docs/dem.md); rolling resistance stands in for the gravel's angular shape
   double rolling = 1.0;
   double damping_steps = 2.0; // SPOOK damping time of normal rows in timesteps (tau = n h)
+  // bulk tensile strength [Pa] of moist or cohesive soil: touching particles hold a tensile force
+  // F_c = pi d^2 cohesion / (phi k) (Rumpf 1962: solid fraction phi, coordination number k; the
+  // pile's phi = 1727/2590 and k = 6, d = 4 R* for equal spheres, so F_c = kRumpfPerR2 cohesion
+  // R*^2). The paper's gravel is dry: 0. Set by the soil_cohesion effect (vehicle/effect.hpp)
+  double cohesion = 0.0;
 };
+
+// F_c / (cohesion R*^2) of Rumpf's law for the pile's packing: 16 pi / (phi k) with
+// phi = 1727 / 2590 (bulk over particle density, SPEC §2.2) and k = 6 contacts per particle
+inline constexpr double kRumpfPerR2 = 16.0 * 3.14159265358979323846 / ((1727.0 / 2590.0) * 6.0);
 
 // the paper's gravel (SPEC §2.2)
 inline Material gravel() { return Material{}; }

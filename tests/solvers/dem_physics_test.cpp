@@ -135,3 +135,51 @@ TEST(DemPhysics, RollingResistanceHoldsBelowItsAngle) {
 
 }  // namespace
 }  // namespace talus
+
+namespace talus {
+namespace {
+
+// does a sphere hang from a fixed one above it for 2 s, given the soil's tensile strength [Pa]?
+// (the bond holds F_c = kRumpfPerR2 cohesion R*^2, the sphere weighs m g)
+bool hangs(Device& dev, double cohesion, double d) {
+  Material m = gravel();
+  m.cohesion = cohesion;
+  DemSettings s;
+  s.dt = 1e-2;
+  s.iterations = 30;
+  DemWorld world(dev, m, s, Bounds{Vec3(-1, -1, -1), Vec3(1, 1, 1)}, {});
+  Particles p;
+  p.add(Vec3(0, 0, 0.5 * d), 0.5 * d, m.density);
+  p.add(Vec3(0, 0, -0.5 * d), 0.5 * d, m.density);
+  p.inv_mass[0] = 0.0;  // the upper one is fixed
+  p.inv_inertia[0] = 0.0;
+  world.set_particles(p);
+  for (int i = 0; i < 200; ++i) world.step();
+  return world.particles().position[1].z() > -d;  // fell less than half a diameter
+}
+
+// the weakest cohesion that holds a sphere hanging under another: the bond F_c must carry its
+// weight m g, so cohesion* = m g / (kRumpfPerR2 R*^2) with R* = d/4. Bisection on the measured
+// outcome, to 2 %
+TEST(DemPhysics, CohesiveBondHoldsItsWeightAtRumpfsStrength) {
+  Device dev;
+  const double d = 0.04;
+  const double mass = gravel().density * M_PI * d * d * d / 6.0;
+  const double r_star = 0.25 * d;
+  const double expected = mass * kGravity / (kRumpfPerR2 * r_star * r_star);
+  EXPECT_FALSE(hangs(dev, 0.0, d));  // dry gravel: it falls
+  double lo = 0.25 * expected, hi = 4.0 * expected;
+  ASSERT_FALSE(hangs(dev, lo, d));
+  ASSERT_TRUE(hangs(dev, hi, d));
+  while (hi / lo > 1.02) {
+    const double mid = std::sqrt(lo * hi);
+    (hangs(dev, mid, d) ? hi : lo) = mid;
+  }
+  const double measured = std::sqrt(lo * hi);
+  std::printf("cohesion that holds a %.0f mm sphere: measured %.1f Pa, Rumpf bond %.1f Pa (%+.1f %%)\n", d * 1e3,
+              measured, expected, 100.0 * (measured / expected - 1.0));
+  EXPECT_NEAR(measured / expected, 1.0, 0.05);
+}
+
+}  // namespace
+}  // namespace talus
