@@ -268,6 +268,11 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
 void run_scenario(const RunOptions& o) {
   const vehicle::Scenario sc = o.scenario_data ? *o.scenario_data : vehicle::load_scenario(o.scenario);
   const auto effects = make_run_effects(o);
+  for (size_t i = 0; i < effects->set.size(); ++i) {
+    if (!sc.pile && effects->set[i].soil_only())
+      throw InputError("--effect " + effects->set[i].name() + ": acts on the soil's particles, and scenario '" + sc.name +
+                       "' has none; use it with a pile scenario (fb35, hd27, rd21)");
+  }
   if (sc.pile) {
     run_digging(o, sc, effects->set);
   } else {

@@ -60,7 +60,10 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
   settings.iterations = preset.iterations;
   settings.sweep = options.sweep;
   settings.max_speed = options.max_particle_speed;
-  dem_ = std::make_unique<DemWorld>(dev, gravel(), settings, pile.bounds, pile.geoms);
+  // the soil: the dry gravel, or what the effects make of it (soil_cohesion)
+  Material soil = gravel();
+  if (effects_) soil.cohesion = effects_->soil().cohesion;
+  dem_ = std::make_unique<DemWorld>(dev, soil, settings, pile.bounds, pile.geoms);
   dem_->set_particles(pile.particles);
   split_ = std::make_unique<SplitSolver>(dev, *dem_, *loader_, options.coupling);
   steps_total_ = static_cast<int>(std::lround(scenario.duration / h));

@@ -185,6 +185,12 @@ void EffectSet::add(std::unique_ptr<Effect> effect) {
   reset_done_ = false;
 }
 
+SoilProperties EffectSet::soil() const {
+  SoilProperties soil;
+  for (const auto& e : effects_) e->on_soil(soil);
+  return soil;
+}
+
 nlohmann::json EffectSet::to_json() const {
   nlohmann::json list = nlohmann::json::array();
   for (const auto& e : effects_) list.push_back(e->to_json());

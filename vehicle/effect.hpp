@@ -6,6 +6,7 @@
 //   on_step      the limits and forces of this step: the cylinders' motor force ranges, the
 //                driveline's power limit, extra wrenches on bodies (for this step only)
 //   on_sensors   what the sensors report (a vehicle::SensorSample, changed in place)
+// and, once before a run with particles, on_soil: the soil's properties (cohesion)
 // Each hook gets an EffectContext: the step's start time t (for on_sensors, the sample's time),
 // the timestep h, the true sensor sample before the step and the machine (read only).
 // An EffectSet applies several effects in order, restores the machine's own limits before each
@@ -39,6 +40,12 @@ struct EffectOption {
   std::string value;
   std::vector<std::string> choices;
   std::string meaning;
+};
+
+// what an effect may change in the soil, once before a run with particles (the baseline gravel is
+// dry and cohesionless); a run without particles has no soil and ignores it
+struct SoilProperties {
+  double cohesion = 0.0;  // bulk tensile strength [Pa] (terrain/particles.hpp Material::cohesion)
 };
 
 // target speeds [m/s]: drive (forward positive), lift and tilt cylinders (extension positive)
@@ -115,6 +122,10 @@ class Effect {
     (void)context;
     (void)sample;
   }
+  // the soil's properties, once before a run with particles
+  virtual void on_soil(SoilProperties& soil) { (void)soil; }
+  // does it act only through on_soil (so a run without particles cannot show it)?
+  virtual bool soil_only() const { return false; }
 
  protected:
   // derived classes declare their parameters and options in their constructors; the index reads
@@ -143,6 +154,8 @@ class EffectSet {
   const Effect& operator[](size_t i) const { return *effects_.at(i); }
   // [{"name": ..., "params": {...}}, ...]
   nlohmann::json to_json() const;
+  // the soil with every effect's on_soil applied in order, from the dry baseline
+  SoilProperties soil() const;
 
   // before a run, at time t: resets every effect, takes the machine's current limits as its own
   // (restored before every step) and the true sensors now as the previous sample
@@ -169,8 +182,7 @@ class EffectSet {
 
 // the built-in effects' names, in the order docs/effects.md lists them
 std::vector<std::string> builtin_effect_names();
-// a built-in effect with its defaults; talus::InputError listing the names for an unknown one,
-// talus::Error for one that is named but not yet built (soil_cohesion)
+// a built-in effect with its defaults; talus::InputError listing the names for an unknown one
 std::unique_ptr<Effect> make_builtin_effect(const std::string& name);
 
 // one step of the machine alone with effects: commands through on_commands, limits and wrenches

@@ -310,6 +310,23 @@ class SensorDelay : public Effect {
   std::deque<Past> past_;
 };
 
+// --- soil_cohesion --------------------------------------------------------------------------
+// moist or cohesive gravel: touching particles hold tension (kernels/solver.cl, Rumpf's law in
+// terrain/particles.hpp), so the soil resists the bucket more, breaks out in lumps and holds
+// steeper faces. Acts from the start of the run on the settled pile (whose shape the scan gives)
+class SoilCohesion : public Effect {
+ public:
+  SoilCohesion() : Effect("soil_cohesion", "cohesion of moist soil: particle contacts hold tension") {
+    cohesion_ = add_parameter({"cohesion", 2e3, 0.0, 20e3, "Pa",
+                               "bulk tensile strength of the soil (moist gravel: about 1-10 kPa of apparent cohesion)"});
+  }
+  void on_soil(SoilProperties& soil) override { soil.cohesion += value(cohesion_); }
+  bool soil_only() const override { return true; }
+
+ private:
+  int cohesion_ = 0;
+};
+
 using Factory = std::unique_ptr<Effect> (*)();
 
 template <class E>
@@ -318,7 +335,7 @@ std::unique_ptr<Effect> make() {
 }
 
 // the built-ins, in the order of docs/effects.md
-constexpr std::array<std::pair<const char*, Factory>, 8> kBuiltins = {{
+constexpr std::array<std::pair<const char*, Factory>, 9> kBuiltins = {{
     {"engine_power_sharing", &make<EnginePowerSharing>},
     {"hydraulic_lag", &make<HydraulicLag>},
     {"pump_flow_limit", &make<PumpFlowLimit>},
@@ -327,6 +344,7 @@ constexpr std::array<std::pair<const char*, Factory>, 8> kBuiltins = {{
     {"tyre_rolling_resistance", &make<TyreRollingResistance>},
     {"sensor_bias", &make<SensorBias>},
     {"sensor_delay", &make<SensorDelay>},
+    {"soil_cohesion", &make<SoilCohesion>},
 }};
 
 }  // namespace
@@ -340,12 +358,10 @@ std::vector<std::string> builtin_effect_names() {
 std::unique_ptr<Effect> make_builtin_effect(const std::string& name) {
   for (const auto& [n, factory] : kBuiltins)
     if (name == n) return factory();
-  if (name == "soil_cohesion")
-    throw Error("effect 'soil_cohesion': not yet: soil cohesion needs cohesive particle contacts (issue 6)");
   std::string list;
   for (const auto& n : builtin_effect_names()) list += (list.empty() ? "" : ", ") + n;
   throw InputError("no built-in effect named '" + name + "'; the built-in effects are " + list +
-                   " (soil_cohesion is not yet built); load others with --effect-plugin");
+                   "; load others with --effect-plugin");
 }
 
 }  // namespace talus::vehicle

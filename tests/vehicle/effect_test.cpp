@@ -99,15 +99,23 @@ TEST(EffectTest, ParameterErrorsNameTheEffectTheParameterAndItsRange) {
             R"({"name":"pump_flow_limit","params":{"max_flow":0.004}})");
 }
 
-TEST(EffectTest, RegistryListsTheBuiltInsAndSoilCohesionIsNotYet) {
+TEST(EffectTest, RegistryListsTheBuiltIns) {
   const auto names = builtin_effect_names();
-  EXPECT_EQ(names.size(), 8u);
+  EXPECT_EQ(names.size(), 9u);
   for (const auto& n : names) EXPECT_EQ(make_builtin_effect(n)->name(), n);
   const std::string unknown = message_of<InputError>([] { make_builtin_effect("rain"); });
   for (const auto& n : names) EXPECT_NE(unknown.find(n), std::string::npos) << unknown;
-  const std::string cohesion = message_of<Error>([] { make_builtin_effect("soil_cohesion"); });
-  EXPECT_NE(cohesion.find("not yet: soil cohesion needs cohesive particle contacts (issue 6)"), std::string::npos);
-  EXPECT_THROW(make_effect("soil_cohesion"), Error);
+}
+
+// soil cohesion acts on the particles alone: it sets the soil, and the machine alone never sees it
+TEST(EffectTest, SoilCohesionSetsTheSoilAndNothingElse) {
+  EffectSet set;
+  set.add(make_effect("soil_cohesion:cohesion=5000"));
+  EXPECT_DOUBLE_EQ(set.soil().cohesion, 5000.0);
+  EXPECT_TRUE(set[0].soil_only());
+  EXPECT_FALSE(make_effect("hydraulic_lag")->soil_only());
+  EXPECT_DOUBLE_EQ(EffectSet().soil().cohesion, 0.0);  // the baseline gravel is dry
+  EXPECT_THROW(make_effect("soil_cohesion:cohesion=-1"), InputError);
 }
 
 // an empty effect set changes nothing: the same run to the last bit
