@@ -106,7 +106,7 @@ void diagnose_command(const DiagnoseArgs& a) {
   } else {
     for (const auto& f : d.found)
       report << "- " << f.spec << " (explains " << std::setprecision(3) << 100.0 * f.explained
-             << " % of the validation excess)\n";
+             << " % of the excess of the " << f.explained_on << " runs)\n";
     report << (d.unexplained ? "\nAn excess beyond noise remains: UNEXPLAINED in part.\n" : "\nWhat remains is within noise.\n");
   }
   report << "\nExcess per run: before " << std::setprecision(3) << d.excess_before << ", after " << d.excess_after

@@ -145,11 +145,11 @@ std::vector<Candidate> candidate_set(const vehicle::EffectPlugins& plugins) {
       // it changes the speed reading alone (and the power that follows it)
       out.push_back({name, "", {static_cast<std::size_t>(Channel::v_drive), kPowerChannel}});
     } else {
-      out.push_back({name, "", {}});
+      out.push_back({name, "", {}, effect->soil_only()});
     }
   }
   for (const auto& plugin : plugins)
-    for (const auto& name : plugin->effect_names()) out.push_back({name, "", {}});
+    for (const auto& name : plugin->effect_names()) out.push_back({name, "", {}, false});
   return out;
 }
 
@@ -250,6 +250,8 @@ Diagnosis diagnose(const std::vector<MeasuredRun>& runs, const DiagnoseOptions& 
 
   // rounds: one effect more each, while an excess beyond noise is left
   const std::vector<Candidate> candidates = candidate_set(options.plugins);
+  // soil effects show only where there are particles
+  const bool any_pile = std::any_of(replays.begin(), replays.end(), [](const auto& r) { return r->scenario().pile; });
   for (int round = 0; round < options.max_effects && overall() >= kSignificantExcess; ++round) {
     DiagnosisRound dr;
     dr.excess_before = current_val;
@@ -258,6 +260,10 @@ Diagnosis diagnose(const std::vector<MeasuredRun>& runs, const DiagnoseOptions& 
     for (const auto& c : candidates) {
       const bool taken = std::any_of(d.found.begin(), d.found.end(), [&](const auto& f) { return f.candidate.label() == c.label(); });
       if (taken) continue;
+      if (c.needs_particles && !any_pile) {
+        dr.screened_out.push_back(c.label());
+        continue;
+      }
       if (!c.signature.empty()) {
         // it can remove no more than its channels' excess, and nothing unless the channel it acts
         // on (the first) departs from the data: power follows a reading, it does not lead it
@@ -327,11 +333,23 @@ Diagnosis diagnose(const std::vector<MeasuredRun>& runs, const DiagnoseOptions& 
       f.parameters = s.parameters;
       f.excess_calibration = std::min(fitted.excess, s.score.excess);
       f.excess_validation = disjoint ? score_runs(d.validation, s.c, s.x).excess : f.excess_calibration;
-      f.explained = current_val > 0.0 ? (current_val - f.excess_validation) / current_val : 0.0;
+      // the share it explains of what the held-out runs leave; when they leave nothing beyond
+      // noise (the effect does not show in them), the share of the calibration runs', provided
+      // it keeps the held-out runs within noise
+      if (current_val >= kSignificantExcess || !disjoint) {
+        f.explained = current_val > 0.0 ? (current_val - f.excess_validation) / current_val : 0.0;
+        f.explained_on = "validation";
+      } else {
+        f.explained = f.excess_validation < kSignificantExcess && current_cal > 0.0
+                          ? (current_cal - f.excess_calibration) / current_cal
+                          : 0.0;
+        f.explained_on = "calibration";
+      }
       f.score = f.excess_validation + kParameterPenalty * f.parameters;
       f.simulations = d.simulations - before;
       say("  fit " + f.spec + ": excess calibration " + format_number(f.excess_calibration) + ", validation " +
-          format_number(f.excess_validation) + " (explains " + format_number(100.0 * f.explained) + " %)");
+          format_number(f.excess_validation) + " (explains " + format_number(100.0 * f.explained) + " % on the " +
+          f.explained_on + " runs)");
       dr.fitted.push_back(f);
     }
     std::sort(dr.fitted.begin(), dr.fitted.end(), [](const auto& a, const auto& b) { return a.score < b.score; });
@@ -406,7 +424,8 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
   auto fitted_json = [](const FittedEffect& f) {
     return json{{"candidate", f.candidate.label()}, {"effect", f.effect}, {"spec", f.spec},
                 {"parameters", f.parameters}, {"excess_calibration", f.excess_calibration},
-                {"excess_validation", f.excess_validation}, {"explained", f.explained}, {"score", f.score},
+                {"excess_validation", f.excess_validation}, {"explained", f.explained},
+                {"explained_on", f.explained_on}, {"score", f.score},
                 {"simulations", f.simulations}};
   };
   json found = json::array();

@@ -17,7 +17,10 @@
 //  4. validation: each fitted candidate on the held-out runs; its score is the validation excess
 //     plus kParameterPenalty per fitted parameter, so a richer effect must earn its parameters
 //  5. decision: the best-scoring candidate is added when it removes at least kMinExplained of the
-//     validation excess that is left, else the round adds nothing
+//     validation excess that is left, else the round adds nothing. Held-out runs that show no
+//     excess (an effect that needs a manoeuvre they lack) cannot confirm a candidate, only refute
+//     it: then the share explained is the calibration runs', if the candidate keeps the held-out
+//     runs within noise
 // Rounds repeat (each fits one more effect on top of those added, which keep their values) until
 // the excess left is within noise, nothing qualifies, or max_effects are added. "Unexplained"
 // means an excess beyond noise remains at the end.
@@ -58,11 +61,11 @@ struct Candidate {
   // channels it can change, the one it acts on first (power follows it); empty: all (it acts on
   // the machine)
   std::vector<std::size_t> signature;
+  bool needs_particles = false;       // acts on the soil only (soil_cohesion)
   std::string label() const;          // "hydraulic_lag", "sensor_bias[f_lift]"
 };
 
-// the built-in effects (soil_cohesion not yet), channel-bound ones once per channel, then every
-// effect of the plug-ins
+// the built-in effects, channel-bound ones once per channel, then every effect of the plug-ins
 std::vector<Candidate> candidate_set(const vehicle::EffectPlugins& plugins);
 
 struct DiagnoseOptions {
@@ -81,7 +84,10 @@ struct FittedEffect {
   int parameters = 0;          // fitted parameters
   double excess_calibration = 0.0;  // mean per calibration run, with this effect added
   double excess_validation = 0.0;   // mean per validation run
-  double explained = 0.0;      // share of the validation excess left that it removes
+  double explained = 0.0;      // share of the excess left that it removes, on the runs below
+  // "validation"; or "calibration" when the held-out runs had nothing beyond noise to explain (the
+  // effect does not show in them) and it kept them within noise
+  std::string explained_on;
   double score = 0.0;          // excess_validation + penalty
   int simulations = 0;
 };

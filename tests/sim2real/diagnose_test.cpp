@@ -15,8 +15,8 @@ TEST(Diagnose, CandidatesExpandChannelOptionsAndCarrySignatures) {
   auto find = [&](const std::string& label) {
     return std::find_if(candidates.begin(), candidates.end(), [&](const Candidate& c) { return c.label() == label; });
   };
-  // five machine effects, wheel slip, and a bias and a delay per channel (13 each)
-  EXPECT_EQ(candidates.size(), 5u + 1u + 26u);
+  // five machine effects, wheel slip, a bias and a delay per channel (13 each), soil cohesion
+  EXPECT_EQ(candidates.size(), 5u + 1u + 26u + 1u);
   ASSERT_NE(find("engine_power_sharing"), candidates.end());
   EXPECT_TRUE(find("engine_power_sharing")->signature.empty());  // acts on the machine: all channels
   ASSERT_NE(find("sensor_bias[f_lift]"), candidates.end());
@@ -26,7 +26,9 @@ TEST(Diagnose, CandidatesExpandChannelOptionsAndCarrySignatures) {
   EXPECT_EQ(bias[1], static_cast<size_t>(Channel::power));
   EXPECT_EQ(find("sensor_delay[power]")->signature.size(), 1u);
   EXPECT_EQ(find("wheel_slip_sensor")->signature.front(), static_cast<size_t>(Channel::v_drive));
-  EXPECT_EQ(find("soil_cohesion"), candidates.end());  // not yet built
+  ASSERT_NE(find("soil_cohesion"), candidates.end());
+  EXPECT_TRUE(find("soil_cohesion")->needs_particles);  // screened out of runs without a pile
+  EXPECT_FALSE(find("hydraulic_lag")->needs_particles);
 }
 
 TEST(Diagnose, MeanRowAveragesAbsoluteValues) {
