@@ -133,11 +133,6 @@ TEST(DemPhysics, RollingResistanceHoldsBelowItsAngle) {
   }
 }
 
-}  // namespace
-}  // namespace talus
-
-namespace talus {
-namespace {
 
 // does a sphere hang from a fixed one above it for 2 s, given the soil's tensile strength [Pa]?
 // (the bond holds F_c = kRumpfPerR2 cohesion R*^2, the sphere weighs m g)

@@ -14,6 +14,12 @@
 namespace talus {
 namespace {
 
+// the scenario's pile at D400, settled (about 10 s here)
+PileBuild pile_at_d400(const vehicle::Scenario& sc, const DiggingOptions& options) {
+  return build_scenario_pile(test::shared_device(), sc, scenario_pile_profile(sc), fidelity_preset("D400"), options,
+                             nullptr);
+}
+
 // HD27 at D400 from start to end: the loaded mass is never more than the bucket's heaped
 // capacity in gravel (heaped volume x the field bulk density 1727 kg/m^3, SPEC §2.2; the rule
 // counts particle centres, and the bucket's load never packs denser than the pile) and is
@@ -22,7 +28,7 @@ TEST(Digging, Hd27AtD400FillsTheBucketWithinItsHeapedCapacity) {
   const vehicle::Scenario sc = vehicle::load_scenario("hd27");
   const FidelityPreset& preset = fidelity_preset("D400");
   DiggingOptions options;
-  PileBuild pile = build_scenario_pile(test::shared_device(), sc, scenario_pile_profile(sc), preset, options, nullptr);
+  PileBuild pile = pile_at_d400(sc, options);
   // the pile's toe lies where the scenario puts it, in front of the bucket
   double toe = 1e9;
   for (const Vec3& x : pile.particles.position) toe = std::min(toe, x.x());
@@ -56,11 +62,6 @@ TEST(Digging, ScenarioWithoutAPileIsRejected) {
                InputError);
 }
 
-}  // namespace
-}  // namespace talus
-
-namespace talus {
-namespace {
 
 // cohesive soil (the soil_cohesion effect) resists the bucket more: FB35 at D400 pushes the flat
 // bucket deep into the pile at the traction the driveline has, and in cohesive gravel it gets less
@@ -71,7 +72,7 @@ TEST(Digging, CohesiveSoilResistsPenetration) {
   const vehicle::Scenario sc = vehicle::load_scenario("fb35");
   const FidelityPreset& preset = fidelity_preset("D400");
   DiggingOptions options;
-  const PileBuild pile = build_scenario_pile(test::shared_device(), sc, scenario_pile_profile(sc), preset, options, nullptr);
+  const PileBuild pile = pile_at_d400(sc, options);
   // how far the machine got [m] by breakout, and the soil's cohesion [Pa] the particles had
   auto penetration = [&](vehicle::EffectSet* effects) {
     DiggingSimulation sim(test::shared_device(), sc, preset, pile, options, effects);
