@@ -110,7 +110,7 @@ void diagnose_command(const DiagnoseArgs& a) {
     report << (d.unexplained ? "\nAn excess beyond noise remains: UNEXPLAINED in part.\n" : "\nWhat remains is within noise.\n");
   }
   report << "\nExcess per run: before " << std::setprecision(3) << d.excess_before << ", after " << d.excess_after
-         << " (within noise below " << kSignificantExcess << "); " << d.simulations << " simulations in "
+         << " (noise alone leaves less than " << kSignificantExcess << "); " << d.simulations << " simulations in "
          << std::setprecision(3) << d.wall_s << " s.\n\n## Error before\n\n";
   std::vector<TableRow> before = d.error_before, after = d.error_after;
   before.push_back(mean_row(d.error_before, "mean over runs"));

@@ -233,7 +233,7 @@ Diagnosis diagnose(const std::vector<MeasuredRun>& runs, const DiagnoseOptions& 
     d.scan_rms_m.push_back(replays[i]->scan_rms_m());
   }
   d.excess_before = mean_of(baseline_excess);
-  say("baseline: excess " + format_number(d.excess_before) + " per run (within noise below " +
+  say("baseline: excess " + format_number(d.excess_before) + " per run (noise alone leaves less than " +
       format_number(kSignificantExcess) + "), mean error " + format_number(mean_row(d.error_before, "").mean));
   auto mean_over = [&](const std::vector<std::size_t>& which, const std::vector<double>& per_run) {
     std::vector<double> v;
