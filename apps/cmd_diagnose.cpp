@@ -116,7 +116,8 @@ void diagnose_command(const DiagnoseArgs& a) {
   before.push_back(mean_row(d.error_before, "mean over runs"));
   after.push_back(mean_row(d.error_after, "mean over runs"));
   report << table_markdown(before, 3) << "\n## Error after\n\n" << table_markdown(after, 3);
-  std::cout << report.str();
+  // the report on stdout, unless the JSON goes there
+  (a.json == "-" ? std::cerr : std::cout) << report.str();
 
   // machine-readable results and figures
   const nlohmann::json j = diagnosis_json(d);

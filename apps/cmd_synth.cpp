@@ -55,7 +55,9 @@ vehicle::Scenario varied_inputs(vehicle::Scenario sc, double v, unsigned seed) {
     if (points.size() > 2) {
       // the inner points move together; the first and last stay
       const double first = points[1].first, last = points[points.size() - 2].first;
-      shift = std::clamp(shift, -0.5 * first, 0.5 * (std::min(sc.duration, points.back().first) - last));
+      const double lo = -0.5 * std::max(0.0, first - points.front().first);
+      const double hi = 0.5 * std::max(0.0, std::min(sc.duration, points.back().first) - last);
+      shift = std::clamp(shift, lo, hi);
     }
     for (size_t i = 0; i < points.size(); ++i) {
       points[i].second *= scale;

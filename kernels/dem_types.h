@@ -49,7 +49,7 @@ typedef struct {
   tl_int particles;       // number of particles
   tl_int geoms;           // number of static geometries
   tl_float speculative;   // extra contact distance for fast approach, 2 h v_max [m]
-  // cohesion of particle pairs within the contact margin: the tensile force a pair holds is
+  // cohesion of particle pairs closer than margin_rel R*: the tensile force a pair holds is
   // cohesion R*^2 [N]
   // (terrain/particles.hpp Material::cohesion, Rumpf's law); 0 for dry gravel
   tl_float cohesion;

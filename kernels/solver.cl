@@ -41,8 +41,9 @@ __kernel void prepare_rows(__global const TlContact* contacts, __global const in
   float d_t = inv_m + wa.w * dot(arm_a, arm_a) + wb.w * dot(arm_b, arm_b);
   float d_r = wa.w + wb.w;
 
-  // cohesion: a particle pair closer than the contact margin (margin_rel R*, a liquid bridge's
-  // reach) holds a tensile impulse up to h F_c, F_c = cohesion R*^2. The margin, not touch, since
+  // cohesion: a particle pair closer than margin_rel R* (a liquid bridge's reach; half the narrow
+  // phase's margin for equal spheres) holds a tensile impulse up to h F_c, F_c = cohesion R*^2.
+  // A reach, not touch, since
   // the compliant row holds a pulled pair a hair apart (gap = eps F_c > 0). A speculative contact
   // further apart, or one with the ground, a wall or the bucket, holds none: a bond breaks when
   // the pair separates

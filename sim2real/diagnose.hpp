@@ -16,14 +16,16 @@
 //     maximises the likelihood (Residuals::log_ratio), the scan and the decisions use the excess
 //  4. validation: each fitted candidate on the held-out runs; its score is the validation excess
 //     plus kParameterPenalty per fitted parameter, so a richer effect must earn its parameters
+//     (the calibration excess when the held-out runs show nothing to explain, see 5)
 //  5. decision: the best-scoring candidate is added when it removes at least kMinExplained of the
 //     validation excess that is left, else the round adds nothing. Held-out runs that show no
 //     excess (an effect that needs a manoeuvre they lack) cannot confirm a candidate, only refute
 //     it: then the share explained is the calibration runs', if the candidate keeps the held-out
 //     runs within noise
 // Rounds repeat (each fits one more effect on top of those added, which keep their values) until
-// the excess left is within noise, nothing qualifies, or max_effects are added. "Unexplained"
-// means an excess beyond noise remains at the end.
+// every run's excess is within noise, nothing qualifies, or max_effects are added. "Unexplained"
+// means some run keeps an excess beyond noise at the end. Candidates with more than two
+// parameters are not fitted (the report says so); all built-ins have one.
 #pragma once
 #include <cstddef>
 #include <functional>
@@ -48,10 +50,10 @@ inline constexpr int kFitEvaluations = 24;
 // a winner must remove this share of the excess left (on the validation runs)
 inline constexpr double kMinExplained = 0.5;
 // the excess one fitted parameter must pay for, per run (in the units of Residuals::excess: one
-// channel-phase cell whose residual is 1.2 times the noise allowance)
+// channel-phase cell whose mean-square residual is e^0.2 = 1.22 times the noise allowance)
 inline constexpr double kParameterPenalty = 0.2;
-// a run's excess below this counts as within noise (one cell at 1.28 times the allowance, or a
-// few cells barely above it)
+// a run's excess below this counts as within noise (one cell whose mean-square residual is
+// e^0.5 = 1.65 times the allowance, or a few cells barely above it)
 inline constexpr double kSignificantExcess = 0.5;
 
 // one candidate: an effect, with its channel option fixed for channel-bound effects
@@ -109,7 +111,7 @@ struct Diagnosis {
   std::vector<DiagnosisRound> rounds;
   std::vector<FittedEffect> found;        // the effects added, in order
   double excess_before = 0.0, excess_after = 0.0;  // mean per run, all runs
-  bool unexplained = false;
+  bool unexplained = false;               // some run keeps an excess beyond noise
   std::vector<std::optional<double>> scan_rms_m;   // per run (pile scenarios)
   int simulations = 0;
   double wall_s = 0.0;

@@ -67,9 +67,11 @@ vehicle::Scenario measured_scenario(const MeasuredRun& measured) {
   sc.lift = vehicle::PiecewiseLinear(measured.meta.lift);
   sc.tilt = vehicle::PiecewiseLinear(measured.meta.tilt);
   if (sc.pile) sc.pile_toe_x = measured.meta.pile_toe_x_m;
-  // as long as the measurement, so every measured sample has a simulated one
+  // as long as the measurement, rounded up to whole steps of any level (20 ms, D400's, is a multiple
+  // of every timestep: 2.5, 5, 10, 20 ms), so every measured sample has a simulated one
+  constexpr double kStepGrain = 0.02;  // s
   const auto& t = measured.run.series[Channel::t];
-  if (!t.empty()) sc.duration = std::max(sc.duration, t.back());
+  if (!t.empty()) sc.duration = std::max(sc.duration, std::ceil(t.back() / kStepGrain - 1e-9) * kStepGrain);
   if (measured.run.summary.dig_start_s) sc.dig_start = *measured.run.summary.dig_start_s;
   if (measured.run.summary.dig_end_s) sc.dig_end = *measured.run.summary.dig_end_s;
   return sc;

@@ -14,6 +14,9 @@ namespace {
 constexpr double kMadToSigma = 1.4826;
 // the floor of σ relative to the channel's largest magnitude (see noise_sigma)
 constexpr double kSigmaFloor = 1e-6;
+// and never below this, in the channel's SI unit, for a channel that is zero throughout (its σ²
+// must stay a normal double: 1e-300 squared underflows to 0 and makes the excess NaN)
+constexpr double kSigmaAbsoluteFloor = 1e-12;
 // derivatives of measured channels by central differences over ±this many samples (0.2 s at
 // 100 Hz): long enough that 1 mm of stroke noise makes only 7 mm/s of rate noise
 constexpr int kDerivativeHalfWidth = 10;
@@ -61,7 +64,7 @@ double noise_sigma(const std::vector<double>& x) {
   const double centre = median(d2);
   for (double& v : d2) v = std::abs(v - centre);
   const double sigma = kMadToSigma * median(d2) / std::sqrt(6.0);
-  return std::max(sigma, kSigmaFloor * largest + 1e-300);
+  return std::max(sigma, std::max(kSigmaFloor * largest, kSigmaAbsoluteFloor));
 }
 
 std::vector<double> noise_sigmas(const TimeSeries& measured) {
@@ -127,9 +130,11 @@ Residuals compute_residuals(const Run& simulated, const Run& measured, const std
       cell.rms = std::sqrt(mse);
       cell.excess = std::log(std::max(mse / (kNoiseAllowance * sigma[c] * sigma[c]), 1.0));
       out.excess += cell.excess;
-      // the smallest ratio counted: a residual a thousandth of the noise is as good as none
+      // the Gaussian log-likelihood's cell term, weighted by the cell's share of the channel's
+      // samples (a short phase counts for its length); the smallest ratio counted: a residual a
+      // thousandth of the noise is as good as none
       constexpr double kSmallestRatio = 1e-6;
-      out.log_ratio += std::log(std::max(mse / (sigma[c] * sigma[c]), kSmallestRatio));
+      out.log_ratio += double(cell.samples) / double(tm.size()) * std::log(std::max(mse / (sigma[c] * sigma[c]), kSmallestRatio));
       out.cells.push_back(cell);
     }
   }

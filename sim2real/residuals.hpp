@@ -33,7 +33,7 @@ double noise_sigma(const std::vector<double>& x);
 // σ of every channel of a measured run (index as kChannelNames; t's entry is 0)
 std::vector<double> noise_sigmas(const TimeSeries& measured);
 
-// a phase of a run: approach [start, dig_start), dig [dig_start, dig_end], after (dig_end, end];
+// a phase of a run: approach [start, dig_start), dig [dig_start, dig_end), after [dig_end, end];
 // a run without phase marks is one phase, "run"
 struct Phase {
   std::string name;
@@ -55,9 +55,10 @@ struct Residuals {
   std::vector<Phase> phases;
   std::vector<ResidualCell> cells;  // channel-major: (f_lift, phase 0), (f_lift, phase 1), ...
   double excess = 0.0;              // summed over the cells
-  // Σ ln(MSE / σ²) over the cells, not floored: the Gaussian log-likelihood with one variance per
-  // cell up to constants, which fits take as their objective (the floored excess is flat near the
-  // optimum and would leave a parameter anywhere within the noise)
+  // Σ (n_cell / n) ln(MSE / σ²) over the cells, not floored: the Gaussian log-likelihood with one
+  // variance per cell up to constants and a factor n/2 per channel, which fits take as their
+  // objective (the floored excess is flat near the optimum and would leave a parameter anywhere
+  // within the noise)
   double log_ratio = 0.0;
   // the excess of the cells of these channels (an effect's signature)
   double excess_of(const std::vector<std::size_t>& channels) const;

@@ -493,7 +493,7 @@ std::vector<Row> prepare_rows(const std::vector<Contact>& contacts, const std::v
                  b.inv_inertia * con.arm_b.squaredNorm();
     double d_r = a.inv_inertia + b.inv_inertia;
 
-    // cohesion: a particle pair within the contact margin (margin_rel R*) holds a tensile impulse
+    // cohesion: a particle pair closer than margin_rel R* holds a tensile impulse
     // up to h F_c, F_c = cohesion R*^2 (kernels/solver.cl explains the margin)
     double cohesion = con.b >= 0 && con.gap <= p.margin_rel * con.reduced_radius
                           ? h * p.cohesion * con.reduced_radius * con.reduced_radius
