@@ -83,10 +83,10 @@ void synthesise(const fs::path& base, const std::string& effect_args, unsigned s
   }
 }
 
-nlohmann::json diagnose(const fs::path& base) {
+nlohmann::json diagnose(const fs::path& base, const std::string& extra_args = "") {
   const fs::path json = base / "diagnosis.json";
   const std::string cmd = kTalus + " diagnose --quiet --data " + (base / "run0").string() + " " + (base / "run1").string() +
-                          " --json " + json.string() + " > " + (base / "report.md").string();
+                          " --json " + json.string() + extra_args + " > " + (base / "report.md").string();
   EXPECT_EQ(exit_code(cmd), 0) << cmd;
   return nlohmann::json::parse(std::ifstream(json));
 }
@@ -123,10 +123,14 @@ TEST(DiagnoseTest, AddsNothingToEffectFreeDataWithNoise) {
   const fs::path base = fs::temp_directory_path() / ("talus_diagnose_noise_" + std::to_string(seed));
   fs::remove_all(base);
   synthesise(base, "", seed);
-  const auto j = diagnose(base);
+  const auto j = diagnose(base, " --out " + (base / "out").string());
   EXPECT_TRUE(j["effects_found"].empty()) << "TALUS_TEST_SEED=" << seed << ": " << j["effects_found"].dump();
   EXPECT_FALSE(j["unexplained"].get<bool>()) << "TALUS_TEST_SEED=" << seed;
   EXPECT_EQ(j["error_before"]["mean"], j["error_after"]["mean"]);
+  // --out: the report, the JSON, the tables and a channel figure per run
+  for (const char* file : {"report.md", "diagnosis.json", "errors-before.csv", "errors-after.csv",
+                           "0-load-carry-field-channels.png", "1-load-carry-field-channels.png"})
+    EXPECT_GT(fs::file_size(base / "out" / file), 100u) << file;
   fs::remove_all(base);
 }
 
