@@ -495,7 +495,9 @@ std::vector<Row> prepare_rows(const std::vector<Contact>& contacts, const std::v
 
     // cohesion: a particle pair closer than margin_rel R* holds a tensile impulse
     // up to h F_c, F_c = cohesion R*^2 (kernels/solver.cl explains the margin)
-    double cohesion = con.b >= 0 && con.gap <= p.margin_rel * con.reduced_radius
+    // (the reach is compared in float, as the kernel does, so a pair at the boundary decides alike)
+    const float reach = static_cast<float>(p.margin_rel) * static_cast<float>(con.reduced_radius);
+    double cohesion = con.b >= 0 && static_cast<float>(con.gap) <= reach
                           ? h * p.cohesion * con.reduced_radius * con.reduced_radius
                           : 0.0;
 
