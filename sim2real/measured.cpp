@@ -125,6 +125,12 @@ void save_metadata(const fs::path& file, const MeasuredMetadata& m) {
 }
 
 MeasuredRun load_measured_run(const fs::path& dir) {
+  // a folder that is not a measured run at all: say what one holds
+  for (const char* file : {kTimeseriesFile, kSummaryFile, kMetadataFile})
+    if (!fs::exists(dir / file))
+      throw InputError(dir.string() + ": not a measured run: no " + file + "; a measured run folder holds " +
+                       kTimeseriesFile + ", " + kSummaryFile + " and " + kMetadataFile + " (docs/measured-data.md; " +
+                       "talus synth writes one)");
   MeasuredRun r;
   r.run = load_run(dir);
   const fs::path file = dir / kMetadataFile;

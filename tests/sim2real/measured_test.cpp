@@ -74,6 +74,19 @@ TEST(MeasuredRun, RoundTrip) {
   EXPECT_EQ(r.run.series.size(), test::reference_series().size());
 }
 
+TEST(MeasuredRun, AFolderWithoutTheFilesSaysWhatAMeasuredRunHolds) {
+  const fs::path dir = write_run("measured_missing_file");
+  fs::remove(dir / kMetadataFile);
+  try {
+    load_measured_run(dir);
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("not a measured run: no metadata.json"), std::string::npos) << what;
+    EXPECT_NE(what.find("docs/measured-data.md"), std::string::npos) << what;
+  }
+}
+
 TEST(MeasuredRun, MalformedMetadataNamesFileAndField) {
   const std::vector<std::pair<std::string, std::function<void(nlohmann::json&)>>> cases = {
       {"'format'", [](nlohmann::json& j) { j["format"] = "csv"; }},
