@@ -221,27 +221,30 @@ Diagnosis diagnose(const std::vector<MeasuredRun>& runs, const DiagnoseOptions& 
   };
 
   // the baseline: residuals and the paper's error rows
-  std::vector<double> baseline_excess(n);
   for (std::size_t i = 0; i < n; ++i) {
     Run r = simulate(i, nullptr);
     r.summary.fidelity = "baseline";
     d.simulated_before.push_back(r);
     d.residuals_before.push_back(compute_residuals(r, runs[i].run, sigma[i]));
-    baseline_excess[i] = d.residuals_before.back().excess;
     const Comparison c = compare_runs(r, runs[i].run, CompareOptions{});
     d.error_before.push_back({runs[i].run.label(), c.e, c.mean});
     d.scan_rms_m.push_back(replays[i]->scan_rms_m());
   }
-  d.excess_before = mean_of(baseline_excess);
-  say("baseline: excess " + format_number(d.excess_before) + " per run (noise alone leaves less than " +
-      format_number(kSignificantExcess) + "), mean error " + format_number(mean_row(d.error_before, "").mean));
-  auto mean_over = [&](const std::vector<std::size_t>& which, const std::vector<double>& per_run) {
+  // the mean excess of some runs' residuals
+  auto mean_excess = [](const std::vector<Residuals>& res, const std::vector<std::size_t>& which) {
     std::vector<double> v;
-    for (std::size_t i : which) v.push_back(per_run[i]);
+    for (std::size_t i : which) v.push_back(res[i].excess);
     return mean_of(v);
   };
-  double current_cal = mean_over(d.calibration, baseline_excess);
-  double current_val = mean_over(d.validation, baseline_excess);
+  std::vector<std::size_t> all(n);
+  for (std::size_t i = 0; i < n; ++i) all[i] = i;
+  d.excess_before = mean_excess(d.residuals_before, all);
+  say("baseline: excess " + format_number(d.excess_before) + " per run (noise alone leaves less than " +
+      format_number(kSignificantExcess) + "), mean error " + format_number(mean_row(d.error_before, "").mean));
+  // the model with the effects found so far: every run's simulation and residuals
+  double current_cal = mean_excess(d.residuals_before, d.calibration);
+  double current_val = mean_excess(d.residuals_before, d.validation);
+  std::vector<Run> current_runs = d.simulated_before;
   std::vector<Residuals> current_residuals = d.residuals_before;
   const bool disjoint = d.validation != d.calibration;
   // the largest excess of any run under the current model: one run beyond noise is enough to
@@ -370,8 +373,11 @@ Diagnosis diagnose(const std::vector<MeasuredRun>& runs, const DiagnoseOptions& 
       found_specs.push_back(dr.fitted[0].spec);
       current_cal = dr.fitted[0].excess_calibration;
       current_val = dr.fitted[0].excess_validation;
-      current_residuals.clear();
-      for (std::size_t i = 0; i < n; ++i) current_residuals.push_back(compute_residuals(simulate(i, nullptr), runs[i].run, sigma[i]));
+      for (std::size_t i = 0; i < n; ++i) {
+        current_runs[i] = simulate(i, nullptr);
+        current_runs[i].summary.fidelity = "with-effects";
+        current_residuals[i] = compute_residuals(current_runs[i], runs[i].run, sigma[i]);
+      }
       say("round " + std::to_string(round + 1) + ": added " + dr.fitted[0].spec);
     } else {
       say("round " + std::to_string(round + 1) + ": no candidate explains " + format_number(100.0 * kMinExplained) +
@@ -381,25 +387,19 @@ Diagnosis diagnose(const std::vector<MeasuredRun>& runs, const DiagnoseOptions& 
     if (!d.rounds.back().added) break;
   }
 
-  // after: every run with the effects found
-  std::vector<double> after_excess(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    if (d.found.empty()) {
-      d.simulated_after.push_back(d.simulated_before[i]);
-      d.residuals_after.push_back(d.residuals_before[i]);
-      d.error_after.push_back(d.error_before[i]);
-    } else {
-      Run r = simulate(i, nullptr);
-      r.summary.fidelity = "with-effects";
-      d.simulated_after.push_back(r);
-      d.residuals_after.push_back(compute_residuals(r, runs[i].run, sigma[i]));
-      const Comparison c = compare_runs(r, runs[i].run, CompareOptions{});
+  // after: the runs with the effects found (the last round's simulations)
+  d.simulated_after = current_runs;
+  d.residuals_after = current_residuals;
+  if (d.found.empty()) {
+    d.error_after = d.error_before;
+  } else {
+    for (std::size_t i = 0; i < n; ++i) {
+      const Comparison c = compare_runs(current_runs[i], runs[i].run, CompareOptions{});
       d.error_after.push_back({runs[i].run.label(), c.e, c.mean});
     }
-    after_excess[i] = d.residuals_after.back().excess;
   }
-  d.excess_after = mean_of(after_excess);
-  d.unexplained = *std::max_element(after_excess.begin(), after_excess.end()) >= kSignificantExcess;
+  d.excess_after = mean_excess(d.residuals_after, all);
+  d.unexplained = worst_run() >= kSignificantExcess;
   d.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return d;
 }
