@@ -23,6 +23,51 @@ bool in_profile(const std::vector<Vec3>& profile, double x, double z) {
   return inside;
 }
 
+// the radical inverse of i in `base` (a coordinate of the Halton sequence)
+double radical_inverse(int i, int base) {
+  double f = 1.0, r = 0.0;
+  for (; i > 0; i /= base) {
+    f /= base;
+    r += f * static_cast<double>(i % base);
+  }
+  return r;
+}
+
+// kBallPoints points evenly spread through the unit ball: the Halton points (bases 2, 3, 5) of the
+// cube [-1, 1]^3 that fall inside it. Quasi-random rather than a lattice, so that no plane of the
+// bucket lines up with a layer of points
+const std::vector<Vec3>& unit_ball_points() {
+  static const std::vector<Vec3> points = [] {
+    std::vector<Vec3> out;
+    for (int i = 1; static_cast<int>(out.size()) < kBallPoints; ++i) {
+      const Vec3 u(2.0 * radical_inverse(i, 2) - 1.0, 2.0 * radical_inverse(i, 3) - 1.0,
+                   2.0 * radical_inverse(i, 5) - 1.0);
+      if (u.squaredNorm() <= 1.0) out.push_back(u);
+    }
+    return out;
+  }();
+  return points;
+}
+
+// a box in the profile frame that holds the whole heaped volume: the profile, and the strike
+// rectangle raised by the heap's highest point (half the distance to its nearest edge, at most)
+Aabb heaped_bounds(const vehicle::BucketMesh& mesh) {
+  Aabb box{Vec3::Constant(1e300), Vec3::Constant(-1e300)};
+  const double half_width = 0.5 * mesh.inner_width;
+  const double length = (mesh.profile.back() - mesh.profile.front()).norm();
+  const double apex = kHeapSlope * std::min(0.5 * length, half_width);
+  for (const Vec3& p : mesh.profile) {
+    box.lo = box.lo.cwiseMin(p);
+    box.hi = box.hi.cwiseMax(p);
+  }
+  // the heap rises along the strike line's normal, a unit vector in the x-z plane
+  box.lo -= Vec3(apex, 0.0, apex);
+  box.hi += Vec3(apex, 0.0, apex);
+  box.lo.y() = -half_width;
+  box.hi.y() = half_width;
+  return box;
+}
+
 }  // namespace
 
 bool in_struck_volume(const vehicle::BucketMesh& mesh, const Vec3& local) {
@@ -59,9 +104,25 @@ std::vector<int> particles_in_bucket(const Particles& particles, const vehicle::
   return out;
 }
 
+double heaped_fraction(const vehicle::BucketMesh& mesh, const Vec3& local_centre, double radius) {
+  int inside = 0;
+  for (const Vec3& u : unit_ball_points())
+    if (in_heaped_volume(mesh, local_centre + radius * u)) ++inside;
+  return static_cast<double>(inside) / static_cast<double>(kBallPoints);
+}
+
 double loaded_mass(const Particles& particles, const vehicle::BucketMesh& mesh, const BucketPose& pose) {
+  if (mesh.profile.size() < 3) return 0.0;
+  const Aabb bounds = heaped_bounds(mesh);
   double m = 0.0;
-  for (int i : particles_in_bucket(particles, mesh, pose)) m += particles.mass(i);
+  for (size_t i = 0; i < particles.size(); ++i) {
+    if (particles.inv_mass[i] <= 0.0) continue;
+    const Vec3 local = pose.to_local(particles.position[i]);
+    const double r = particles.radius[i];
+    // a ball wholly outside the heaped volume's box holds nothing in it
+    if ((local.array() < bounds.lo.array() - r).any() || (local.array() > bounds.hi.array() + r).any()) continue;
+    m += particles.mass(i) * heaped_fraction(mesh, local, r);
+  }
   return m;
 }
 
