@@ -1,0 +1,154 @@
+#include "solvers/tool_world.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "host/error.hpp"
+
+namespace talus {
+
+void add_box(vehicle::BucketMesh& mesh, const Vec3& centre, const Vec3& half) {
+  const int base = static_cast<int>(mesh.vertices.size());
+  // corners: bit 0 of k picks +x, bit 1 +y, bit 2 +z
+  for (int k = 0; k < 8; ++k)
+    mesh.vertices.push_back(centre + Vec3((k & 1) ? half.x() : -half.x(), (k & 2) ? half.y() : -half.y(),
+                                          (k & 4) ? half.z() : -half.z()));
+  // two triangles per face, wound counter-clockwise seen from outside
+  const int faces[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (const auto& f : faces) {
+    mesh.triangles.push_back({base + f[0], base + f[1], base + f[2]});
+    mesh.triangles.push_back({base + f[0], base + f[2], base + f[3]});
+  }
+}
+
+// one tool's device side and its warm-start memory
+struct ToolWorld::Side {
+  Side(Device& dev, Tool t, const embree::Device& embree)
+      : tool(std::move(t)), scene(tool.mesh, embree), selection(dev), block(dev) {
+    for (const Vec3& v : scene.vertices()) reach = std::max(reach, v.norm());
+  }
+  Tool tool;
+  BucketScene scene;
+  DeviceBoxSelection selection;
+  BucketRowBlock block;
+  double reach = 0.0;  // largest distance of a vertex from the tool's origin [m]
+  // this step's rows, their contacts and candidates; last step's impulses for the warm start
+  std::vector<reference::Row> rows;
+  std::vector<int> candidates;
+  std::vector<BucketImpulse> previous;
+  ToolLoad load;
+};
+
+ToolWorld::ToolWorld(Device& dev, DemWorld& dem, std::vector<Tool> tools, const embree::Device& embree)
+    : dev_(dev), dem_(dem) {
+  for (size_t i = 0; i < tools.size(); ++i) {
+    const Tool& t = tools[i];
+    const std::string field = "tool " + std::to_string(i);
+    if (!(t.material.friction >= 0.0) || !(t.material.rolling >= 0.0))
+      throw InputError(field + ": friction and rolling must not be negative");
+    if (!t.mobility.bottomRows<3>().isZero(0.0))
+      throw InputError(field + ": mobility turns the tool; tools translate only (angular rows must be zero)");
+    sides_.push_back(std::make_unique<Side>(dev, t, embree));
+  }
+}
+
+ToolWorld::~ToolWorld() = default;
+
+size_t ToolWorld::size() const { return sides_.size(); }
+Tool& ToolWorld::tool(size_t i) { return sides_.at(i)->tool; }
+const Tool& ToolWorld::tool(size_t i) const { return sides_.at(i)->tool; }
+const ToolLoad& ToolWorld::load(size_t i) const { return sides_.at(i)->load; }
+
+void ToolWorld::step() {
+  const double h = dem_.settings().dt;
+  dem_.begin_step();
+  const reference::StepParams params = reference::from_device(dem_.params());
+  const double r_max = dem_.max_radius();
+
+  // each tool: candidates near it, their contacts, rows warm-started from last step's impulses
+  for (auto& side : sides_) {
+    Tool& t = side->tool;
+    side->load = ToolLoad{};
+    side->rows.clear();
+    side->candidates.clear();
+    BucketPose pose;
+    pose.position = t.position;
+    // what the tool and a particle can close within the step is covered by speculative rows
+    const double reach = 2.0 * h * (t.velocity.norm() + dem_.settings().max_speed);
+    std::vector<BucketContact> contacts;
+    Particles near;
+    if (dem_.size() > 0) {
+      const double margin_box = dem_.settings().margin_rel + reach / std::max(r_max, 1e-12);
+      const Aabb box = candidate_box(side->scene.world_bounds(pose), r_max, margin_box);
+      DemBuffers& b = dem_.buffers();
+      side->candidates = side->selection.select(b.position, dem_.size(), box);
+      near = side->block.gather(side->candidates, b.position, b.velocity, b.omega);
+      std::vector<int> local(side->candidates.size());
+      for (size_t k = 0; k < local.size(); ++k) local[k] = static_cast<int>(k);
+      double r_min = r_max;
+      for (double r : near.radius) r_min = std::min(r_min, r);
+      const double margin = dem_.settings().margin_rel + reach / std::max(r_min, 1e-12);
+      contacts = side->scene.find_bucket_contacts(near, local, pose, margin);
+    }
+    side->load.contacts = static_cast<int>(contacts.size());
+    for (const BucketContact& c : contacts)
+      side->load.max_overlap_rel = std::max(side->load.max_overlap_rel, -c.gap / near.radius[c.particle]);
+
+    std::vector<BucketContact> keyed = contacts;
+    for (auto& c : keyed) c.particle = side->candidates[c.particle];
+    const std::vector<int> match = dem_.settings().warm_start ? match_bucket_contacts(keyed, side->previous)
+                                                              : std::vector<int>();
+    BucketBody body;
+    body.velocity = t.velocity;
+    body.mobility = t.mobility;
+    side->rows = make_bucket_rows(contacts, near, body, t.position, params, t.material, side->previous, match);
+    set_bucket_effective_masses(side->rows, contacts, near, t.mobility);
+    // a loaded tool starts the sweeps from its velocity after its external force and the
+    // warm-start impulses (as the bucket starts from the vehicle solved under them)
+    Vec6 push = bucket_wrench_impulse(side->rows);
+    push.head<3>() += h * t.external_force;
+    body.velocity += (t.mobility * push).head<3>();
+    std::vector<TlRow> device_rows;
+    device_rows.reserve(side->rows.size());
+    for (const auto& r : side->rows) {
+      TlRow d = to_device(r);
+      d.a = side->candidates[r.a];
+      device_rows.push_back(d);
+    }
+    side->block.set_rows(device_rows);
+    side->block.set_bucket(body);
+  }
+
+  // velocities: gravity, warm starts, then every sweep over the particle rows and each tool's
+  dem_.apply_gravity();
+  dem_.warm_start();
+  if (dem_.settings().warm_start)
+    for (auto& side : sides_) side->block.warm_start(dem_.buffers().velocity, dem_.buffers().omega);
+  for (int it = 0; it < dem_.settings().iterations; ++it) {
+    dem_.sweep_fixed(1);
+    for (auto& side : sides_) side->block.sweep(dem_.buffers().velocity, dem_.buffers().omega);
+  }
+
+  // the tools' loads and (loaded tools) their new velocities; impulses kept for the warm start
+  for (auto& side : sides_) {
+    Tool& t = side->tool;
+    if (!side->rows.empty()) {
+      const std::vector<TlRow> solved = side->block.rows();
+      for (size_t k = 0; k < side->rows.size(); ++k) {
+        const reference::Row r = reference::from_device(solved[k]);
+        side->rows[k].impulse_n = r.impulse_n;
+        side->rows[k].impulse_t = r.impulse_t;
+        side->rows[k].impulse_r = r.impulse_r;
+      }
+    }
+    side->load.wrench = bucket_wrench_impulse(side->rows) / h;
+    if (!t.mobility.isZero(0.0)) t.velocity = side->block.bucket().velocity;
+    side->previous = bucket_impulses(side->rows, side->candidates);
+    std::stable_sort(side->previous.begin(), side->previous.end(),
+                     [](const BucketImpulse& a, const BucketImpulse& b) { return a.particle < b.particle; });
+  }
+  dem_.end_step();
+  for (auto& side : sides_) side->tool.position += h * side->tool.velocity;
+}
+
+}  // namespace talus

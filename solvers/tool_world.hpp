@@ -1,0 +1,77 @@
+// Rigid tools in the particle world: bodies that touch the particles through a triangle mesh but
+// are not part of the wheel loader — the blade of the cutting test, the moving ring and the
+// loading platen of the shear box (issue 11, terrain/shear_test and terrain/cutting_test).
+//
+// A tool is the bucket of the coupled step without the vehicle behind it. Its contacts come from
+// the same Embree closest-point queries (terrain/bucket_contacts), its rows are the same bucket
+// rows (solvers/bucket_rows), solved on the device by the same kernel after every particle sweep;
+// only the mobility W that the vehicle's direct solve gives the bucket is the tool's own:
+//   - kinematic (W = 0): the motion is prescribed, the particles cannot push the tool; the rows'
+//     impulses are the force the drive must supply (the cutting blade, the shear ring);
+//   - loaded (W = 1/M on the axes the tool may move along): a body of mass M, pulled by an
+//     external force (a platen's weight) and pushed by the particles within the same sweeps, so
+//     the coupling is as strong as the bucket's. Tools translate only: W's angular rows must be
+//     zero, so a tool never turns (a platen held level by its frame, a blade on rails).
+// Each tool is swept serially after the particle rows, one after another in index order, so a
+// step is deterministic like every other.
+#pragma once
+#include <memory>
+#include <vector>
+
+#include "host/device.hpp"
+#include "solvers/bucket_rows.hpp"
+#include "solvers/dem_world.hpp"
+#include "terrain/bucket_contacts.hpp"
+#include "terrain/bucket_selection.hpp"
+#include "terrain/embree.hpp"
+#include "vehicle/bucket_mesh.hpp"
+
+namespace talus {
+
+// appends a closed box (12 triangles, outward faces) with centre `centre` and half extents `half`,
+// in the mesh's own frame; the shell contacts of terrain/bucket_contacts make it solid from outside
+void add_box(vehicle::BucketMesh& mesh, const Vec3& centre, const Vec3& half);
+
+struct Tool {
+  vehicle::BucketMesh mesh;        // the triangles, in the tool's frame (profile and volumes unused)
+  Vec3 position = Vec3::Zero();    // of the tool's frame origin in the world [m]; arms are taken about it
+  Vec3 velocity = Vec3::Zero();    // of the tool [m/s]
+  // response to an impulse wrench about the origin (twist change per [N s; N m s]): zero for a
+  // kinematic tool, 1/M on the free axes of a loaded one; the angular rows must be zero
+  Mat6 mobility = Mat6::Zero();
+  Vec3 external_force = Vec3::Zero();  // [N], moves a loaded tool through its mobility (its weight)
+  BucketMaterial material;
+};
+
+// what the particles did to one tool in the last step
+struct ToolLoad {
+  Vec6 wrench = Vec6::Zero();      // mean wrench on the tool about its origin over the step [N, N m]
+  int contacts = 0;                // particle-tool contact rows
+  double max_overlap_rel = 0.0;    // deepest overlap at the step's start, in particle radii
+};
+
+class ToolWorld {
+ public:
+  // `dem` must outlive the world; throws InputError for a tool with no usable triangle, a negative
+  // material coefficient or a mobility that would turn it
+  ToolWorld(Device& dev, DemWorld& dem, std::vector<Tool> tools, const embree::Device& embree = embree::Device());
+  ~ToolWorld();
+
+  // one particle step with the tools' rows solved inside every sweep, then both sides move
+  void step();
+
+  size_t size() const;
+  // the tools; a kinematic tool's velocity may be changed between steps (its prescribed motion)
+  Tool& tool(size_t i);
+  const Tool& tool(size_t i) const;
+  const ToolLoad& load(size_t i) const;
+  DemWorld& dem() { return dem_; }
+
+ private:
+  struct Side;
+  Device& dev_;
+  DemWorld& dem_;
+  std::vector<std::unique_ptr<Side>> sides_;
+};
+
+}  // namespace talus

@@ -1,0 +1,143 @@
+// solvers/tool_world: rigid tools that touch the particles through a mesh. A kinematic plate
+// carries the weight of the grains on it, a loaded platen comes to rest on a bed with its weight
+// balanced by the grains, a tool that would turn is refused, and two runs are bit-identical.
+#include "solvers/tool_world.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <cstring>
+
+#include "host/error.hpp"
+#include "terrain/soil_sample.hpp"
+
+namespace talus {
+namespace {
+
+constexpr double kD = 0.1;  // particle diameter of these tests [m]
+
+// a bed of 0.1 m grains, 8 x 8 D, about 5 D deep, settled densely between four walls on a floor at z0
+struct Bed {
+  std::unique_ptr<DemWorld> dem;
+  double mass = 0.0;
+};
+
+Bed make_bed(Device& dev, double z0, unsigned seed) {
+  const double half = 4.0 * kD;
+  Particles p = emit_box_particles(Vec3(-half, -half, z0), Vec3(half, half, z0 + 12.0 * kD), kD, 2590.0,
+                                   0.6 * 64.0 * 5.0 * kD * kD * kD, seed);
+  std::vector<StaticGeom> walls = {StaticGeom::plane(Vec3(-half, 0, 0), Vec3::UnitX()),
+                                   StaticGeom::plane(Vec3(half, 0, 0), -Vec3::UnitX()),
+                                   StaticGeom::plane(Vec3(0, -half, 0), Vec3::UnitY()),
+                                   StaticGeom::plane(Vec3(0, half, 0), -Vec3::UnitY())};
+  DemSettings s;
+  s.dt = 0.005;
+  s.iterations = 50;
+  Bed b;
+  b.dem = std::make_unique<DemWorld>(dev, gravel(), s, Bounds{Vec3(-half - kD, -half - kD, z0 - 2 * kD),
+                                                               Vec3(half + kD, half + kD, z0 + 20 * kD)}, walls);
+  b.dem->set_particles(p);
+  for (size_t i = 0; i < p.size(); ++i) b.mass += p.mass(i);
+  return b;
+}
+
+TEST(ToolWorld, AKinematicPlateCarriesTheWeightOfTheGrainsOnIt) {
+  // the floor is a tool (a box whose top face is at z = 0), so all the weight goes through it
+  Device dev;
+  Bed b = make_bed(dev, 0.0, 3);
+  Tool floor;
+  add_box(floor.mesh, Vec3(0, 0, -0.5 * kD), Vec3(6 * kD, 6 * kD, 0.5 * kD));
+  ToolWorld tools(dev, *b.dem, {floor});
+  Vec3 mean = Vec3::Zero();
+  int n = 0;
+  for (int k = 0; k < 400; ++k) {
+    tools.step();
+    if (k >= 300) {
+      mean += tools.load(0).wrench.head<3>();
+      ++n;
+    }
+  }
+  mean /= n;
+  const double weight = b.mass * 9.81;
+  std::printf("[ measured ] plate carries %.1f N of %.1f N weight (%+.2f %%), %d contacts\n", -mean.z(), weight,
+              100.0 * (-mean.z() / weight - 1.0), tools.load(0).contacts);
+  EXPECT_NEAR(-mean.z(), weight, 0.01 * weight);
+  EXPECT_LT(std::abs(mean.x()) + std::abs(mean.y()), 0.01 * weight);
+  EXPECT_DOUBLE_EQ(tools.tool(0).position.z(), 0.0);  // kinematic at rest: it never moves
+}
+
+TEST(ToolWorld, ALoadedPlatenComesToRestWithItsWeightBalanced) {
+  // a platen of 500 kg, free along z only, dropped onto a settled bed on a static floor
+  Device dev;
+  Bed b = make_bed(dev, 0.0, 5);
+  std::vector<StaticGeom> geoms = b.dem->geoms();
+  geoms.push_back(StaticGeom::plane(Vec3::Zero(), Vec3::UnitZ()));
+  b.dem->set_geoms(geoms);
+  for (int k = 0; k < 200; ++k) b.dem->step();
+  const Particles settled = b.dem->particles();
+  const double mass = 500.0;
+  Tool platen;
+  add_box(platen.mesh, Vec3(0, 0, 0.5 * kD), Vec3(3.95 * kD, 3.95 * kD, 0.5 * kD));
+  platen.position = Vec3(0, 0, top_surface(settled, -1, 1, -1, 1) + 0.02 * kD);
+  platen.mobility(2, 2) = 1.0 / mass;
+  platen.external_force = Vec3(0, 0, -mass * 9.81);
+  ToolWorld tools(dev, *b.dem, {platen});
+  double push = 0.0, z_start = 0.0;
+  int n = 0;
+  for (int k = 0; k < 400; ++k) {
+    tools.step();
+    if (k == 300) z_start = tools.tool(0).position.z();
+    if (k >= 300) {
+      push += tools.load(0).wrench.z();
+      ++n;
+    }
+  }
+  push /= n;
+  const double sink = z_start - tools.tool(0).position.z();
+  std::printf("[ measured ] grains hold the platen with %.1f N against its %.1f N weight; it sank %.2e m in the "
+              "last 0.5 s\n", push, mass * 9.81, sink);
+  EXPECT_NEAR(push, mass * 9.81, 0.02 * mass * 9.81);
+  EXPECT_LT(std::abs(sink), 0.01 * kD);
+  EXPECT_GT(tools.tool(0).position.z(), 2.0 * kD);  // it rests on the bed, not through it
+}
+
+TEST(ToolWorld, AToolThatWouldTurnIsRefused) {
+  Device dev;
+  Bed b = make_bed(dev, 0.0, 1);
+  Tool t;
+  add_box(t.mesh, Vec3::Zero(), Vec3(kD, kD, kD));
+  t.mobility(3, 3) = 1.0;
+  EXPECT_THROW(ToolWorld(dev, *b.dem, {t}), InputError);
+}
+
+TEST(ToolWorld, TwoRunsAreBitIdentical) {
+  // a blade pushed through a bed: particles and the blade's force bit for bit the same
+  auto run = [](std::vector<float>& state, Vec6& load) {
+    Device dev;
+    Bed b = make_bed(dev, 0.0, 7);
+    std::vector<StaticGeom> geoms = b.dem->geoms();
+    geoms.push_back(StaticGeom::plane(Vec3::Zero(), Vec3::UnitZ()));
+    b.dem->set_geoms(geoms);
+    Tool blade;
+    add_box(blade.mesh, Vec3(0, 0, 0.3), Vec3(0.02, 0.35, 0.3));
+    blade.position = Vec3(-0.35, 0, 0.1);
+    blade.velocity = Vec3(0.5, 0, 0);
+    ToolWorld tools(dev, *b.dem, {blade});
+    for (int k = 0; k < 60; ++k) tools.step();
+    state.clear();
+    for (const cl_float4& v : b.dem->buffers().velocity.download(b.dem->size()))
+      for (int c = 0; c < 4; ++c) state.push_back(v.s[c]);
+    load = tools.load(0).wrench;
+  };
+  std::vector<float> a, b;
+  Vec6 la, lb;
+  run(a, la);
+  run(b, lb);
+  ASSERT_EQ(a.size(), b.size());
+  EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(float)), 0);
+  EXPECT_EQ(la, lb);
+  EXPECT_GT(std::abs(la.x()), 0.0);  // the blade did meet the grains
+}
+
+}  // namespace
+}  // namespace talus
