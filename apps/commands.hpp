@@ -18,5 +18,7 @@ void add_synth_command(CLI::App& app);   // field-like data with effects and noi
 void add_diagnose_command(CLI::App& app);  // the sim-to-real loop: residual -> missing effect
 void add_sweep_command(CLI::App& app);   // force-feedback sweep along the search line (MPI)
 void add_plot_command(CLI::App& app);    // paper-style PNG figures of runs
+void add_soil_command(CLI::App& app);    // calibration tests of the gravel: repose, shear, collapse
+void add_cut_command(CLI::App& app);     // quasi-static cutting test against the earthmoving equation
 
 }  // namespace talus::app

@@ -10,6 +10,8 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", "talus 0.1.0");
   talus::app::add_pile_command(app);
   talus::app::add_repose_command(app);
+  talus::app::add_soil_command(app);
+  talus::app::add_cut_command(app);
   talus::app::add_bench_command(app);
   talus::app::add_run_command(app);
   talus::app::add_sweep_command(app);
