@@ -1,0 +1,124 @@
+// talus cut: the quasi-static cutting test (terrain/cutting_test) at a fidelity level: a flat
+// vertical blade pushed at constant depth through a level bed, its mean horizontal force against
+// the fundamental earthmoving equation. Writes DIR/summary.json (force_N, fee_force_N, the force
+// series), DIR/cut.csv, DIR/cut.png, DIR/particles.csv (x,y,z,r,vx,vy,vz), particles.vtp, side.png.
+#include <chrono>
+#include <iostream>
+#include <sstream>
+
+#include "apps/commands.hpp"
+#include "host/device.hpp"
+#include "io/image.hpp"
+#include "io/output.hpp"
+#include "io/plot.hpp"
+#include "terrain/cutting_test.hpp"
+#include "terrain/pile.hpp"
+
+namespace talus::app {
+
+void add_cut_command(CLI::App& app) {
+  struct Options {
+    std::string level = "D200";
+    std::string out;
+    std::string json;
+    CuttingOptions cut;
+    Material material = gravel();
+    bool quiet = false;
+  };
+  auto opt = std::make_shared<Options>();
+  auto* cmd = app.add_subcommand("cut", "quasi-static cutting of a level bed by a flat blade, against the "
+                                        "fundamental earthmoving equation");
+  cmd->add_option("--level", opt->level, "fidelity level whose D, timestep and sweeps the test uses")->capture_default_str();
+  cmd->add_option("--depth", opt->cut.depth, "cutting depth below the bed's mean surface [m]")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd->add_option("--out", opt->out, "output folder (summary.json, cut.csv, cut.png, particles.csv, ...)")->required();
+  cmd->add_option("--json", opt->json, "also write the summary to this file ('-' for stdout)");
+  cmd->add_option("--speed", opt->cut.speed, "blade speed [m/s]")->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_option("--travel", opt->cut.travel, "blade travel [m]")->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_option("--phi", opt->cut.internal_friction_deg, "internal friction angle of the soil for the equation [deg]")
+      ->check(CLI::Range(1.0, 80.0))
+      ->capture_default_str();
+  cmd->add_option("--rolling", opt->material.rolling, "rolling resistance mu_r of the gravel")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  cmd->add_option("--seed", opt->cut.seed, "random seed of the bed")->capture_default_str();
+  cmd->add_flag("--quiet", opt->quiet, "no progress on stderr");
+  cmd->callback([opt] {
+    const FidelityPreset& level = fidelity_preset(opt->level);
+    make_output_dir(opt->out);
+    const auto t0 = std::chrono::steady_clock::now();
+    Device dev;
+    CuttingOptions c = opt->cut;
+    c.diameter = level.diameter;
+    c.dt = level.dt;
+    c.iterations = level.iterations;
+    Progress progress("cut " + level.name, 0.0, !opt->quiet);
+    const CuttingResult r = run_cutting_test(dev, opt->material, c, &progress);
+    progress.finish();
+
+    std::ostringstream csv;
+    csv << "travel_m,force_x_N,force_z_N\n";
+    Series force, fee;
+    nlohmann::json travel = nlohmann::json::array(), fx = nlohmann::json::array(), fz = nlohmann::json::array();
+    for (const CuttingSample& x : r.series) {
+      csv << x.travel << ',' << x.force_x << ',' << x.force_z << '\n';
+      travel.push_back(x.travel);
+      fx.push_back(x.force_x);
+      fz.push_back(x.force_z);
+      force.x.push_back(x.travel);
+      force.y.push_back(1e-3 * x.force_x);
+    }
+    write_file_atomically(opt->out + "/cut.csv", csv.str());
+    fee.x = {0.0, c.travel};
+    fee.y = {1e-3 * r.fee_force, 1e-3 * r.fee_force};
+    force.colour = series_colour(0);
+    force.label = "blade (talus " + level.name + ")";
+    fee.colour = Rgb{0, 0, 0};
+    fee.style = LineStyle::dashed;
+    fee.label = "earthmoving equation";
+    Figure fig;
+    fig.x_label = "blade travel [m]";
+    char title[160];
+    std::snprintf(title, sizeof title, "depth %.2f m: steady %.2f kN, equation %.2f kN", c.depth, 1e-3 * r.force,
+                  1e-3 * r.fee_force);
+    Panel& p = fig.add_panel("horizontal force [kN]", title);
+    p.series = {force, fee};
+    p.shaded.push_back(Range{0.0, r.steady_from});
+    fig.write_png(opt->out + "/cut.png", 900, 500);
+
+    nlohmann::json j = {{"level", level.name},
+                        {"diameter_m", level.diameter},
+                        {"dt_s", level.dt},
+                        {"iterations", level.iterations},
+                        {"depth_m", c.depth},
+                        {"width_m", r.width},
+                        {"speed_m_s", c.speed},
+                        {"force_N", r.force},
+                        {"force_spread_N", r.force_spread},
+                        {"fee_force_N", r.fee_force},
+                        {"force_over_fee", r.fee_force > 0.0 ? r.force / r.fee_force : 0.0},
+                        {"fee_failure_angle_deg", r.fee_failure_angle_deg},
+                        {"internal_friction_deg", c.internal_friction_deg},
+                        {"blade_friction", c.blade_friction},
+                        {"bed_density", r.bed_density},
+                        {"steady_from_m", r.steady_from},
+                        {"rolling_resistance", opt->material.rolling},
+                        {"seed", c.seed},
+                        {"particles", r.particles},
+                        {"sim_time_s", r.sim_time},
+                        {"wall_s", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()},
+                        {"device", dev.description()},
+                        {"series", {{"travel_m", travel}, {"force_x_N", fx}, {"force_z_N", fz}}}};
+    write_file_atomically(opt->out + "/particles.csv", particles_csv(r.final_state));
+    write_file_atomically(opt->out + "/particles.vtp", particles_vtp(r.final_state));
+    side_view(r.final_state).write_png(opt->out + "/side.png");
+    write_json(opt->out + "/summary.json", j);
+    if (opt->json == "-")
+      std::cout << j.dump(2) << "\n";
+    else if (!opt->json.empty())
+      write_json(opt->json, j);
+  });
+}
+
+}  // namespace talus::app

@@ -1,0 +1,166 @@
+#include "terrain/cutting_test.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "host/error.hpp"
+#include "solvers/tool_world.hpp"
+#include "terrain/soil_sample.hpp"
+
+namespace talus {
+
+namespace {
+
+constexpr double kGravity = 9.81;  // [m/s^2], as DemSettings::gravity
+constexpr double kDegree = M_PI / 180.0;
+
+// the mean height of the bed's surface over [x0, x1] x [y0, y1]: the highest top in each cell
+// of D x D, averaged over the cells
+double mean_surface(const Particles& p, double x0, double x1, double y0, double y1, double d) {
+  const int nx = std::max(1, static_cast<int>((x1 - x0) / d));
+  const int ny = std::max(1, static_cast<int>((y1 - y0) / d));
+  std::vector<double> top(static_cast<size_t>(nx * ny), 0.0);
+  for (size_t i = 0; i < p.size(); ++i) {
+    if (p.inv_mass[i] <= 0.0) continue;
+    const int ix = static_cast<int>((p.position[i].x() - x0) / d);
+    const int iy = static_cast<int>((p.position[i].y() - y0) / d);
+    if (ix < 0 || ix >= nx || iy < 0 || iy >= ny) continue;
+    double& t = top[static_cast<size_t>(iy * nx + ix)];
+    t = std::max(t, p.position[i].z() + p.radius[i]);
+  }
+  double sum = 0.0;
+  for (double t : top) sum += t;
+  return sum / static_cast<double>(top.size());
+}
+
+}  // namespace
+
+double fee_force(double density, double depth, double width, double rake_deg, double tool_friction_deg,
+                 double internal_friction_deg, double* beta_deg) {
+  const double alpha = rake_deg * kDegree, delta = tool_friction_deg * kDegree, phi = internal_friction_deg * kDegree;
+  // the failure angle that makes the force smallest, on a grid of 0.01 degrees
+  double best = 1e300, best_beta = 0.0;
+  for (int k = 1; k < 9000; ++k) {
+    const double beta = 0.01 * k * kDegree;
+    const double den = std::cos(alpha + delta) + std::sin(alpha + delta) / std::tan(beta + phi);
+    if (!(den > 0.0)) continue;  // the wedge cannot fail along this plane
+    const double n_gamma = (1.0 / std::tan(alpha) + 1.0 / std::tan(beta)) / (2.0 * den);
+    if (n_gamma < best) {
+      best = n_gamma;
+      best_beta = 0.01 * k;
+    }
+  }
+  if (beta_deg) *beta_deg = best_beta;
+  // the soil's force on the blade acts at delta from its normal: horizontal part sin(alpha + delta)
+  return density * kGravity * depth * depth * best * width * std::sin(alpha + delta);
+}
+
+CuttingResult run_cutting_test(Device& dev, const Material& material, const CuttingOptions& o, Progress* progress) {
+  if (!(o.diameter > 0.0) || !(o.dt > 0.0) || o.iterations < 1 || !(o.depth > 0.0) || !(o.speed > 0.0) ||
+      !(o.travel > 0.0) || !(o.blade_friction >= 0.0) || !(o.internal_friction_deg > 0.0))
+    throw InputError("cutting test options: diameter, dt, iterations, depth, speed, travel and friction angle "
+                     "must be positive");
+  CuttingResult result;
+  const double d = o.diameter;
+  // the bin: as wide as 10 D or 4 depths, long enough for the travel, the last wedge and a margin
+  const double width = std::max(10.0 * d, 4.0 * o.depth);
+  double beta = 0.0;
+  fee_force(1727.0, o.depth, width, 90.0, std::atan(o.blade_friction) / kDegree, o.internal_friction_deg, &beta);
+  const double wedge = o.depth / std::tan(beta * kDegree);
+  const double length = o.travel + 2.0 * wedge + 6.0 * d;
+  const double bed = o.depth + std::max(3.0 * d, 0.3);  // bed height over the rough base [m]
+  result.width = width;
+
+  // rough base, then the bed filled densely to the field's bulk density
+  Particles particles;
+  add_rough_base(particles, 0.5 * d, length - 0.5 * d, -0.5 * width + 0.5 * d, 0.5 * width - 0.5 * d, d,
+                 material.density);
+  const double solid = (1727.0 / material.density) * length * width * bed;
+  const Particles fill = emit_box_particles(Vec3(0.0, -0.5 * width, d), Vec3(length, 0.5 * width, d + 2.2 * bed), d,
+                                            material.density, solid, o.seed);
+  for (size_t i = 0; i < fill.size(); ++i) particles.add(fill.position[i], fill.radius[i], material.density);
+  result.particles = static_cast<int>(fill.size());
+  const StaticGeom floor = StaticGeom::plane(Vec3::Zero(), Vec3::UnitZ());
+  std::vector<StaticGeom> bin = {floor,
+                                 StaticGeom::plane(Vec3(length, 0, 0), -Vec3::UnitX()),
+                                 StaticGeom::plane(Vec3(0, -0.5 * width, 0), Vec3::UnitY()),
+                                 StaticGeom::plane(Vec3(0, 0.5 * width, 0), -Vec3::UnitY())};
+  std::vector<StaticGeom> filling = bin;
+  filling.push_back(StaticGeom::plane(Vec3::Zero(), Vec3::UnitX()));
+  const Bounds bounds{Vec3(-2.0 * d, -0.5 * width - d, 0.0), Vec3(length + d, 0.5 * width + d, d + 2.4 * bed + 4.0 * d)};
+  DemSettings settings;
+  settings.dt = o.dt;
+  settings.iterations = o.iterations;
+  DemWorld world(dev, material, settings, bounds, filling);
+  world.set_particles(particles);
+  settle_dense(world, material, 3.0, progress);
+  const Particles settled = world.particles();
+  const double surface = mean_surface(settled, 2.0 * d, length - 2.0 * d, -0.5 * width, 0.5 * width, d);
+  double solid_volume = 0.0;
+  for (size_t i = 0; i < settled.size(); ++i)
+    if (settled.inv_mass[i] > 0.0) solid_volume += 4.0 / 3.0 * M_PI * std::pow(settled.radius[i], 3);
+  result.bed_density = material.density * solid_volume / (length * width * (surface - d));
+  const double blade_bottom = surface - o.depth;
+  if (blade_bottom < 2.0 * d) throw InputError("cutting test: depth " + std::to_string(o.depth) + " m is deeper than the bed");
+
+  // the bed's face below the cut stays held; above it the blade takes the front wall's place
+  const double blade_thickness = 0.5 * d, blade_height = o.depth + 3.0 * d;
+  bin.push_back(StaticGeom::box(Vec3(-d, 0, 0.5 * blade_bottom), Vec3(d, 0.5 * width + d, 0.5 * blade_bottom),
+                                Eigen::Matrix3d::Identity()));
+  world.set_geoms(bin);
+  Tool blade;
+  add_box(blade.mesh, Vec3(-0.5 * blade_thickness, 0, 0.5 * blade_height),
+          Vec3(0.5 * blade_thickness, 0.5 * width - 0.1 * d, 0.5 * blade_height));
+  blade.position = Vec3(-0.01 * d, 0, blade_bottom);
+  blade.velocity = Vec3(o.speed, 0, 0);
+  blade.material.friction = o.blade_friction;
+  blade.material.rolling = material.rolling;
+  ToolWorld tools(dev, world, {blade});
+
+  // push: force means per quarter D of travel
+  const int window_steps = std::max(1, static_cast<int>(std::lround(0.25 * d / (o.speed * o.dt))));
+  const int steps = static_cast<int>(std::lround(o.travel / (o.speed * o.dt)));
+  Vec3 sum = Vec3::Zero();
+  int in_window = 0;
+  for (int k = 1; k <= steps; ++k) {
+    tools.step();
+    sum += tools.load(0).wrench.head<3>();
+    if (++in_window < window_steps && k < steps) continue;
+    CuttingSample x;
+    x.travel = k * o.speed * o.dt;
+    x.force_x = -sum.x() / in_window;
+    x.force_z = sum.z() / in_window;
+    result.series.push_back(x);
+    sum.setZero();
+    in_window = 0;
+    if (progress) {
+      char note[96];
+      std::snprintf(note, sizeof note, "blade at %.2f m, %.1f kN", x.travel, 1e-3 * x.force_x);
+      progress->update(world.time(), note);
+    }
+  }
+
+  // the steady part: after the first wedge has formed
+  result.steady_from = std::min(wedge, 0.5 * o.travel);
+  double mean = 0.0, square = 0.0;
+  int n = 0;
+  for (const CuttingSample& x : result.series)
+    if (x.travel >= result.steady_from) {
+      mean += x.force_x;
+      square += x.force_x * x.force_x;
+      ++n;
+    }
+  if (n > 0) {
+    mean /= n;
+    result.force = mean;
+    result.force_spread = std::sqrt(std::max(0.0, square / n - mean * mean));
+  }
+  result.fee_force = fee_force(result.bed_density, o.depth, width, 90.0, std::atan(o.blade_friction) / kDegree,
+                               o.internal_friction_deg, &result.fee_failure_angle_deg);
+  result.sim_time = world.time();
+  result.final_state = world.particles();
+  return result;
+}
+
+}  // namespace talus

@@ -1,0 +1,68 @@
+// The quasi-static cutting test (SPEC §2.5 and §7, issue 11): a flat vertical blade pushed at
+// constant depth and slow speed through a level bed of gravel; its mean horizontal force against
+// the fundamental earthmoving equation (FEE) of Reece 1965 / McKyes 1985 for the same depth,
+// width and soil. Built once for type D (particles) and, later, type G (issue 14).
+//
+// The bin: a bed of the level's particles as wide as the blade (between frictional side walls,
+// so the failure is planar as the FEE assumes), on a rough base, filled densely
+// (terrain/soil_sample). The blade is a kinematic tool (solvers/tool_world) 0.5 D thick with the
+// bucket-soil friction of the paper (0.2), its bottom `depth` below the bed's mean surface,
+// reaching 3 D above it; a wall under the blade's path holds the bed's face below the cut.
+//
+// The FEE for a cohesionless soil and no surcharge: F / w = rho g d^2 N_gamma with
+//   N_gamma = (cot alpha + cot beta) / (2 [cos(alpha + delta) + sin(alpha + delta) cot(beta + phi)])
+// (alpha rake angle from the horizontal, delta soil-tool friction angle, phi internal friction,
+// beta the failure plane's angle from the horizontal, the one that makes F smallest).
+// The steady part is the travel after the first failure wedge has formed (the wedge's length at
+// the surface, d cot beta) to the end. Soil heaps up in front of the blade as it goes (a
+// surcharge the q = 0 equation leaves out), so the force series is written too.
+#pragma once
+#include <vector>
+
+#include "io/progress.hpp"
+#include "solvers/dem_world.hpp"
+
+namespace talus {
+
+struct CuttingOptions {
+  double diameter = 0.2;        // mean D [m]
+  double dt = 0.01;             // [s]
+  int iterations = 500;         // PGS sweeps per step
+  unsigned seed = 1;
+  double depth = 0.3;           // cutting depth below the bed's mean surface [m]
+  double speed = 0.2;           // blade speed [m/s], quasi-static
+  double travel = 1.5;          // blade travel [m]
+  double blade_friction = 0.2;  // bucket-soil friction, paper §4.4
+  double internal_friction_deg = 32.0;  // phi of the FEE: the type-G soil of the paper (SPEC §2.5)
+};
+
+struct CuttingSample {
+  double travel = 0.0;      // [m]
+  double force_x = 0.0;     // horizontal force the blade needs against the soil [N]
+  double force_z = 0.0;     // vertical force of the soil on the blade [N] (up positive)
+};
+
+struct CuttingResult {
+  double force = 0.0;           // mean horizontal force over the steady part [N]
+  double force_spread = 0.0;    // standard deviation of the window means over the steady part [N]
+  double fee_force = 0.0;       // the FEE's value [N]
+  double fee_failure_angle_deg = 0.0;  // its beta
+  double steady_from = 0.0;     // start of the steady part [m of travel]
+  double width = 0.0;           // blade (and bed) width [m]
+  double bed_density = 0.0;     // bulk density of the bed [kg/m^3]
+  int particles = 0;
+  double sim_time = 0.0;
+  std::vector<CuttingSample> series;  // window means, one per D / 4 of travel
+  Particles final_state;
+};
+
+CuttingResult run_cutting_test(Device& dev, const Material& material, const CuttingOptions& options,
+                               Progress* progress = nullptr);
+
+// the FEE's horizontal force [N] on a blade of width `width` [m] at depth `depth` [m] in a
+// cohesionless soil of bulk density `density` [kg/m^3] with no surcharge; rake, soil-tool friction
+// and internal friction angles in degrees; `beta_deg` receives the failure angle that minimises it
+double fee_force(double density, double depth, double width, double rake_deg, double tool_friction_deg,
+                 double internal_friction_deg, double* beta_deg = nullptr);
+
+}  // namespace talus
