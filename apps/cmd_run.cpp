@@ -153,10 +153,18 @@ void write_render(const std::string& path, const Particles& particles, const veh
 
 // a pile scenario: build the pile at the level, dig, write everything
 void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::EffectSet& effects) {
-  const FidelityPreset& preset = fidelity_preset(o.fidelity);
+  FidelityPreset preset = fidelity_preset(o.fidelity);
+  if (o.dt > 0.0) preset.dt = o.dt;
+  if (o.iterations > 0) preset.iterations = o.iterations;
   const PileProfile placed = scenario_pile_profile(sc);
   DiggingOptions options;
   options.pile.seed = o.seed;
+  if (o.rolling >= 0.0) {
+    // the gravel's rolling resistance, between grains and against the bucket alike
+    options.soil.rolling = o.rolling;
+    options.coupling.material.rolling = o.rolling;
+  }
+  options.coupling.record_residual = o.residuals;
   options.sweep = parse_sweep(o.sweep, "--sweep");
   make_output_dir(o.out);
   const std::filesystem::path dir(o.out);
@@ -169,7 +177,9 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
   PileBuild pile;
   {
     Progress progress("pile " + preset.name, 1.5 * options.pile.max_time, !o.quiet);
-    pile = build_scenario_pile(dev, sc, placed, preset, options, &progress);
+    // the pile is the level's own whatever the dig's timestep and sweeps: a convergence study
+    // changes the dig alone
+    pile = build_scenario_pile(dev, sc, placed, fidelity_preset(o.fidelity), options, &progress);
     progress.finish(std::to_string(pile.particles.size()) + " particles");
   }
   const double pile_wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -220,6 +230,10 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
       {"scenario", sc.name},
       {"fidelity", preset.name},
       {"particles", static_cast<int>(pile.particles.size())},
+      {"dt_s", preset.dt},
+      {"iterations", preset.iterations},
+      {"rolling_resistance", options.soil.rolling},
+      {"seed", o.seed},
       {"loaded_mass_kg", loaded},
       {"work_J", vehicle::work_between(sim.log().samples(), sc.dig_start, sc.dig_end)},
       {"work_total_J", sim.log().work()},
@@ -241,6 +255,13 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
       {"device", dev.description()},
       {"reconstructed_inputs", true},
       {"effects", effects.to_json()}};
+  if (!sim.step_residuals().empty()) {
+    // the particle rows' residual at the end of each step with contacts: median and 95th percentile
+    std::vector<double> r = sim.step_residuals();
+    std::sort(r.begin(), r.end());
+    auto quantile = [&](double q) { return r[static_cast<size_t>(q * static_cast<double>(r.size() - 1))]; };
+    summary["step_residual_m_s"] = {{"median", quantile(0.5)}, {"p95", quantile(0.95)}, {"steps", r.size()}};
+  }
   if (sc.field_loaded_mass_kg > 0) {
     summary["field_loaded_mass_kg"] = sc.field_loaded_mass_kg;
     summary["field_work_J"] = sc.field_work_J;
@@ -298,6 +319,13 @@ void add_run_command(CLI::App& app) {
   cmd->add_option("--sweep", opts->sweep, "particle sweeps: pgs or jacobi")->capture_default_str();
   cmd->add_option("--seed", opts->seed, "random seed of the pile's particle sizes and jitter")->capture_default_str();
   cmd->add_flag("--quiet", opts->quiet, "no progress on stderr");
+  cmd->add_option("--rolling", opts->rolling, "study: the gravel's rolling resistance mu_r instead of its calibrated "
+                  "value (docs/dem.md)")->check(CLI::NonNegativeNumber);
+  cmd->add_option("--dt", opts->dt, "study: timestep [s] instead of the level's")->check(CLI::PositiveNumber);
+  cmd->add_option("--iterations", opts->iterations, "study: sweeps per step instead of the level's")
+      ->check(CLI::Range(1, 100000));
+  cmd->add_flag("--residuals", opts->residuals, "record the particle rows' residual at the end of every step "
+                "(summary: step_residual_m_s median and p95)");
   cmd->add_option("--effect", opts->effects,
                   "a model extension, NAME or NAME:key=value,key=value (repeatable, applied in order): "
                   "engine_power_sharing, hydraulic_lag, pump_flow_limit, cylinder_friction, wheel_slip_sensor, "

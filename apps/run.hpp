@@ -18,6 +18,13 @@ struct RunOptions {
   double snapshot_interval = 1.0;  // s; 0: no snapshots
   unsigned seed = 1;
   bool quiet = false;
+  // studies of the soil model and of convergence (issue 11): overrides of the gravel's rolling
+  // resistance and of the level's timestep and sweeps (negative / 0: the preset's), and the
+  // particle rows' residual recorded at the end of every step
+  double rolling = -1.0;
+  double dt = 0.0;
+  int iterations = 0;
+  bool residuals = false;
   std::vector<std::string> effects;         // NAME:key=value,...
   std::vector<std::string> effect_plugins;  // shared libraries
   // when set, this scenario instead of loading `scenario` (talus synth's varied operator inputs)

@@ -34,7 +34,7 @@ PileProfile scenario_pile_profile(const vehicle::Scenario& scenario) {
 PileBuild build_scenario_pile(Device& dev, const vehicle::Scenario& scenario, const PileProfile& placed,
                               const FidelityPreset& preset, const DiggingOptions& options, Progress* progress) {
   if (!scenario.pile) throw InputError(scenario.path + ": scenario '" + scenario.name + "' has no pile (\"pile\": false)");
-  PileBuild pile = build_pile(dev, placed, preset, gravel(), options.pile, progress);
+  PileBuild pile = build_pile(dev, placed, preset, options.soil, options.pile, progress);
   pile.bounds.lo.x() = std::min(pile.bounds.lo.x(), scenario.pile_toe_x - kCarryBack);
   pile.bounds.hi.z() = std::max(pile.bounds.hi.z(), kCarryHeight);
   return pile;
@@ -61,7 +61,7 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
   settings.sweep = options.sweep;
   settings.max_speed = options.max_particle_speed;
   // the soil: the dry gravel, or what the effects make of it (soil_cohesion)
-  Material soil = gravel();
+  Material soil = options.soil;
   if (effects_) soil.cohesion = effects_->soil().cohesion;
   dem_ = std::make_unique<DemWorld>(dev, soil, settings, pile.bounds, pile.geoms);
   dem_->set_particles(pile.particles);
@@ -108,6 +108,7 @@ void DiggingSimulation::step(double drive, double lift, double tilt) {
     if (s.residual >= split_->settings().tolerance) ++capped_steps_;
   }
   max_overlap_rel_ = std::max(max_overlap_rel_, s.max_overlap_rel);
+  if (s.particle_residual >= 0.0) residuals_.push_back(s.particle_residual);
 }
 
 double DiggingSimulation::loaded_mass() const {

@@ -27,6 +27,9 @@ struct DiggingOptions {
   // the fastest particle to expect [m/s] (speculative contacts, DemSettings::max_speed): gravel
   // thrown by the bucket moves at about the bucket's speed, 1-2 m/s in these scenarios
   double max_particle_speed = 2.0;
+  // the soil's contact material (the pile is built and dug with it): the paper's gravel unless a
+  // study changes it (talus run --rolling); the soil_cohesion effect adds its cohesion on top
+  Material soil = gravel();
 };
 
 // the scenario's pile profile (data/piles/NAME.json or a path; InputError naming the scenario's
@@ -75,6 +78,9 @@ class DiggingSimulation {
   double max_bucket_overlap_rel() const { return max_overlap_rel_; }
   // steps whose outer passes stopped at the limit with the residual still above the tolerance
   int steps_at_pass_limit() const { return capped_steps_; }
+  // the particle rows' RMS residual at the end of each step with particle contacts [m/s], when
+  // options.coupling.record_residual is set (empty otherwise)
+  const std::vector<double>& step_residuals() const { return residuals_; }
 
  private:
   Device& dev_;
@@ -90,6 +96,7 @@ class DiggingSimulation {
   int contact_steps_ = 0, max_passes_ = 0, capped_steps_ = 0;
   long pass_sum_ = 0;
   double max_residual_ = 0.0, max_overlap_rel_ = 0.0;
+  std::vector<double> residuals_;
 };
 
 }  // namespace talus

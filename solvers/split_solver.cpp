@@ -144,6 +144,7 @@ void SplitSolver::step() {
   stats_.wrench = impulse / h;
 
   // 6. both sides move; the bucket impulses are kept for the next warm start
+  if (settings_.record_residual) stats_.particle_residual = dem_.residual();
   previous_ = talus::bucket_impulses(rows, candidates);
   std::stable_sort(previous_.begin(), previous_.end(),
                    [](const BucketImpulse& a, const BucketImpulse& b) { return a.particle < b.particle; });

@@ -38,6 +38,9 @@ struct CouplingSettings {
   double tolerance = 1.0e-3;       // [m/s] bucket point-velocity disagreement that ends the passes
   // sweeps in each pass after the first, as a fraction of the step's iterations (at least one)
   double pass_sweep_fraction = 0.2;
+  // measure the particle rows' RMS residual at the end of every step (CouplingStats::
+  // particle_residual): one more kernel and a download per step, for convergence studies
+  bool record_residual = false;
 };
 
 // what one coupled step did
@@ -50,6 +53,7 @@ struct CouplingStats {
   Vec6 wrench = Vec6::Zero();  // mean wrench of the particles on the bucket over the step [N, N m]
   Vec6 impulse = Vec6::Zero(); // the same as an impulse over the step [N s, N m s]
   double embree_seconds = 0.0; // wall time of the Embree queries
+  double particle_residual = -1.0;  // RMS particle-row residual after the sweeps [m/s]; -1 unless recorded
 };
 
 class SplitSolver {
