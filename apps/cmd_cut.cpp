@@ -58,25 +58,28 @@ void add_cut_command(CLI::App& app) {
     progress.finish();
 
     std::ostringstream csv;
-    csv << "travel_m,force_x_N,force_z_N\n";
+    csv << "travel_m,force_x_N,force_z_N,surcharge_m,fee_force_N\n";
     Series force, fee;
-    nlohmann::json travel = nlohmann::json::array(), fx = nlohmann::json::array(), fz = nlohmann::json::array();
+    nlohmann::json travel = nlohmann::json::array(), fx = nlohmann::json::array(), fz = nlohmann::json::array(),
+                   heap = nlohmann::json::array(), fe = nlohmann::json::array();
     for (const CuttingSample& x : r.series) {
-      csv << x.travel << ',' << x.force_x << ',' << x.force_z << '\n';
+      csv << x.travel << ',' << x.force_x << ',' << x.force_z << ',' << x.surcharge << ',' << x.fee_force << '\n';
       travel.push_back(x.travel);
       fx.push_back(x.force_x);
       fz.push_back(x.force_z);
+      heap.push_back(x.surcharge);
+      fe.push_back(x.fee_force);
       force.x.push_back(x.travel);
       force.y.push_back(1e-3 * x.force_x);
+      fee.x.push_back(x.travel);
+      fee.y.push_back(1e-3 * x.fee_force);
     }
     write_file_atomically(opt->out + "/cut.csv", csv.str());
-    fee.x = {0.0, c.travel};
-    fee.y = {1e-3 * r.fee_force, 1e-3 * r.fee_force};
     force.colour = series_colour(0);
     force.label = "blade (talus " + level.name + ")";
     fee.colour = Rgb{0, 0, 0};
     fee.style = LineStyle::dashed;
-    fee.label = "earthmoving equation";
+    fee.label = "earthmoving equation (measured surcharge)";
     Figure fig;
     fig.x_label = "blade travel [m]";
     char title[160];
@@ -97,6 +100,7 @@ void add_cut_command(CLI::App& app) {
                         {"force_N", r.force},
                         {"force_spread_N", r.force_spread},
                         {"fee_force_N", r.fee_force},
+                        {"fee_force_level_bed_N", r.fee_force_level},
                         {"force_over_fee", r.fee_force > 0.0 ? r.force / r.fee_force : 0.0},
                         {"fee_failure_angle_deg", r.fee_failure_angle_deg},
                         {"internal_friction_deg", c.internal_friction_deg},
@@ -109,7 +113,8 @@ void add_cut_command(CLI::App& app) {
                         {"sim_time_s", r.sim_time},
                         {"wall_s", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()},
                         {"device", dev.description()},
-                        {"series", {{"travel_m", travel}, {"force_x_N", fx}, {"force_z_N", fz}}}};
+                        {"series", {{"travel_m", travel}, {"force_x_N", fx}, {"force_z_N", fz},
+                                    {"surcharge_m", heap}, {"fee_force_N", fe}}}};
     write_file_atomically(opt->out + "/particles.csv", particles_csv(r.final_state));
     write_file_atomically(opt->out + "/particles.vtp", particles_vtp(r.final_state));
     side_view(r.final_state).write_png(opt->out + "/side.png");

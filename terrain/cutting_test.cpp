@@ -37,7 +37,7 @@ double mean_surface(const Particles& p, double x0, double x1, double y0, double 
 }  // namespace
 
 double fee_force(double density, double depth, double width, double rake_deg, double tool_friction_deg,
-                 double internal_friction_deg, double* beta_deg) {
+                 double internal_friction_deg, double surcharge, double* beta_deg) {
   const double alpha = rake_deg * kDegree, delta = tool_friction_deg * kDegree, phi = internal_friction_deg * kDegree;
   // the failure angle that makes the force smallest, on a grid of 0.01 degrees
   double best = 1e300, best_beta = 0.0;
@@ -45,15 +45,17 @@ double fee_force(double density, double depth, double width, double rake_deg, do
     const double beta = 0.01 * k * kDegree;
     const double den = std::cos(alpha + delta) + std::sin(alpha + delta) / std::tan(beta + phi);
     if (!(den > 0.0)) continue;  // the wedge cannot fail along this plane
-    const double n_gamma = (1.0 / std::tan(alpha) + 1.0 / std::tan(beta)) / (2.0 * den);
-    if (n_gamma < best) {
-      best = n_gamma;
+    const double n_q = (1.0 / std::tan(alpha) + 1.0 / std::tan(beta)) / den;
+    // F / (rho g w) = d^2 N_gamma + h d N_q with N_gamma = N_q / 2
+    const double f = 0.5 * depth * depth * n_q + std::max(0.0, surcharge) * depth * n_q;
+    if (f < best) {
+      best = f;
       best_beta = 0.01 * k;
     }
   }
   if (beta_deg) *beta_deg = best_beta;
   // the soil's force on the blade acts at delta from its normal: horizontal part sin(alpha + delta)
-  return density * kGravity * depth * depth * best * width * std::sin(alpha + delta);
+  return density * kGravity * best * width * std::sin(alpha + delta);
 }
 
 CuttingResult run_cutting_test(Device& dev, const Material& material, const CuttingOptions& o, Progress* progress) {
@@ -66,7 +68,7 @@ CuttingResult run_cutting_test(Device& dev, const Material& material, const Cutt
   // the bin: as wide as 10 D or 4 depths, long enough for the travel, the last wedge and a margin
   const double width = std::max(10.0 * d, 4.0 * o.depth);
   double beta = 0.0;
-  fee_force(1727.0, o.depth, width, 90.0, std::atan(o.blade_friction) / kDegree, o.internal_friction_deg, &beta);
+  fee_force(1727.0, o.depth, width, 90.0, std::atan(o.blade_friction) / kDegree, o.internal_friction_deg, 0.0, &beta);
   const double wedge = o.depth / std::tan(beta * kDegree);
   const double length = o.travel + 2.0 * wedge + 6.0 * d;
   const double bed = o.depth + std::max(3.0 * d, 0.3);  // bed height over the rough base [m]
@@ -102,6 +104,7 @@ CuttingResult run_cutting_test(Device& dev, const Material& material, const Cutt
     if (settled.inv_mass[i] > 0.0) solid_volume += 4.0 / 3.0 * M_PI * std::pow(settled.radius[i], 3);
   result.bed_density = material.density * solid_volume / (length * width * (surface - d));
   const double blade_bottom = surface - o.depth;
+  const double tool_friction_deg = std::atan(o.blade_friction) / kDegree;
   if (blade_bottom < 2.0 * d) throw InputError("cutting test: depth " + std::to_string(o.depth) + " m is deeper than the bed");
 
   // the bed's face below the cut stays held; above it the blade takes the front wall's place
@@ -131,6 +134,11 @@ CuttingResult run_cutting_test(Device& dev, const Material& material, const Cutt
     x.travel = k * o.speed * o.dt;
     x.force_x = -sum.x() / in_window;
     x.force_z = sum.z() / in_window;
+    // the heap over the wedge in front of the blade, and the equation under it
+    const double front = tools.tool(0).position.x();
+    x.surcharge = mean_surface(world.particles(), front, front + wedge, -0.5 * width, 0.5 * width, d) - surface;
+    x.fee_force = fee_force(result.bed_density, o.depth, width, 90.0, tool_friction_deg, o.internal_friction_deg,
+                            x.surcharge);
     result.series.push_back(x);
     sum.setZero();
     in_window = 0;
@@ -143,21 +151,23 @@ CuttingResult run_cutting_test(Device& dev, const Material& material, const Cutt
 
   // the steady part: after the first wedge has formed
   result.steady_from = std::min(wedge, 0.5 * o.travel);
-  double mean = 0.0, square = 0.0;
+  double mean = 0.0, square = 0.0, fee = 0.0;
   int n = 0;
   for (const CuttingSample& x : result.series)
     if (x.travel >= result.steady_from) {
       mean += x.force_x;
       square += x.force_x * x.force_x;
+      fee += x.fee_force;
       ++n;
     }
   if (n > 0) {
     mean /= n;
     result.force = mean;
     result.force_spread = std::sqrt(std::max(0.0, square / n - mean * mean));
+    result.fee_force = fee / n;
   }
-  result.fee_force = fee_force(result.bed_density, o.depth, width, 90.0, std::atan(o.blade_friction) / kDegree,
-                               o.internal_friction_deg, &result.fee_failure_angle_deg);
+  result.fee_force_level = fee_force(result.bed_density, o.depth, width, 90.0, tool_friction_deg,
+                                     o.internal_friction_deg, 0.0, &result.fee_failure_angle_deg);
   result.sim_time = world.time();
   result.final_state = world.particles();
   return result;

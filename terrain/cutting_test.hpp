@@ -9,13 +9,17 @@
 // bucket-soil friction of the paper (0.2), its bottom `depth` below the bed's mean surface,
 // reaching 3 D above it; a wall under the blade's path holds the bed's face below the cut.
 //
-// The FEE for a cohesionless soil and no surcharge: F / w = rho g d^2 N_gamma with
-//   N_gamma = (cot alpha + cot beta) / (2 [cos(alpha + delta) + sin(alpha + delta) cot(beta + phi)])
+// The FEE for a cohesionless soil: F / w = rho g d^2 N_gamma + q d N_q with
+//   den = cos(alpha + delta) + sin(alpha + delta) cot(beta + phi)
+//   N_gamma = (cot alpha + cot beta) / (2 den),  N_q = (cot alpha + cot beta) / den
 // (alpha rake angle from the horizontal, delta soil-tool friction angle, phi internal friction,
-// beta the failure plane's angle from the horizontal, the one that makes F smallest).
-// The steady part is the travel after the first failure wedge has formed (the wedge's length at
-// the surface, d cot beta) to the end. Soil heaps up in front of the blade as it goes (a
-// surcharge the q = 0 equation leaves out), so the force series is written too.
+// beta the failure plane's angle from the horizontal, the one that makes F smallest); the blade's
+// horizontal force is F sin(alpha + delta). The soil the blade pushes heaps up in front of it
+// (the side walls keep it from spilling sideways), and that heap is a surcharge q on the failure
+// wedge: q = rho g h with h the heap's mean height above the original surface over the wedge's
+// length at the surface, d cot beta, measured from the particles in every window. The equation's
+// force is evaluated with the measured q window by window, so blade and equation are compared on
+// the same soil state. Steady part: from one wedge length of travel to the end.
 #pragma once
 #include <vector>
 
@@ -40,12 +44,15 @@ struct CuttingSample {
   double travel = 0.0;      // [m]
   double force_x = 0.0;     // horizontal force the blade needs against the soil [N]
   double force_z = 0.0;     // vertical force of the soil on the blade [N] (up positive)
+  double surcharge = 0.0;   // height of the heap over the wedge, above the original surface [m]
+  double fee_force = 0.0;   // the equation's horizontal force with that surcharge [N]
 };
 
 struct CuttingResult {
   double force = 0.0;           // mean horizontal force over the steady part [N]
   double force_spread = 0.0;    // standard deviation of the window means over the steady part [N]
-  double fee_force = 0.0;       // the FEE's value [N]
+  double fee_force = 0.0;       // the FEE's value, mean over the steady part [N]
+  double fee_force_level = 0.0; // the FEE's value for the level bed, no surcharge [N]
   double fee_failure_angle_deg = 0.0;  // its beta
   double steady_from = 0.0;     // start of the steady part [m of travel]
   double width = 0.0;           // blade (and bed) width [m]
@@ -60,9 +67,10 @@ CuttingResult run_cutting_test(Device& dev, const Material& material, const Cutt
                                Progress* progress = nullptr);
 
 // the FEE's horizontal force [N] on a blade of width `width` [m] at depth `depth` [m] in a
-// cohesionless soil of bulk density `density` [kg/m^3] with no surcharge; rake, soil-tool friction
-// and internal friction angles in degrees; `beta_deg` receives the failure angle that minimises it
+// cohesionless soil of bulk density `density` [kg/m^3] under a surcharge of `surcharge` [m] of the
+// same soil; rake, soil-tool friction and internal friction angles in degrees; `beta_deg`
+// receives the failure angle that minimises it
 double fee_force(double density, double depth, double width, double rake_deg, double tool_friction_deg,
-                 double internal_friction_deg, double* beta_deg = nullptr);
+                 double internal_friction_deg, double surcharge = 0.0, double* beta_deg = nullptr);
 
 }  // namespace talus

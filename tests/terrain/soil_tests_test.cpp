@@ -1,0 +1,89 @@
+// terrain/shear_test, collapse_test, cutting_test: the rules that turn measurements into angles,
+// run-out and forces, checked on made-up data with known answers, and the fundamental
+// earthmoving equation against Rankine's passive pressure, its closed form for a smooth wall.
+// The full tests on particles (and the soil anchors) are in soil_anchors_test.cpp.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+
+#include "terrain/collapse_test.hpp"
+#include "terrain/cutting_test.hpp"
+#include "terrain/shear_test.hpp"
+
+namespace talus {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+TEST(SoilTests, ShearAnglesOfAKnownCurve) {
+  // tau/sigma rises to tan 40 deg at 1 D, falls to tan 28 deg from 3 D on; the platen rises at
+  // tan 15 deg between 0.5 D and 1.5 D and stays level elsewhere (D = 0.2 m, a sample per 0.02 m)
+  const double d = 0.2;
+  std::vector<ShearSample> series;
+  double z = 0.0;
+  for (int k = 1; k <= 40; ++k) {
+    ShearSample x;
+    x.travel = 0.02 * k;
+    const double s = x.travel / d;
+    const double phi = s <= 1.0 ? 40.0 * s : (s < 3.0 ? 40.0 - 6.0 * (s - 1.0) : 28.0);
+    x.normal_stress = 20000.0;
+    x.shear_stress = x.normal_stress * std::tan(phi * kDeg);
+    if (s > 0.5 && s <= 1.5) z += 0.02 * std::tan(15.0 * kDeg);
+    x.platen_z = z;
+    series.push_back(x);
+  }
+  ShearResult r;
+  shear_angles(series, 0.5 * d, r);
+  std::printf("[ measured ] peak %.2f, critical %.2f, dilatancy %.2f deg (made: 40, 28, 15)\n", r.peak_friction_deg,
+              r.critical_friction_deg, r.dilatancy_deg);
+  EXPECT_NEAR(r.peak_friction_deg, 40.0, 1e-9);
+  EXPECT_NEAR(r.peak_travel, d, 1e-9);
+  EXPECT_NEAR(r.critical_friction_deg, 28.0, 1e-9);
+  EXPECT_NEAR(r.dilatancy_deg, 15.0, 0.01);
+}
+
+TEST(SoilTests, RunoutFrontIgnoresAStrayGrain) {
+  // a row of touching grains to x = 2 m, then one grain 0.5 m further: the front is 2 m
+  Particles p;
+  for (double x = 0.05; x < 2.0; x += 0.1) p.add(Vec3(x, 0, 0.05), 0.05, 2590.0);
+  EXPECT_NEAR(runout_front(p, 0.0, 0.1), 2.0, 1e-9);
+  p.add(Vec3(2.55, 0, 0.05), 0.05, 2590.0);
+  EXPECT_NEAR(runout_front(p, 0.0, 0.1), 2.0, 1e-9);
+  // within one D it is part of the deposit
+  p.add(Vec3(2.12, 0, 0.05), 0.05, 2590.0);
+  EXPECT_NEAR(runout_front(p, 0.0, 0.1), 2.17, 1e-9);
+}
+
+TEST(SoilTests, EarthmovingEquationMeetsRankineForASmoothVerticalWall) {
+  // delta = 0, alpha = 90 deg: the least force is Rankine's passive thrust 1/2 gamma d^2 K_p w,
+  // K_p = tan^2(45 + phi/2), on the plane beta = 45 - phi/2
+  for (double phi : {25.0, 32.0, 40.0}) {
+    double beta = 0.0;
+    const double f = fee_force(1727.0, 0.3, 2.0, 90.0, 0.0, phi, 0.0, &beta);
+    const double kp = std::pow(std::tan((45.0 + 0.5 * phi) * kDeg), 2);
+    const double rankine = 0.5 * 1727.0 * 9.81 * 0.09 * kp * 2.0;
+    std::printf("[ measured ] phi %.0f: FEE %.1f N, Rankine %.1f N, beta %.2f deg (45 - phi/2 = %.2f)\n", phi, f,
+                rankine, beta, 45.0 - 0.5 * phi);
+    EXPECT_NEAR(f, rankine, 1e-4 * rankine);
+    EXPECT_NEAR(beta, 45.0 - 0.5 * phi, 0.02);
+  }
+}
+
+TEST(SoilTests, EarthmovingEquationGrowsWithToolFrictionAndDepthSquared) {
+  const double rough = fee_force(1727.0, 0.3, 1.0, 90.0, std::atan(0.2) / kDeg, 32.0);
+  const double smooth = fee_force(1727.0, 0.3, 1.0, 90.0, 0.0, 32.0);
+  EXPECT_GT(rough, smooth);
+  EXPECT_NEAR(fee_force(1727.0, 0.6, 1.0, 90.0, 11.0, 32.0), 4.0 * fee_force(1727.0, 0.3, 1.0, 90.0, 11.0, 32.0), 1e-6);
+}
+
+TEST(SoilTests, ASurchargeOnASmoothWallAddsRankinesUniformPressure) {
+  // delta = 0, alpha = 90 deg: a surcharge h adds K_p q d with q = gamma h, on the same plane
+  const double kp = std::pow(std::tan((45.0 + 16.0) * kDeg), 2);
+  const double f = fee_force(1727.0, 0.3, 1.0, 90.0, 0.0, 32.0, 0.2);
+  const double rankine = 1727.0 * 9.81 * kp * (0.5 * 0.09 + 0.2 * 0.3);
+  EXPECT_NEAR(f, rankine, 1e-4 * rankine);
+}
+
+}  // namespace
+}  // namespace talus
