@@ -34,6 +34,7 @@ nlohmann::json bench_level(Device& dev, const FidelityPreset& preset, int steps,
   PileBuildOptions build;
   build.min_time = 0.5;
   build.max_time = 1.0;
+  build.form_speed = 0.0;  // a bed to time, not a pile to dig: the formwork may go at once
   Progress progress("bench " + preset.name + " (settling)", build.max_time, !quiet);
   PileBuild pile = build_pile(dev, default_pile_profile(), preset, gravel(), build, &progress);
   progress.finish();

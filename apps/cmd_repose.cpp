@@ -28,7 +28,7 @@ void add_repose_command(CLI::App& app) {
   cmd->add_option("--seed", opt->heap.seed, "random seed of the particle sizes and jitter");
   cmd->add_option("--friction", opt->material.friction, "Coulomb friction (default: the gravel's 0.3)")
       ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--rolling", opt->material.rolling, "rolling resistance mu_r (default: the gravel's 1.0, calibrated to 32 deg; docs/dem.md)")
+  cmd->add_option("--rolling", opt->material.rolling, "rolling resistance mu_r, torque <= mu_r R* lambda_n (default: the paper's 0.02; docs/soil.md)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--wall-speed", opt->heap.wall_speed, "speed the walls retreat at before removal, 0 = at once [m/s]")
       ->check(CLI::NonNegativeNumber);

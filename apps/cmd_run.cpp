@@ -165,6 +165,7 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
     options.coupling.material.rolling = o.rolling;
   }
   options.coupling.record_residual = o.residuals;
+  if (o.form_speed >= 0.0) options.pile.form_speed = o.form_speed;
   options.sweep = parse_sweep(o.sweep, "--sweep");
   make_output_dir(o.out);
   const std::filesystem::path dir(o.out);
@@ -234,6 +235,7 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
       {"iterations", preset.iterations},
       {"rolling_resistance", options.soil.rolling},
       {"seed", o.seed},
+      {"form_speed_m_s", options.pile.form_speed},
       {"loaded_mass_kg", loaded},
       {"work_J", vehicle::work_between(sim.log().samples(), sc.dig_start, sc.dig_end)},
       {"work_total_J", sim.log().work()},
@@ -319,11 +321,13 @@ void add_run_command(CLI::App& app) {
   cmd->add_option("--sweep", opts->sweep, "particle sweeps: pgs or jacobi")->capture_default_str();
   cmd->add_option("--seed", opts->seed, "random seed of the pile's particle sizes and jitter")->capture_default_str();
   cmd->add_flag("--quiet", opts->quiet, "no progress on stderr");
-  cmd->add_option("--rolling", opts->rolling, "study: the gravel's rolling resistance mu_r instead of its calibrated "
-                  "value (docs/dem.md)")->check(CLI::NonNegativeNumber);
+  cmd->add_option("--rolling", opts->rolling, "study: the gravel's rolling resistance mu_r instead of the paper's 0.02 "
+                  "(docs/soil.md)")->check(CLI::NonNegativeNumber);
   cmd->add_option("--dt", opts->dt, "study: timestep [s] instead of the level's")->check(CLI::PositiveNumber);
   cmd->add_option("--iterations", opts->iterations, "study: sweeps per step instead of the level's")
       ->check(CLI::Range(1, 100000));
+  cmd->add_option("--form-speed", opts->form_speed, "study: speed the pile's formwork withdraws at before it "
+                  "settles, 0 = removed at once [m/s]")->check(CLI::NonNegativeNumber);
   cmd->add_flag("--residuals", opts->residuals, "record the particle rows' residual at the end of every step "
                 "(summary: step_residual_m_s median and p95)");
   cmd->add_option("--effect", opts->effects,

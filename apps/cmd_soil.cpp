@@ -77,7 +77,7 @@ void add_soil_command(CLI::App& app) {
   cmd->add_option("--out", opt->out, "output folder (summary.json, particles.csv, particles.vtp, side.png)")->required();
   cmd->add_option("--json", opt->json, "also write the summary to this file ('-' for stdout)");
   cmd->add_option("--rolling", opt->material.rolling,
-                  "rolling resistance mu_r, torque <= mu_r R* lambda_n (default: the gravel's; docs/dem.md)")
+                  "rolling resistance mu_r, torque <= mu_r R* lambda_n (default: the paper's 0.02; docs/soil.md)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   cmd->add_option("--friction", opt->material.friction, "Coulomb friction between grains")

@@ -25,6 +25,7 @@ struct RunOptions {
   double dt = 0.0;
   int iterations = 0;
   bool residuals = false;
+  double form_speed = -1.0;  // the pile's formwork withdrawal speed [m/s]; negative: PileBuildOptions' default
   std::vector<std::string> effects;         // NAME:key=value,...
   std::vector<std::string> effect_plugins;  // shared libraries
   // when set, this scenario instead of loading `scenario` (talus synth's varied operator inputs)

@@ -281,8 +281,22 @@ PileBuild build_pile(Device& dev, const PileProfile& profile, const FidelityPres
   so.max_time = 0.5 * options.max_time;
   so.rest_speed = 0.02;
   settle(world, so, progress);
-  // the gravel's friction on, formwork off: the pile settles into its own shape
+  // the gravel's friction on; the formwork withdraws (along -x, away from the faces), then goes,
+  // and the pile settles into its own shape
   world.set_material(material);
+  if (options.form_speed > 0.0) {
+    const int steps = static_cast<int>(std::lround(options.form_travel / (options.form_speed * settings.dt)));
+    for (int k = 1; k <= steps; ++k) {
+      std::vector<StaticGeom> moved = out.geoms;
+      for (StaticGeom f : pile_forms(profile)) {
+        f.centre.x() -= k * options.form_speed * settings.dt;
+        moved.push_back(f);
+      }
+      world.set_geoms(moved, true);
+      world.step();
+      if (progress) progress->update(world.time(), "formwork withdrawing");
+    }
+  }
   world.set_geoms(out.geoms);
   so.min_time = options.min_time;
   so.max_time = options.max_time;
