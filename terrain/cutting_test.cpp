@@ -14,6 +14,9 @@ namespace {
 
 constexpr double kGravity = 9.81;  // [m/s^2], as DemSettings::gravity
 constexpr double kDegree = M_PI / 180.0;
+// the deepest cut the test makes [m]: the default pile's height (SPEC §2.5), which is all a bucket
+// ever cuts; the bed grows with the depth squared, so a typo must not start a huge run
+constexpr double kMaxDepth = 2.0;
 
 // the mean height of the bed's surface over [x0, x1] x [y0, y1]: the highest top in each cell
 // of D x D, averaged over the cells
@@ -63,6 +66,10 @@ CuttingResult run_cutting_test(Device& dev, const Material& material, const Cutt
       !(o.travel > 0.0) || !(o.blade_friction >= 0.0) || !(o.internal_friction_deg > 0.0))
     throw InputError("cutting test options: diameter, dt, iterations, depth, speed, travel and friction angle "
                      "must be positive");
+  if (o.depth < 0.5 * o.diameter || o.depth > kMaxDepth)
+    throw InputError("cutting test: --depth " + std::to_string(o.depth) + " m must lie between half a particle (" +
+                     std::to_string(0.5 * o.diameter) + " m) and " + std::to_string(kMaxDepth) +
+                     " m (the pile's height); choose a depth in that range");
   CuttingResult result;
   const double d = o.diameter;
   // the bin: as wide as 10 D or 4 depths, long enough for the travel, the last wedge and a margin
