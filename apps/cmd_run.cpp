@@ -244,6 +244,7 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
       {"realtime_factor", dig_wall > 0 ? sim_time / dig_wall : 0.0},
       {"pile_build_wall_s", pile_wall},
       {"pile_bulk_density", pile.bulk_density},
+      {"pile_toe_shift_m", pile.toe_shift},
       {"scan_face_angle_deg", scan.face_angle_deg},
       {"dig_start_s", sc.dig_start},
       {"dig_end_s", sc.dig_end},

@@ -53,6 +53,9 @@ typedef struct {
   // cohesion R*^2 [N]
   // (terrain/particles.hpp Material::cohesion, Rumpf's law); 0 for dry gravel
   tl_float cohesion;
+  // rolling resistance of a grain against static geometry (ground, walls): mu_r of
+  // terrain/particles.hpp Material::ground_rolling, with R* = r
+  tl_float ground_rolling;
 } TlStepParams;
 
 // a contact as found by the narrow phase, grouped by its owner particle a (b > a, or static).

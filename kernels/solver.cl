@@ -48,6 +48,8 @@ __kernel void prepare_rows(__global const TlContact* contacts, __global const in
   // further apart, or one with the ground, a wall or the bucket, holds none: a bond breaks when
   // the pair separates
   float cohesion = con.b >= 0 && gap <= p.margin_rel * reduced ? h * p.cohesion * reduced * reduced : 0.0f;
+  // rolling resistance: between grains the gravel's, against static geometry the ground's
+  float rolling = con.b >= 0 ? p.rolling : p.ground_rolling;
 
   // warm start: last step's impulses carried into the new frame, within the new cones
   float ln = 0.0f;
@@ -62,7 +64,7 @@ __kernel void prepare_rows(__global const TlContact* contacts, __global const in
     lt = pm > 0.0f ? proj * (fmin(mag, p.friction * (ln + cohesion)) / pm) : (float3)(0.0f);
     // rolling: the tangential part onto the new disc, the twist about the new normal clamped
     float3 old_r = con.impulse_r.xyz;
-    float rmax = p.rolling * reduced * (ln + cohesion);
+    float rmax = rolling * reduced * (ln + cohesion);
     float twist = clamp(dot(old_r, n), -rmax, rmax);
     float3 roll = old_r - dot(old_r, n) * n;
     float rm = length(roll);
@@ -76,7 +78,7 @@ __kernel void prepare_rows(__global const TlContact* contacts, __global const in
   row.arm_b = (float4)(arm_b, sigma);
   row.impulse_t = (float4)(lt, ln);
   row.impulse_r = (float4)(lr, d_t > 0.0f ? 1.0f / d_t : 0.0f);
-  row.coef = (float4)(p.friction, p.rolling * reduced, d_r > 0.0f ? 1.0f / d_r : 0.0f, cohesion);
+  row.coef = (float4)(p.friction, rolling * reduced, d_r > 0.0f ? 1.0f / d_r : 0.0f, cohesion);
   row.a = con.a;
   row.b = con.b;
   row.contact = c;

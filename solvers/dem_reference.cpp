@@ -152,6 +152,7 @@ StepParams from_device(const TlStepParams& p) {
   out.overlap_floor_rel = p.overlap_floor_rel;
   out.speculative = p.speculative;
   out.cohesion = p.cohesion;
+  out.ground_rolling = p.ground_rolling;
   out.particles = p.particles;
   out.geoms = p.geoms;
   return out;
@@ -500,6 +501,8 @@ std::vector<Row> prepare_rows(const std::vector<Contact>& contacts, const std::v
     double cohesion = con.b >= 0 && static_cast<float>(con.gap) <= reach
                           ? h * p.cohesion * con.reduced_radius * con.reduced_radius
                           : 0.0;
+    // rolling resistance: between grains the gravel's, against static geometry the ground's
+    const double rolling = con.b >= 0 ? p.rolling : p.ground_rolling;
 
     // warm start: last step's impulses carried into the new frame, within the new cones
     double ln = 0.0;
@@ -513,7 +516,7 @@ std::vector<Row> prepare_rows(const std::vector<Contact>& contacts, const std::v
       lt = pm > 0.0 ? Vec3(projected * (std::min(old_t.norm(), p.friction * (ln + cohesion)) / pm))
                     : Vec3::Zero();
       // rolling onto the new disc, twist about the new normal clamped
-      double rmax = p.rolling * con.reduced_radius * (ln + cohesion);
+      double rmax = rolling * con.reduced_radius * (ln + cohesion);
       double twist = std::clamp(con.impulse_r.dot(n), -rmax, rmax);
       Vec3 roll = con.impulse_r - con.impulse_r.dot(n) * n;
       double rm = roll.norm();
@@ -533,7 +536,7 @@ std::vector<Row> prepare_rows(const std::vector<Contact>& contacts, const std::v
     row.impulse_r = lr;
     row.inv_dt = d_t > 0.0 ? 1.0 / d_t : 0.0;
     row.friction = p.friction;
-    row.rolling_limit = p.rolling * con.reduced_radius;
+    row.rolling_limit = rolling * con.reduced_radius;
     row.inv_dr = d_r > 0.0 ? 1.0 / d_r : 0.0;
     row.cohesion = cohesion;
     row.a = con.a;

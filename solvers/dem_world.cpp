@@ -119,6 +119,7 @@ void DemWorld::update_params() {
   p.poisson = static_cast<float>(material_.poisson);
   p.friction = static_cast<float>(material_.friction);
   p.rolling = static_cast<float>(material_.rolling);
+  p.ground_rolling = static_cast<float>(material_.ground_rolling);
   p.damping_tau = static_cast<float>(material_.damping_steps * settings_.dt);
   p.margin_rel = static_cast<float>(settings_.margin_rel);
   p.overlap_floor_rel = static_cast<float>(settings_.overlap_floor_rel);

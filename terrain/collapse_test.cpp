@@ -57,9 +57,9 @@ CollapseResult run_collapse_test(Device& dev, const Material& material, const Co
   DemSettings settings;
   settings.dt = o.dt;
   settings.iterations = o.iterations;
-  DemWorld world(dev, material, settings, bounds, gated);
+  DemWorld world(dev, lab_walls(material), settings, bounds, gated);
   world.set_particles(particles);
-  settle_dense(world, material, 3.0, progress);
+  settle_dense(world, lab_walls(material), 3.0, progress);
   Particles settled = world.particles();
   result.initial_length = L0;
   result.initial_height = top_surface(settled, 0.0, L0, -W, W) - d;

@@ -18,25 +18,6 @@ constexpr double kDegree = M_PI / 180.0;
 // ever cuts; the bed grows with the depth squared, so a typo must not start a huge run
 constexpr double kMaxDepth = 2.0;
 
-// the mean height of the bed's surface over [x0, x1] x [y0, y1]: the highest top in each cell
-// of D x D, averaged over the cells
-double mean_surface(const Particles& p, double x0, double x1, double y0, double y1, double d) {
-  const int nx = std::max(1, static_cast<int>((x1 - x0) / d));
-  const int ny = std::max(1, static_cast<int>((y1 - y0) / d));
-  std::vector<double> top(static_cast<size_t>(nx * ny), 0.0);
-  for (size_t i = 0; i < p.size(); ++i) {
-    if (p.inv_mass[i] <= 0.0) continue;
-    const int ix = static_cast<int>((p.position[i].x() - x0) / d);
-    const int iy = static_cast<int>((p.position[i].y() - y0) / d);
-    if (ix < 0 || ix >= nx || iy < 0 || iy >= ny) continue;
-    double& t = top[static_cast<size_t>(iy * nx + ix)];
-    t = std::max(t, p.position[i].z() + p.radius[i]);
-  }
-  double sum = 0.0;
-  for (double t : top) sum += t;
-  return sum / static_cast<double>(top.size());
-}
-
 }  // namespace
 
 double fee_force(double density, double depth, double width, double rake_deg, double tool_friction_deg,
@@ -101,9 +82,9 @@ CuttingResult run_cutting_test(Device& dev, const Material& material, const Cutt
   DemSettings settings;
   settings.dt = o.dt;
   settings.iterations = o.iterations;
-  DemWorld world(dev, material, settings, bounds, filling);
+  DemWorld world(dev, lab_walls(material), settings, bounds, filling);
   world.set_particles(particles);
-  settle_dense(world, material, 3.0, progress);
+  settle_dense(world, lab_walls(material), 3.0, progress);
   const Particles settled = world.particles();
   const double surface = mean_surface(settled, 2.0 * d, length - 2.0 * d, -0.5 * width, 0.5 * width, d);
   double solid_volume = 0.0;

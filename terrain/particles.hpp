@@ -23,6 +23,14 @@ struct Material {
   // heap of these spheres (21 deg). talus used 1.0 until issue 11, calibrated to a 32 deg heap: it
   // made the soil 10-20 deg too strong in shear. docs/soil.md has the tests and the sources
   double rolling = 0.02;
+  // rolling resistance of a grain against static geometry: the ground and the container's walls,
+  // which in the field are gravel-covered, so a grain rests in a pocket between the grains below
+  // instead of rolling away on a polished plane. On a square layer of equal grains (the rough base
+  // of the soil tests) a sphere rolls out of its pocket on a slope of atan(1/sqrt 2) = 35.3 deg, so
+  // the plane holds it below the same slope: mu_r = tan 35.3 deg = 1/sqrt 2 with R* = r (torque
+  // balance on a slope, tan theta = mu_r). Issue 11: with the plane at the gravel's 0.02 the toe
+  // of a D400 pile ran out 3-4 m as a monolayer of rolling grains
+  double ground_rolling = 0.70710678118654752;
   double damping_steps = 2.0; // SPOOK damping time of normal rows in timesteps (tau = n h)
   // bulk tensile strength [Pa] of moist or cohesive soil: touching particles hold a tensile force
   // F_c = pi d^2 cohesion / (phi k) (Rumpf 1962: solid fraction phi, coordination number k; the

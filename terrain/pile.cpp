@@ -217,6 +217,7 @@ double bulk_density(const Particles& particles, const Bounds& box, double partic
 
 #include "terrain/heightmap.hpp"
 #include "terrain/settle.hpp"
+#include "terrain/soil_sample.hpp"
 
 namespace talus {
 
@@ -258,6 +259,33 @@ PileScan scan_pile(const Particles& particles, const PileProfile& profile, doubl
   }
   if (n >= 3) scan.face_angle_deg = std::atan((n * sxz - sx * sz) / (n * sxx - sx * sx)) * 180.0 / M_PI;
   return scan;
+}
+
+double profile_toe(const PileProfile& profile) {
+  for (size_t k = 1; k < profile.points.size(); ++k) {
+    const Vec3& p0 = profile.points[k - 1];
+    const Vec3& p1 = profile.points[k];
+    if (p1.z() >= kToeHeight && p0.z() < kToeHeight)
+      return p0.x() + (p1.x() - p0.x()) * (kToeHeight - p0.z()) / (p1.z() - p0.z());
+  }
+  return profile.points.empty() ? 0.0 : profile.points.front().x();
+}
+
+double particle_toe(const Particles& particles, const PileProfile& profile, double d) {
+  // bins of D from well in front of the profile's toe towards the rear wall
+  const double quarter = 0.25 * profile.width;
+  const double start = pile_bounds(profile, d).lo.x();
+  double previous = 0.0;
+  for (double x = start; x < profile.rear_wall_x; x += d) {
+    const double h = mean_surface(particles, x, x + d, -quarter, quarter, d);
+    if (h >= kToeHeight) {
+      // linear between the bins' centres
+      const double s = (kToeHeight - previous) / std::max(h - previous, 1e-12);
+      return x - 0.5 * d + s * d;
+    }
+    previous = h;
+  }
+  return profile.rear_wall_x;
 }
 
 PileBuild build_pile(Device& dev, const PileProfile& profile, const FidelityPreset& preset,
@@ -319,6 +347,15 @@ PileBuild build_pile(Device& dev, const PileProfile& profile, const FidelityPres
   Bounds core{Vec3(flat_start + 2 * d, -0.5 * profile.width + 2 * d, 2 * d),
               Vec3(profile.rear_wall_x - 2 * d, 0.5 * profile.width - 2 * d, 0.75 * top)};
   out.bulk_density = bulk_density(out.particles, core, material.density);
+  if (options.place_toe) {
+    // the pile moves as one, container and all, so its toe lies where the profile's does
+    const double dx = profile_toe(profile) - particle_toe(out.particles, profile, preset.diameter);
+    for (Vec3& x : out.particles.position) x.x() += dx;
+    for (StaticGeom& g : out.geoms) g.centre.x() += dx;
+    out.bounds.lo.x() += dx;
+    out.bounds.hi.x() += dx;
+    out.toe_shift = dx;
+  }
   return out;
 }
 

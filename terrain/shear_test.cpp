@@ -91,9 +91,9 @@ ShearResult run_shear_test(Device& dev, const Material& material, const ShearOpt
   DemSettings settings;
   settings.dt = o.dt;
   settings.iterations = o.iterations;
-  DemWorld world(dev, material, settings, bounds, filling);
+  DemWorld world(dev, lab_walls(material), settings, bounds, filling);
   world.set_particles(particles);
-  settle_dense(world, material, 3.0, progress);
+  settle_dense(world, lab_walls(material), 3.0, progress);
 
   // the lower half's walls stay (4 D thick boxes); the upper half's become the ring
   const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();

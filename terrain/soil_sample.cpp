@@ -57,6 +57,24 @@ double settle_dense(DemWorld& world, const Material& material, double max_time, 
   return r.sim_time;
 }
 
+double mean_surface(const Particles& p, double x0, double x1, double y0, double y1, double d) {
+  const int nx = std::max(1, static_cast<int>(std::lround((x1 - x0) / d)));
+  const int ny = std::max(1, static_cast<int>(std::lround((y1 - y0) / d)));
+  const double cx = (x1 - x0) / nx, cy = (y1 - y0) / ny;
+  std::vector<double> top(static_cast<size_t>(nx) * static_cast<size_t>(ny), 0.0);
+  for (size_t i = 0; i < p.size(); ++i) {
+    if (p.inv_mass[i] <= 0.0) continue;
+    const int ix = static_cast<int>(std::floor((p.position[i].x() - x0) / cx));
+    const int iy = static_cast<int>(std::floor((p.position[i].y() - y0) / cy));
+    if (ix < 0 || ix >= nx || iy < 0 || iy >= ny) continue;
+    double& t = top[static_cast<size_t>(iy) * static_cast<size_t>(nx) + static_cast<size_t>(ix)];
+    t = std::max(t, p.position[i].z() + p.radius[i]);
+  }
+  double sum = 0.0;
+  for (double t : top) sum += t;
+  return sum / static_cast<double>(top.size());
+}
+
 double top_surface(const Particles& p, double x0, double x1, double y0, double y1) {
   double top = 0.0;
   for (size_t i = 0; i < p.size(); ++i) {

@@ -26,9 +26,22 @@ Particles emit_box_particles(const Vec3& lo, const Vec3& hi, double diameter, do
 void add_rough_base(Particles& particles, double x0, double x1, double y0, double y1, double diameter,
                     double density);
 
+// the material of a soil test: the gravel, with the box's walls and floor as smooth as a
+// laboratory's (grains roll on them with their own mu_r, not with the gravel-covered ground's
+// Material::ground_rolling); where a test needs a rough floor it lays fixed grains (add_rough_base)
+inline Material lab_walls(Material material) {
+  material.ground_rolling = material.rolling;
+  return material;
+}
+
 // settles `world` with friction and rolling resistance off (a dense fill), then gives it
 // `material`; returns the simulated settling time [s]
 double settle_dense(DemWorld& world, const Material& material, double max_time, Progress* progress);
+
+// the mean height of the surface over [x0, x1] x [y0, y1]: the highest top (z + r) of the free
+// particles in each of the cells of about D x D that tile the box (0 where a cell is empty),
+// averaged over the cells; a lone grain adds only its share of one cell
+double mean_surface(const Particles& particles, double x0, double x1, double y0, double y1, double diameter);
 
 // the highest top (z + r) of the free particles whose centres lie over [x0, x1] x [y0, y1]
 // (0 when there are none)

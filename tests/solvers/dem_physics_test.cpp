@@ -53,6 +53,7 @@ TEST(DemPhysics, InclineBelowFrictionAngleHolds) {
   Device dev;
   Material m = gravel();
   m.rolling = 100.0;
+  m.ground_rolling = m.rolling;  // the sphere rests on a plane
   DemSettings s;
   s.dt = 1e-2;
   s.iterations = 30;
@@ -71,6 +72,7 @@ TEST(DemPhysics, InclineAboveFrictionAngleSlidesAtAnalyticAcceleration) {
   Device dev;
   Material m = gravel();
   m.rolling = 100.0;
+  m.ground_rolling = m.rolling;  // the sphere rests on a plane
   DemSettings s;
   s.dt = 1e-3;
   s.iterations = 30;
@@ -93,6 +95,7 @@ TEST(DemPhysics, SphereRollsWithoutSlippingAtFiveSevenths) {
   Device dev;
   Material m = gravel();
   m.rolling = 0.0;
+  m.ground_rolling = m.rolling;  // the sphere rests on a plane
   m.friction = 1.0;
   DemSettings s;
   s.dt = 1e-3;
@@ -116,6 +119,7 @@ TEST(DemPhysics, RollingResistanceHoldsBelowItsAngle) {
   Device dev;
   Material m = gravel();
   m.rolling = 0.1;
+  m.ground_rolling = m.rolling;  // the sphere rests on a plane
   DemSettings s;
   s.dt = 5e-3;
   s.iterations = 30;
