@@ -7,12 +7,14 @@
 #include <sstream>
 
 #include "apps/commands.hpp"
+#include "apps/outputs.hpp"
 #include "host/device.hpp"
 #include "io/image.hpp"
 #include "io/output.hpp"
 #include "io/plot.hpp"
 #include "terrain/cutting_test.hpp"
 #include "terrain/pile.hpp"
+#include "terrain/soil_sample.hpp"
 
 namespace talus::app {
 
@@ -46,13 +48,11 @@ void add_cut_command(CLI::App& app) {
   cmd->add_flag("--quiet", opt->quiet, "no progress on stderr");
   cmd->callback([opt] {
     const FidelityPreset& level = fidelity_preset(opt->level);
+    const CuttingOptions c = at_level(level, opt->cut);
+    check_cutting_options(c);  // bad input leaves no output folder behind
     make_output_dir(opt->out);
     const auto t0 = std::chrono::steady_clock::now();
     Device dev;
-    CuttingOptions c = opt->cut;
-    c.diameter = level.diameter;
-    c.dt = level.dt;
-    c.iterations = level.iterations;
     Progress progress("cut " + level.name, 0.0, !opt->quiet);
     const CuttingResult r = run_cutting_test(dev, opt->material, c, &progress);
     progress.finish();
@@ -115,14 +115,7 @@ void add_cut_command(CLI::App& app) {
                         {"device", dev.description()},
                         {"series", {{"travel_m", travel}, {"force_x_N", fx}, {"force_z_N", fz},
                                     {"surcharge_m", heap}, {"fee_force_N", fe}}}};
-    write_file_atomically(opt->out + "/particles.csv", particles_csv(r.final_state));
-    write_file_atomically(opt->out + "/particles.vtp", particles_vtp(r.final_state));
-    side_view(r.final_state).write_png(opt->out + "/side.png");
-    write_json(opt->out + "/summary.json", j);
-    if (opt->json == "-")
-      std::cout << j.dump(2) << "\n";
-    else if (!opt->json.empty())
-      write_json(opt->json, j);
+    write_particles_and_summary(opt->out, r.final_state, j, opt->json);
   });
 }
 

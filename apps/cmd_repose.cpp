@@ -58,7 +58,7 @@ void add_repose_command(CLI::App& app) {
                         {"sim_time_s", r.sim_time},
                         {"wall_s", wall},
                         {"device", dev.description()},
-                        {"anchor", {{"repose_angle_deg", 32.0}, {"bulk_density", 1727.0}}}};
+                        {"anchor", {{"repose_angle_deg", 21.0}, {"bulk_density", 1727.0}}}};
     write_json(opt->out + "/summary.json", j);
     std::cout << j.dump(2) << "\n";
   });

@@ -24,14 +24,11 @@ void add_box(vehicle::BucketMesh& mesh, const Vec3& centre, const Vec3& half) {
 // one tool's device side and its warm-start memory
 struct ToolWorld::Side {
   Side(Device& dev, Tool t, const embree::Device& embree)
-      : tool(std::move(t)), scene(tool.mesh, embree), selection(dev), block(dev) {
-    for (const Vec3& v : scene.vertices()) reach = std::max(reach, v.norm());
-  }
+      : tool(std::move(t)), scene(tool.mesh, embree), selection(dev), block(dev) {}
   Tool tool;
   BucketScene scene;
   DeviceBoxSelection selection;
   BucketRowBlock block;
-  double reach = 0.0;  // largest distance of a vertex from the tool's origin [m]
   // this step's rows, their contacts and candidates; last step's impulses for the warm start
   std::vector<reference::Row> rows;
   std::vector<int> candidates;
@@ -46,8 +43,9 @@ ToolWorld::ToolWorld(Device& dev, DemWorld& dem, std::vector<Tool> tools, const 
     const std::string field = "tool " + std::to_string(i);
     if (!(t.material.friction >= 0.0) || !(t.material.rolling >= 0.0))
       throw InputError(field + ": friction and rolling must not be negative");
-    if (!t.mobility.bottomRows<3>().isZero(0.0))
-      throw InputError(field + ": mobility turns the tool; tools translate only (angular rows must be zero)");
+    if (!t.mobility.bottomRows<3>().isZero(0.0) || !t.mobility.topRightCorner<3, 3>().isZero(0.0))
+      throw InputError(field + ": mobility turns the tool or moves it with torques; tools translate only (angular rows and "
+                       "the top-right block must be zero)");
     sides_.push_back(std::make_unique<Side>(dev, t, embree));
   }
 }

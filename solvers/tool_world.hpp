@@ -52,8 +52,9 @@ struct ToolLoad {
 
 class ToolWorld {
  public:
-  // `dem` must outlive the world; throws InputError for a tool with no usable triangle, a negative
-  // material coefficient or a mobility that would turn it
+  // `dem` must outlive the world; throws InputError for a negative material coefficient or a
+  // mobility that would turn the tool, talus::Error (from BucketScene) for a mesh with no usable
+  // triangle
   ToolWorld(Device& dev, DemWorld& dem, std::vector<Tool> tools, const embree::Device& embree = embree::Device());
   ~ToolWorld();
 

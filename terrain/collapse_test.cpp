@@ -29,9 +29,9 @@ double runout_front(const Particles& p, double back, double gap) {
 
 CollapseResult run_collapse_test(Device& dev, const Material& material, const CollapseOptions& o,
                                  Progress* progress) {
-  if (!(o.diameter > 0.0) || !(o.dt > 0.0) || o.iterations < 1 || !(o.aspect > 0.0) || o.aspect > 4.0 ||
+  if (!(o.diameter > 0.0) || !(o.dt > 0.0) || o.iterations < 1 || !(o.aspect > 0.0) || o.aspect > 3.0 ||
       !(o.max_time > 0.0))
-    throw InputError("collapse test options: diameter, dt, iterations and time must be positive, aspect in (0, 4]");
+    throw InputError("collapse test options: diameter, dt, iterations and time must be positive, aspect in (0, 3] (the laboratory law's range)");
   CollapseResult result;
   const double d = o.diameter;
   const double L0 = kColumnLength * d, W = kWidth * d, H0 = o.aspect * L0;

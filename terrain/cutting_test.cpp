@@ -37,12 +37,16 @@ double fee_force(double density, double depth, double width, double rake_deg, do
       best_beta = 0.01 * k;
     }
   }
+  if (best_beta == 0.0)
+    throw InputError("earthmoving equation: no failure plane for rake " + std::to_string(rake_deg) + " deg, tool friction " +
+                     std::to_string(tool_friction_deg) + " deg and internal friction " +
+                     std::to_string(internal_friction_deg) + " deg (--phi): their sum must stay below 180 deg");
   if (beta_deg) *beta_deg = best_beta;
   // the soil's force on the blade acts at delta from its normal: horizontal part sin(alpha + delta)
   return density * kGravity * best * width * std::sin(alpha + delta);
 }
 
-CuttingResult run_cutting_test(Device& dev, const Material& material, const CuttingOptions& o, Progress* progress) {
+void check_cutting_options(const CuttingOptions& o) {
   if (!(o.diameter > 0.0) || !(o.dt > 0.0) || o.iterations < 1 || !(o.depth > 0.0) || !(o.speed > 0.0) ||
       !(o.travel > 0.0) || !(o.blade_friction >= 0.0) || !(o.internal_friction_deg > 0.0))
     throw InputError("cutting test options: diameter, dt, iterations, depth, speed, travel and friction angle "
@@ -51,6 +55,11 @@ CuttingResult run_cutting_test(Device& dev, const Material& material, const Cutt
     throw InputError("cutting test: --depth " + std::to_string(o.depth) + " m must lie between half a particle (" +
                      std::to_string(0.5 * o.diameter) + " m) and " + std::to_string(kMaxDepth) +
                      " m (the pile's height); choose a depth in that range");
+  fee_force(1727.0, o.depth, 1.0, 90.0, std::atan(o.blade_friction) / kDegree, o.internal_friction_deg);
+}
+
+CuttingResult run_cutting_test(Device& dev, const Material& material, const CuttingOptions& o, Progress* progress) {
+  check_cutting_options(o);
   CuttingResult result;
   const double d = o.diameter;
   // the bin: as wide as 10 D or 4 depths, long enough for the travel, the last wedge and a margin

@@ -63,6 +63,10 @@ struct CuttingResult {
   Particles final_state;
 };
 
+// throws InputError naming the option when the test cannot be run with these options (depth
+// outside half a particle .. 2 m, non-positive sizes, no failure plane for the friction angles)
+void check_cutting_options(const CuttingOptions& options);
+
 CuttingResult run_cutting_test(Device& dev, const Material& material, const CuttingOptions& options,
                                Progress* progress = nullptr);
 

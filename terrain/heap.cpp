@@ -6,23 +6,11 @@
 
 #include "terrain/pile.hpp"
 #include "terrain/settle.hpp"
+#include "terrain/soil_sample.hpp"
 
 namespace talus {
 
 namespace {
-
-// a least-squares slope of y against x
-double fit_slope(const std::vector<double>& x, const std::vector<double>& y) {
-  double n = static_cast<double>(x.size());
-  double sx = 0, sy = 0, sxx = 0, sxy = 0;
-  for (size_t k = 0; k < x.size(); ++k) {
-    sx += x[k];
-    sy += y[k];
-    sxx += x[k] * x[k];
-    sxy += x[k] * y[k];
-  }
-  return (n * sxy - sx * sy) / (n * sxx - sx * sx);
-}
 
 }  // namespace
 
@@ -57,7 +45,7 @@ FlankFit measure_flank_angle(const Particles& p, double bin_width, int sectors) 
       }
     }
     if (r.size() < 3) continue;
-    angles.push_back(std::atan(-fit_slope(r, z)) * 180.0 / M_PI);
+    angles.push_back(std::atan(-least_squares_slope(r, z)) * 180.0 / M_PI);
   }
   fit.sectors = static_cast<int>(angles.size());
   if (angles.empty()) return fit;

@@ -312,6 +312,9 @@ PileBuild build_pile(Device& dev, const PileProfile& profile, const FidelityPres
   // the gravel's friction on; the formwork withdraws (along -x, away from the faces), then goes,
   // and the pile settles into its own shape
   world.set_material(material);
+  if (options.form_speed > 0.0 && options.form_speed < 0.01)
+    throw InputError("--form-speed " + std::to_string(options.form_speed) +
+                     " m/s: give 0 (formwork removed at once) or at least 0.01 m/s");
   if (options.form_speed > 0.0) {
     const int steps = static_cast<int>(std::lround(options.form_travel / (options.form_speed * settings.dt)));
     for (int k = 1; k <= steps; ++k) {

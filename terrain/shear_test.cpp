@@ -17,50 +17,47 @@ constexpr double kGravity = 9.81;  // [m/s^2], as DemSettings::gravity
 // the box in diameters (file comment): length, width, height, lower half, wall thickness
 constexpr double kLength = 16.0, kWidth = 8.0, kHeight = 10.0, kLower = 5.0, kWall = 4.0;
 
-double least_squares_slope(const std::vector<double>& x, const std::vector<double>& y) {
-  const double n = static_cast<double>(x.size());
-  double sx = 0, sy = 0, sxx = 0, sxy = 0;
-  for (size_t k = 0; k < x.size(); ++k) {
-    sx += x[k];
-    sy += y[k];
-    sxx += x[k] * x[k];
-    sxy += x[k] * y[k];
-  }
-  const double den = n * sxx - sx * sx;
-  return den > 0.0 ? (n * sxy - sx * sy) / den : 0.0;
-}
-
 }  // namespace
 
 void shear_angles(const std::vector<ShearSample>& series, double window, ShearResult& r) {
   r.peak_friction_deg = r.critical_friction_deg = r.dilatancy_deg = 0.0;
-  if (series.empty()) return;
-  // mobilised friction per sample; the peak is its largest value
+  const size_t n = series.size();
+  if (n < 2) return;
+  // samples per window (the series is evenly spaced in travel); both measures are taken over
+  // whole windows, so the largest of many noisy window means does not pick the noise
+  const double spacing = (series.back().travel - series.front().travel) / static_cast<double>(n - 1);
+  const size_t w = std::max<size_t>(2, static_cast<size_t>(std::lround(window / spacing)) + 1);
+  // mobilised friction: tau / sigma over each window; the peak is the largest
   const double s_end = series.back().travel;
-  double critical_sum = 0.0;
-  int critical_count = 0;
-  for (const ShearSample& x : series) {
-    if (!(x.normal_stress > 0.0)) continue;
-    const double phi = std::atan(x.shear_stress / x.normal_stress) * 180.0 / M_PI;
+  for (size_t k = 0; k + w <= n; ++k) {
+    double tau = 0.0, sigma = 0.0;
+    for (size_t j = k; j < k + w; ++j) {
+      tau += series[j].shear_stress;
+      sigma += series[j].normal_stress;
+    }
+    if (!(sigma > 0.0)) continue;
+    const double phi = std::atan(tau / sigma) * 180.0 / M_PI;
     if (phi > r.peak_friction_deg) {
       r.peak_friction_deg = phi;
-      r.peak_travel = x.travel;
-    }
-    if (x.travel >= 0.75 * s_end) {
-      critical_sum += phi;
-      ++critical_count;
+      r.peak_travel = series[k + w / 2].travel;
     }
   }
-  if (critical_count > 0) r.critical_friction_deg = critical_sum / critical_count;
-  // dilatancy: the platen's steepest rise, a least-squares slope over each window of travel
+  // critical state: the mean stress ratio over the last quarter of the travel
+  double tau = 0.0, sigma = 0.0;
+  for (const ShearSample& x : series)
+    if (x.travel >= 0.75 * s_end) {
+      tau += x.shear_stress;
+      sigma += x.normal_stress;
+    }
+  if (sigma > 0.0) r.critical_friction_deg = std::atan(tau / sigma) * 180.0 / M_PI;
+  // dilatancy: the platen's steepest rise, a least-squares slope over each window
   double steepest = 0.0;
-  for (size_t k = 0; k < series.size(); ++k) {
+  for (size_t k = 0; k + w <= n; ++k) {
     std::vector<double> s, z;
-    for (size_t j = k; j < series.size() && series[j].travel <= series[k].travel + window; ++j) {
+    for (size_t j = k; j < k + w; ++j) {
       s.push_back(series[j].travel);
       z.push_back(series[j].platen_z);
     }
-    if (s.size() < 3 || s.back() - s.front() < 0.9 * window) break;
     steepest = std::max(steepest, least_squares_slope(s, z));
   }
   r.dilatancy_deg = std::atan(steepest) * 180.0 / M_PI;
@@ -110,7 +107,8 @@ ShearResult run_shear_test(Device& dev, const Material& material, const ShearOpt
     add_box(ring.mesh, Vec3(side * 0.5 * (L + T), 0, 0.5 * ring_height), Vec3(0.5 * T, 0.5 * W + T, 0.5 * ring_height));
     add_box(ring.mesh, Vec3(0, side * 0.5 * (W + T), 0.5 * ring_height), Vec3(0.5 * L, 0.5 * T, 0.5 * ring_height));
   }
-  ring.material.friction = o.ring_friction;
+  const double wall_friction = o.ring_friction >= 0.0 ? o.ring_friction : material.friction;
+  ring.material.friction = wall_friction;
   ring.material.rolling = material.rolling;
   // the platen: a plate 1 D thick, a twentieth of D clear of the ring, free along z only
   const double area = L * W;
@@ -121,7 +119,7 @@ ShearResult run_shear_test(Device& dev, const Material& material, const ShearOpt
   platen.position = Vec3(0, 0, top_surface(settled, -L, L, -W, W) + 0.02 * d);
   platen.mobility(2, 2) = 1.0 / platen_mass;
   platen.external_force = Vec3(0, 0, -platen_mass * kGravity);
-  platen.material.friction = o.ring_friction;
+  platen.material.friction = wall_friction;
   platen.material.rolling = material.rolling;
   ToolWorld tools(dev, world, {ring, platen});
 

@@ -1,7 +1,7 @@
 // The direct shear test of the gravel (SPEC §7, issue 11): the soil's peak and critical-state
 // friction angles and its dilatancy, to compare with the type-G soil of the paper (internal
 // friction 32 deg, dilatancy 8 deg) — the bulk numbers the paper's "32 deg" most likely names
-// (docs/dem.md "What the 32 deg is").
+// (docs/soil.md "What the paper's 32° and μ_r 0.02 are").
 //
 // The box, in particle diameters D: a sample 16 D long (x), 8 D wide, 10 D high, split at half
 // height. The lower half sits in fixed walls on the floor; the upper half is held by a ring that
@@ -11,12 +11,17 @@
 // shear plane always meets a face, never a gap, up to the test's 4 D of shear travel (25 % of
 // the box). The sample is filled densely (terrain/soil_sample) before the platen goes on.
 //
-// Measured along the travel s, each averaged over windows of 0.1 D of travel:
+// Measured along the travel s, each averaged over samples of 0.1 D of travel:
 //   tau   = -(F_x on ring + F_x on platen) / A  (what the drive must push; A = box area)
-//   sigma = (F_z on the platen + weight of the grains whose centres lie above the shear plane) / A
-//   phi_mobilised = atan(tau / sigma); peak = its largest value, critical state = its mean over
-//   the last quarter of the travel; dilatancy psi = atan(dz/ds) of the platen at its steepest
-//   over 0.5 D of travel (the peak's dilation rate, Bolton 1986).
+//   sigma = (F_z on the platen + F_z on the ring + weight of the grains whose centres lie above
+//           the shear plane) / A  (the upper half's vertical balance: the ring's walls carry part
+//           of its weight through wall friction)
+//   phi_mobilised = atan(tau / sigma) over windows of 0.5 D; peak = its largest value, critical
+//   state = the ratio over the last quarter of the travel; dilatancy psi = atan(dz/ds) of the
+//   platen at its steepest over 0.5 D (the peak's dilation rate, Bolton 1986).
+// Approximation: grains of the lower half that touch the ring's bottom faces push on the ring
+// too, as the sample's own shear band does (the ring's wall thickness keeps that to the box's
+// ends).
 #pragma once
 #include <vector>
 
@@ -37,7 +42,7 @@ struct ShearOptions {
   // for a shear band 10 D thick at sigma 17 kPa (MiDi 2004: rate effects below I ~ 1e-2 are small)
   double speed = 0.25;
   double travel_diameters = 4.0;  // shear travel in D
-  double ring_friction = 0.3;     // grain-wall friction of the box (the gravel's own mu)
+  double ring_friction = -1.0;    // grain-wall friction of the ring and platen; negative: the gravel's mu
 };
 
 struct ShearSample {

@@ -8,6 +8,19 @@
 
 namespace talus {
 
+double least_squares_slope(const std::vector<double>& x, const std::vector<double>& y) {
+  const double n = static_cast<double>(x.size());
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  for (size_t k = 0; k < x.size(); ++k) {
+    sx += x[k];
+    sy += y[k];
+    sxx += x[k] * x[k];
+    sxy += x[k] * y[k];
+  }
+  const double den = n * sxx - sx * sx;
+  return den > 0.0 ? (n * sxy - sx * sy) / den : 0.0;
+}
+
 Particles emit_box_particles(const Vec3& lo, const Vec3& hi, double diameter, double density,
                              double solid_volume, unsigned seed) {
   std::mt19937 rng(seed);

@@ -9,12 +9,26 @@
 #pragma once
 #include "io/progress.hpp"
 #include "solvers/dem_world.hpp"
+#include "terrain/pile.hpp"
 #include "terrain/particles.hpp"
 
 namespace talus {
 
 // spacing of the emission lattice: the largest diameter (1.1 D) plus 2 %, so no spheres overlap
 inline double lattice_spacing(double diameter) { return 1.1 * diameter * 1.02; }
+
+// a soil test's options (ShearOptions, CollapseOptions, CuttingOptions) at a fidelity level: its
+// particle size, timestep and sweeps
+template <class Options>
+Options at_level(const FidelityPreset& level, Options options = {}) {
+  options.diameter = level.diameter;
+  options.dt = level.dt;
+  options.iterations = level.iterations;
+  return options;
+}
+
+// the least-squares slope of y against x (0 when x does not vary)
+double least_squares_slope(const std::vector<double>& x, const std::vector<double>& y);
 
 // particles with diameters uniform in D +- 0.1 D on a jittered lattice inside [lo, hi], layer by
 // layer from lo.z up until their solid volume reaches `solid_volume` [m^3] or the box is full

@@ -235,7 +235,10 @@ TEST(BucketContacts, EmbreeMatchesBruteForceOnRandomParticles) {
   for (const auto& list : by_particle) multi += list.size() > 1;
   EXPECT_EQ(fast.size(), ref.size());
   EXPECT_LT(max_gap, 1e-9);
-  EXPECT_LT(max_normal_dist, 1e-12);
+  // the two paths round the closest point differently, each by a few ulps of the world
+  // coordinates (~10 m, ulp 1.8e-15 m) through the pose's rotation: about 1e-12 m at worst over
+  // 8000 contacts (1.01e-12 m seen once in 200 fresh seeds, which failed the old 1e-12 bound)
+  EXPECT_LT(max_normal_dist, 4e-12);
   // the contact point follows from the normal and the gap, so it is printed, not asserted
   for (const auto& k : fast) {
     EXPECT_NEAR(k.normal.norm(), 1.0, 1e-12);

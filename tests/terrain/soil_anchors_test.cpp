@@ -12,18 +12,12 @@
 #include "terrain/cutting_test.hpp"
 #include "terrain/pile.hpp"
 #include "terrain/shear_test.hpp"
+#include "terrain/soil_sample.hpp"
 
 namespace talus {
 namespace {
 
-ShearOptions shear_at(const std::string& level) {
-  const FidelityPreset& p = fidelity_preset(level);
-  ShearOptions o;
-  o.diameter = p.diameter;
-  o.dt = p.dt;
-  o.iterations = p.iterations;
-  return o;
-}
+ShearOptions shear_at(const std::string& level) { return at_level<ShearOptions>(fidelity_preset(level)); }
 
 // dense gravel peaks at the paper's effective internal friction, 32 deg + 8 deg dilatancy = 40 deg
 // (paper §4.4), and softens to a critical state below it (D100's D, timestep and sweeps; ~30 s)
@@ -57,11 +51,7 @@ TEST(SoilAnchors, BlockedRollingMakesTheSoilFarStrongerThanThePapers) {
 // 2005, Lajeunesse et al. 2005; SPEC §7), at D400's size and sweeps (~5 s)
 TEST(SoilAnchors, ColumnCollapseRunsOutAsInTheLaboratory) {
   Device dev;
-  const FidelityPreset& p = fidelity_preset("D400");
-  CollapseOptions o;
-  o.diameter = p.diameter;
-  o.dt = p.dt;
-  o.iterations = p.iterations;
+  const CollapseOptions o = at_level<CollapseOptions>(fidelity_preset("D400"));
   const CollapseResult r = run_collapse_test(dev, gravel(), o);
   const double lambda = r.runout_ratio / r.aspect_ratio;
   std::printf("[ measured ] D400 collapse: a = %.2f, (L - L0)/L0 = %.2f, lambda = %.2f (laboratory 1.2-1.8)\n",
@@ -77,11 +67,7 @@ TEST(SoilAnchors, ColumnCollapseRunsOutAsInTheLaboratory) {
 // (within 25 %; ~5 s). The finer levels' numbers are in docs/soil.md
 TEST(SoilAnchors, BladeForceMeetsTheEarthmovingEquation) {
   Device dev;
-  const FidelityPreset& p = fidelity_preset("D400");
-  CuttingOptions o;
-  o.diameter = p.diameter;
-  o.dt = p.dt;
-  o.iterations = p.iterations;
+  CuttingOptions o = at_level<CuttingOptions>(fidelity_preset("D400"));
   o.depth = 0.6;
   const CuttingResult r = run_cutting_test(dev, gravel(), o);
   std::printf("[ measured ] D400 cut 0.6 m deep, %.1f m wide: %.1f kN (spread %.1f), equation %.1f kN (level bed "
