@@ -1,0 +1,65 @@
+#!/usr/bin/env python3
+"""Tables of issue 11's digging studies from talus run summaries (docs/validation.md).
+
+Reads DIR/*/summary.json (default out/dig) and prints, as Markdown:
+  - per scenario and level: loaded mass and work over pile seeds (mean, coefficient of variation),
+    against the field values;
+  - convergence: each run with --dt or --iterations changed against the same level's seed-1 run;
+  - the particle rows' residual at the end of each step (median, 95th percentile).
+Run names follow scripts' convention S-L-seedN, S-L-dtX, S-L-itN (the study queue in the docs)."""
+import json
+import pathlib
+import re
+import statistics
+import sys
+
+root = pathlib.Path(sys.argv[1] if len(sys.argv) > 1 else "out/dig")
+runs = {}
+earlier = {}
+for f in sorted(root.glob("*/summary.json")):
+    m = re.fullmatch(r"(fb35|hd27|rd21)-(D\d+)-(seed\d+|dt[\d.]+|it\d+)", f.parent.name)
+    if m:
+        runs[m.groups()] = json.loads(f.read_text())
+    # earlier stages of the study, kept for the before/after table: mu_r 1.0 (talus before issue
+    # 11) and mu_r 0.02 on a polished floor (before the ground's rolling resistance)
+    m = re.fullmatch(r"(fb35|hd27|rd21)-(D\d+)-mur([\d.]+)-(seed\d+)", f.parent.name)
+    if m:
+        earlier.setdefault(m.group(3), {})[(m.group(1), m.group(2), m.group(4))] = json.loads(f.read_text())
+
+field = {"fb35": (3460, 209e3), "hd27": (2700, 127e3), "rd21": (2100, 112e3)}
+
+print("| gravel | scenario | level | seeds | loaded mass [t] mean (CV) | E_M | work [kJ] mean (CV) | E_W |")
+print("|---|---|---|---|---|---|---|---|")
+names = {"1.0": "mu_r 1.0 (before)", "0.02": "mu_r 0.02, polished floor"}
+variants = [(names.get(k, k), v) for k, v in sorted(earlier.items(), key=lambda kv: -float(kv[0]))]
+variants.append(("mu_r 0.02, gravel ground (now)", runs))
+for label, table in variants:
+  for s in ("fb35", "hd27", "rd21"):
+    for level in ("D400", "D200", "D100"):
+        seeds = [r for (sc, l, k), r in table.items() if sc == s and l == level and k.startswith("seed")]
+        if not seeds:
+            continue
+        m = [r["loaded_mass_kg"] for r in seeds]
+        w = [r["work_J"] for r in seeds]
+        cv = lambda x: statistics.pstdev(x) / statistics.mean(x) if len(x) > 1 else float("nan")
+        mm, wm = statistics.mean(m), statistics.mean(w)
+        print(f"| {label} | {s.upper()} | {level} | {len(seeds)} | {mm/1e3:.2f} ({100*cv(m):.0f} %) | {mm/field[s][0]-1:+.2f} "
+              f"| {wm/1e3:.0f} ({100*cv(w):.0f} %) | {wm/field[s][1]-1:+.2f} |")
+
+print()
+print("| run | loaded mass [t] | change | work [kJ] | change | residual median / p95 [m/s] |")
+print("|---|---|---|---|---|---|")
+for (s, level, k), r in sorted(runs.items()):
+    base = runs.get((s, level, "seed1"))
+    res = r.get("step_residual_m_s", {})
+    res_text = f"{res.get('median', float('nan')):.1e} / {res.get('p95', float('nan')):.1e}" if res else "-"
+    if k.startswith("seed") and k != "seed1":
+        continue
+    if base is None or k == "seed1":
+        print(f"| {s.upper()}-{level} ({r['dt_s']*1e3:g} ms, {r['iterations']} sweeps) | {r['loaded_mass_kg']/1e3:.2f} | - "
+              f"| {r['work_J']/1e3:.0f} | - | {res_text} |")
+        continue
+    dm = r["loaded_mass_kg"] / base["loaded_mass_kg"] - 1
+    dw = r["work_J"] / base["work_J"] - 1
+    print(f"| {s.upper()}-{level} {k} ({r['dt_s']*1e3:g} ms, {r['iterations']} sweeps) | {r['loaded_mass_kg']/1e3:.2f} "
+          f"| {100*dm:+.1f} % | {r['work_J']/1e3:.0f} | {100*dw:+.1f} % | {res_text} |")
