@@ -57,6 +57,7 @@ void add_pile_command(CLI::App& app) {
         {"paper_particles", preset.paper_particles},
         {"particles_vs_paper", double(n) / preset.paper_particles},
         {"bulk_density", pile.bulk_density},
+        {"toe_shift_m", pile.toe_shift},
         {"settle_time_s", pile.settle_time},
         {"at_rest", pile.at_rest},
         {"rms_speed_m_s", pile.rms_speed},

@@ -130,3 +130,28 @@ TEST(Pile, LaserScanOfTheEmittedProfileReadsItsFace) {
 
 }  // namespace
 }  // namespace talus
+
+namespace talus {
+namespace {
+
+// the default pile at D400 on gravel-covered ground: its face stands (the scan reads more than
+// 25 deg; on a polished floor the paper's gravel ran out to 6-15 deg, issue 11) and its settled
+// toe is moved to where the profile's lies
+TEST(Pile, SettledD400PileStandsWithItsToeWhereTheProfilePutsIt) {
+  Device dev;
+  const PileProfile profile = default_pile_profile();
+  const FidelityPreset& preset = fidelity_preset("D400");
+  PileBuildOptions options;
+  const PileBuild pile = build_pile(dev, profile, preset, gravel(), options, nullptr);
+  const PileScan scan = scan_pile(pile.particles, profile, preset.diameter);
+  std::printf("[ measured ] D400 pile: face %.1f deg, toe moved %+.2f m, toe at %.2f m (profile %.2f m)\n",
+              scan.face_angle_deg, pile.toe_shift, particle_toe(pile.particles, profile, preset.diameter),
+              profile_toe(profile));
+  EXPECT_GT(scan.face_angle_deg, 25.0);
+  EXPECT_NEAR(particle_toe(pile.particles, profile, preset.diameter), profile_toe(profile), 0.5 * preset.diameter);
+  // the default profile rises at 32 deg from its toe: the 0.2 m line lies 0.2 / tan 32 deg behind it
+  EXPECT_NEAR(profile_toe(profile), profile.points.front().x() + kToeHeight / std::tan(32.0 * M_PI / 180.0), 0.05);
+}
+
+}  // namespace
+}  // namespace talus
