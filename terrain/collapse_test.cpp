@@ -41,7 +41,7 @@ CollapseResult run_collapse_test(Device& dev, const Material& material, const Co
   // rough base under the whole channel, the column on it (its bottom at one D)
   Particles particles;
   add_rough_base(particles, -0.5 * d, channel, -0.5 * W + 0.5 * d, 0.5 * W - 0.5 * d, d, material.density);
-  const double solid = (1727.0 / material.density) * L0 * W * H0;
+  const double solid = (kFieldBulkDensity / material.density) * L0 * W * H0;
   const Particles column = emit_box_particles(Vec3(0.0, -0.5 * W, d), Vec3(L0, 0.5 * W, d + 2.2 * H0), d,
                                               material.density, solid, o.seed);
   for (size_t i = 0; i < column.size(); ++i) particles.add(column.position[i], column.radius[i], material.density);

@@ -55,7 +55,7 @@ void check_cutting_options(const CuttingOptions& o) {
     throw InputError("cutting test: --depth " + std::to_string(o.depth) + " m must lie between half a particle (" +
                      std::to_string(0.5 * o.diameter) + " m) and " + std::to_string(kMaxDepth) +
                      " m (the pile's height); choose a depth in that range");
-  fee_force(1727.0, o.depth, 1.0, 90.0, std::atan(o.blade_friction) / kDegree, o.internal_friction_deg);
+  fee_force(kFieldBulkDensity, o.depth, 1.0, 90.0, std::atan(o.blade_friction) / kDegree, o.internal_friction_deg);
 }
 
 CuttingResult run_cutting_test(Device& dev, const Material& material, const CuttingOptions& o, Progress* progress) {
@@ -65,7 +65,7 @@ CuttingResult run_cutting_test(Device& dev, const Material& material, const Cutt
   // the bin: as wide as 10 D or 4 depths, long enough for the travel, the last wedge and a margin
   const double width = std::max(10.0 * d, 4.0 * o.depth);
   double beta = 0.0;
-  fee_force(1727.0, o.depth, width, 90.0, std::atan(o.blade_friction) / kDegree, o.internal_friction_deg, 0.0, &beta);
+  fee_force(kFieldBulkDensity, o.depth, width, 90.0, std::atan(o.blade_friction) / kDegree, o.internal_friction_deg, 0.0, &beta);
   const double wedge = o.depth / std::tan(beta * kDegree);
   const double length = o.travel + 2.0 * wedge + 6.0 * d;
   const double bed = o.depth + std::max(3.0 * d, 0.3);  // bed height over the rough base [m]
@@ -75,7 +75,7 @@ CuttingResult run_cutting_test(Device& dev, const Material& material, const Cutt
   Particles particles;
   add_rough_base(particles, 0.5 * d, length - 0.5 * d, -0.5 * width + 0.5 * d, 0.5 * width - 0.5 * d, d,
                  material.density);
-  const double solid = (1727.0 / material.density) * length * width * bed;
+  const double solid = (kFieldBulkDensity / material.density) * length * width * bed;
   const Particles fill = emit_box_particles(Vec3(0.0, -0.5 * width, d), Vec3(length, 0.5 * width, d + 2.2 * bed), d,
                                             material.density, solid, o.seed);
   for (size_t i = 0; i < fill.size(); ++i) particles.add(fill.position[i], fill.radius[i], material.density);

@@ -39,9 +39,13 @@ struct Material {
   double cohesion = 0.0;
 };
 
+// the bulk density of the field tests' gravel [kg/m^3] (paper §3, SPEC §2.2): what a dense fill
+// of the gravel must reach, and the soil's unit weight in the earthmoving equation
+inline constexpr double kFieldBulkDensity = 1727.0;
+
 // F_c / (cohesion R*^2) of Rumpf's law for the pile's packing: 16 pi / (phi k) with
 // phi = 1727 / 2590 (bulk over particle density, SPEC §2.2) and k = 6 contacts per particle
-inline constexpr double kRumpfPerR2 = 16.0 * 3.14159265358979323846 / ((1727.0 / 2590.0) * 6.0);
+inline constexpr double kRumpfPerR2 = 16.0 * 3.14159265358979323846 / ((kFieldBulkDensity / 2590.0) * 6.0);
 
 // the paper's gravel (SPEC §2.2)
 inline Material gravel() { return Material{}; }

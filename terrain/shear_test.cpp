@@ -12,7 +12,6 @@ namespace talus {
 
 namespace {
 
-constexpr double kGravity = 9.81;  // [m/s^2], as DemSettings::gravity
 
 // the box in diameters (file comment): length, width, height, lower half, wall thickness
 constexpr double kLength = 16.0, kWidth = 8.0, kHeight = 10.0, kLower = 5.0, kWall = 4.0;
@@ -74,7 +73,7 @@ ShearResult run_shear_test(Device& dev, const Material& material, const ShearOpt
   const double travel = o.travel_diameters * d;
 
   // dense fill inside four plane walls: solid volume of the field's bulk density over the box
-  const double solid = (1727.0 / material.density) * L * W * H;
+  const double solid = (kFieldBulkDensity / material.density) * L * W * H;
   Particles particles = emit_box_particles(Vec3(-0.5 * L, -0.5 * W, 0.0), Vec3(0.5 * L, 0.5 * W, 2.2 * H), d,
                                            material.density, solid, o.seed);
   result.particles = static_cast<int>(particles.size());
@@ -112,13 +111,14 @@ ShearResult run_shear_test(Device& dev, const Material& material, const ShearOpt
   ring.material.rolling = material.rolling;
   // the platen: a plate 1 D thick, a twentieth of D clear of the ring, free along z only
   const double area = L * W;
-  const double platen_mass = o.normal_stress * area / kGravity;
+  const double g = -settings.gravity.z();  // [m/s^2]
+  const double platen_mass = o.normal_stress * area / g;
   Tool platen;
   add_box(platen.mesh, Vec3(0, 0, 0.5 * d), Vec3(0.5 * L - 0.05 * d, 0.5 * W - 0.05 * d, 0.5 * d));
   const Particles settled = world.particles();
   platen.position = Vec3(0, 0, top_surface(settled, -L, L, -W, W) + 0.02 * d);
   platen.mobility(2, 2) = 1.0 / platen_mass;
-  platen.external_force = Vec3(0, 0, -platen_mass * kGravity);
+  platen.external_force = platen_mass * settings.gravity;
   platen.material.friction = wall_friction;
   platen.material.rolling = material.rolling;
   ToolWorld tools(dev, world, {ring, platen});
@@ -156,7 +156,7 @@ ShearResult run_shear_test(Device& dev, const Material& material, const ShearOpt
     ShearSample x;
     x.travel = k * o.speed * o.dt;
     x.shear_stress = -(ring_force.x() + platen_force.x()) / area;
-    x.normal_stress = (platen_force.z() + ring_force.z() + upper * kGravity) / area;
+    x.normal_stress = (platen_force.z() + ring_force.z() + upper * g) / area;
     x.platen_z = tools.tool(1).position.z() - z0;
     result.series.push_back(x);
     ring_force.setZero();

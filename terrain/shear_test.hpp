@@ -37,7 +37,7 @@ struct ShearOptions {
   unsigned seed = 1;
   // normal stress of the platen's weight [Pa]: the overburden 1 m down in the 2 m pile
   // (1727 kg/m^3 x 9.81 m/s^2 x 1 m)
-  double normal_stress = 1727.0 * 9.81 * 1.0;
+  double normal_stress = kFieldBulkDensity * 9.81 * 1.0;
   // shear speed [m/s]: quasi-static, inertial number I = (v / 10 D) D / sqrt(sigma / rho) ~ 0.01
   // for a shear band 10 D thick at sigma 17 kPa (MiDi 2004: rate effects below I ~ 1e-2 are small)
   double speed = 0.25;
