@@ -43,13 +43,16 @@ for label, table in variants:
         w = [r["work_J"] for r in seeds]
         cv = lambda x: statistics.pstdev(x) / statistics.mean(x) if len(x) > 1 else float("nan")
         mm, wm = statistics.mean(m), statistics.mean(w)
-        print(f"| {label} | {s.upper()} | {level} | {len(seeds)} | {mm/1e3:.2f} ({100*cv(m):.0f} %) | {mm/field[s][0]-1:+.2f} "
-              f"| {wm/1e3:.0f} ({100*cv(w):.0f} %) | {wm/field[s][1]-1:+.2f} |")
+        spread = lambda x: f"{100*cv(x):.0f} %" if len(x) > 1 else "one seed"
+        print(f"| {label} | {s.upper()} | {level} | {len(seeds)} | {mm/1e3:.2f} ({spread(m)}) | {mm/field[s][0]-1:+.2f} "
+              f"| {wm/1e3:.0f} ({spread(w)}) | {wm/field[s][1]-1:+.2f} |")
 
 print()
 print("| run | loaded mass [t] | change | work [kJ] | change | residual median / p95 [m/s] |")
 print("|---|---|---|---|---|---|")
-for (s, level, k), r in sorted(runs.items()):
+# each level's own seed-1 run first, then its studies
+order = lambda item: (item[0][0], -int(item[0][1][1:]), item[0][2] != "seed1", item[0][2])
+for (s, level, k), r in sorted(runs.items(), key=order):
     base = runs.get((s, level, "seed1"))
     res = r.get("step_residual_m_s", {})
     res_text = f"{res.get('median', float('nan')):.1e} / {res.get('p95', float('nan')):.1e}" if res else "-"
