@@ -79,7 +79,7 @@ void add_cut_command(CLI::App& app) {
     force.label = "blade (talus " + level.name + ")";
     fee.colour = Rgb{0, 0, 0};
     fee.style = LineStyle::dashed;
-    fee.label = "earthmoving equation (measured surcharge)";
+    fee.label = "equation, measured heap";
     Figure fig;
     fig.x_label = "blade travel [m]";
     char title[160];
