@@ -54,12 +54,8 @@ CollapseResult run_collapse_test(Device& dev, const Material& material, const Co
   std::vector<StaticGeom> gated = channel_walls;
   gated.push_back(StaticGeom::plane(Vec3(L0, 0, 0), -Vec3::UnitX()));
   const Bounds bounds{Vec3(-d, -0.5 * W - d, 0.0), Vec3(channel + d, 0.5 * W + d, d + 2.4 * H0)};
-  DemSettings settings;
-  settings.dt = o.dt;
-  settings.iterations = o.iterations;
-  DemWorld world(dev, lab_walls(material), settings, bounds, gated);
-  world.set_particles(particles);
-  settle_dense(world, lab_walls(material), 3.0, progress);
+  auto sample = dense_sample(dev, material, o.dt, o.iterations, bounds, gated, particles, progress);
+  DemWorld& world = *sample;
   Particles settled = world.particles();
   result.initial_length = L0;
   result.initial_height = top_surface(settled, 0.0, L0, -W, W) - d;

@@ -88,12 +88,8 @@ CuttingResult run_cutting_test(Device& dev, const Material& material, const Cutt
   std::vector<StaticGeom> filling = bin;
   filling.push_back(StaticGeom::plane(Vec3::Zero(), Vec3::UnitX()));
   const Bounds bounds{Vec3(-2.0 * d, -0.5 * width - d, 0.0), Vec3(length + d, 0.5 * width + d, d + 2.4 * bed + 4.0 * d)};
-  DemSettings settings;
-  settings.dt = o.dt;
-  settings.iterations = o.iterations;
-  DemWorld world(dev, lab_walls(material), settings, bounds, filling);
-  world.set_particles(particles);
-  settle_dense(world, lab_walls(material), 3.0, progress);
+  auto sample = dense_sample(dev, material, o.dt, o.iterations, bounds, filling, particles, progress);
+  DemWorld& world = *sample;
   const Particles settled = world.particles();
   const double surface = mean_surface(settled, 2.0 * d, length - 2.0 * d, -0.5 * width, 0.5 * width, d);
   double solid_volume = 0.0;

@@ -84,12 +84,8 @@ ShearResult run_shear_test(Device& dev, const Material& material, const ShearOpt
                                      StaticGeom::plane(Vec3(0, -0.5 * W, 0), Vec3::UnitY()),
                                      StaticGeom::plane(Vec3(0, 0.5 * W, 0), -Vec3::UnitY())};
   const Bounds bounds{Vec3(-0.5 * L - T - d, -0.5 * W - T - d, 0.0), Vec3(0.5 * L + T + travel + d, 0.5 * W + T + d, 2.4 * H)};
-  DemSettings settings;
-  settings.dt = o.dt;
-  settings.iterations = o.iterations;
-  DemWorld world(dev, lab_walls(material), settings, bounds, filling);
-  world.set_particles(particles);
-  settle_dense(world, lab_walls(material), 3.0, progress);
+  auto sample = dense_sample(dev, material, o.dt, o.iterations, bounds, filling, particles, progress);
+  DemWorld& world = *sample;
 
   // the lower half's walls stay (4 D thick boxes); the upper half's become the ring
   const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
@@ -111,14 +107,15 @@ ShearResult run_shear_test(Device& dev, const Material& material, const ShearOpt
   ring.material.rolling = material.rolling;
   // the platen: a plate 1 D thick, a twentieth of D clear of the ring, free along z only
   const double area = L * W;
-  const double g = -settings.gravity.z();  // [m/s^2]
+  const Vec3 gravity = world.settings().gravity;  // [m/s^2]
+  const double g = -gravity.z();
   const double platen_mass = o.normal_stress * area / g;
   Tool platen;
   add_box(platen.mesh, Vec3(0, 0, 0.5 * d), Vec3(0.5 * L - 0.05 * d, 0.5 * W - 0.05 * d, 0.5 * d));
   const Particles settled = world.particles();
   platen.position = Vec3(0, 0, top_surface(settled, -L, L, -W, W) + 0.02 * d);
   platen.mobility(2, 2) = 1.0 / platen_mass;
-  platen.external_force = platen_mass * settings.gravity;
+  platen.external_force = platen_mass * gravity;
   platen.material.friction = wall_friction;
   platen.material.rolling = material.rolling;
   ToolWorld tools(dev, world, {ring, platen});

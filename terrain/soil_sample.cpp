@@ -8,6 +8,12 @@
 
 namespace talus {
 
+namespace {
+// the longest a sample may take to settle [s]: a 10-20 D column falls and packs within about
+// 1 s (free fall over 2 m takes 0.64 s); settle() stops earlier once the grains are at rest
+constexpr double kSampleSettleTime = 3.0;
+}  // namespace
+
 double least_squares_slope(const std::vector<double>& x, const std::vector<double>& y) {
   const double n = static_cast<double>(x.size());
   double sx = 0, sy = 0, sxx = 0, sxy = 0;
@@ -55,6 +61,19 @@ void add_rough_base(Particles& particles, double x0, double x1, double y0, doubl
       particles.inv_mass.back() = 0.0;
       particles.inv_inertia.back() = 0.0;
     }
+}
+
+std::unique_ptr<DemWorld> dense_sample(Device& dev, const Material& material, double dt, int iterations,
+                                       const Bounds& bounds, std::vector<StaticGeom> geoms,
+                                       const Particles& particles, Progress* progress) {
+  DemSettings settings;
+  settings.dt = dt;
+  settings.iterations = iterations;
+  auto world = std::make_unique<DemWorld>(dev, lab_walls(material), settings, bounds, std::move(geoms));
+  world->set_particles(particles);
+  // the dense fill ends with material's own friction on (settle_dense)
+  settle_dense(*world, lab_walls(material), kSampleSettleTime, progress);
+  return world;
 }
 
 double settle_dense(DemWorld& world, const Material& material, double max_time, Progress* progress) {

@@ -7,6 +7,9 @@
 // gravel's own material; the piles of the digging scenarios are made the same way, so the tests
 // measure the soil the bucket meets.
 #pragma once
+#include <memory>
+#include <vector>
+
 #include "io/progress.hpp"
 #include "solvers/dem_world.hpp"
 #include "terrain/pile.hpp"
@@ -47,6 +50,12 @@ inline Material lab_walls(Material material) {
   material.ground_rolling = material.rolling;
   return material;
 }
+
+// a soil test's sample: a particle world of `particles` in `geoms` with the test's material on
+// laboratory walls (lab_walls), the level's timestep and sweeps, filled densely (settle_dense)
+std::unique_ptr<DemWorld> dense_sample(Device& dev, const Material& material, double dt, int iterations,
+                                       const Bounds& bounds, std::vector<StaticGeom> geoms,
+                                       const Particles& particles, Progress* progress);
 
 // settles `world` with friction and rolling resistance off (a dense fill), then gives it
 // `material`; returns the simulated settling time [s]
