@@ -2,12 +2,31 @@
 // CLI11 subcommand; apps/talus.cpp wires them up and turns errors into exit codes.
 #pragma once
 #include <CLI/CLI.hpp>
+#include <cmath>
+#include <stdexcept>
+#include <string>
 
 namespace talus::app {
 
 // exit codes (sysexits-like): 0 success, 1 runtime failure, 2 bad usage or bad input
 inline constexpr int kExitFailure = 1;
 inline constexpr int kExitUsage = 2;
+
+// a numeric option that must be a finite number: CLI11's range checks let NaN through (every
+// comparison with it is false), and a NaN timestep or rolling resistance would run silently
+inline CLI::Validator finite_number() {
+  return CLI::Validator(
+      [](std::string& text) {
+        try {
+          size_t used = 0;
+          const double x = std::stod(text, &used);
+          if (std::isfinite(x)) return std::string();
+        } catch (const std::exception&) {
+        }
+        return "must be a finite number, got '" + text + "'";
+      },
+      "FINITE");
+}
 
 void add_pile_command(CLI::App& app);    // build and settle the default pile
 void add_repose_command(CLI::App& app);  // heap test: angle of repose of the gravel

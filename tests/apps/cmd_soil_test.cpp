@@ -68,6 +68,13 @@ TEST(SoilCommand, BadInputIsRefusedWithExitCode2) {
   EXPECT_EQ(run("cut --level D400 --depth -1 --out /tmp/talus_unused"), 2);
   // deeper than the bed can be made
   EXPECT_EQ(run("cut --level D400 --depth 50 --out /tmp/talus_unused_cut"), 2);
+  // not a number: refused before anything runs (range checks alone let NaN through)
+  EXPECT_EQ(run("soil --test shear --level D400 --rolling nan --out /tmp/talus_unused"), 2);
+  EXPECT_EQ(run("soil --test collapse --level D400 --aspect nan --out /tmp/talus_unused"), 2);
+  EXPECT_EQ(run("cut --level D400 --speed nan --out /tmp/talus_unused"), 2);
+  EXPECT_EQ(run("run --scenario hd27 --fidelity D400 --dt nan --out /tmp/talus_unused"), 2);
+  EXPECT_EQ(run("run --scenario hd27 --fidelity D400 --rolling inf --out /tmp/talus_unused"), 2);
+  EXPECT_EQ(run("run --scenario hd27 --fidelity D400 --form-speed 0.001 --out /tmp/talus_unused"), 2);
 }
 
 }  // namespace
