@@ -20,7 +20,7 @@ inline CLI::Validator finite_number() {
         try {
           size_t used = 0;
           const double x = std::stod(text, &used);
-          if (std::isfinite(x)) return std::string();
+          if (used == text.size() && std::isfinite(x)) return std::string();
         } catch (const std::exception&) {
         }
         return "must be a finite number, got '" + text + "'";
