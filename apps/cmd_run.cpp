@@ -69,14 +69,6 @@ std::string effects_note(const vehicle::EffectSet& effects) {
   return note.str();
 }
 
-// the 100 Hz log as the channel-contract CSV
-std::string timeseries_csv(const vehicle::SensorLog& log) {
-  std::ostringstream csv;
-  csv << std::setprecision(10) << vehicle::sensor_csv_header() << '\n';
-  for (const auto& s : log.samples()) vehicle::write_sensor_csv_row(csv, s);
-  return csv.str();
-}
-
 void emit_summary(const RunOptions& o, const nlohmann::json& summary) {
   write_json((std::filesystem::path(o.out) / sim2real::kSummaryFile).string(), summary);
   if (o.json == "-") {
@@ -102,7 +94,7 @@ void run_vehicle_only(const RunOptions& o, const vehicle::Scenario& sc, vehicle:
   const vehicle::SensorLog log = sim2real::simulate_on_flat_ground(sc, effects, &progress);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   progress.finish();
-  write_file_atomically((std::filesystem::path(o.out) / sim2real::kTimeseriesFile).string(), timeseries_csv(log));
+  write_file_atomically((std::filesystem::path(o.out) / sim2real::kTimeseriesFile).string(), vehicle::sensor_log_csv(log));
   const nlohmann::json summary = {{"scenario", sc.name},
                                   {"work_J", log.work()},
                                   {"loaded_mass_kg", sc.payload},
@@ -224,7 +216,7 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
   progress.finish(std::to_string(static_cast<long>(std::lround(loaded))) + " kg loaded");
 
   // outputs: time series, snapshots' collection, summary, figures
-  write_file_atomically((dir / sim2real::kTimeseriesFile).string(), timeseries_csv(sim.log()));
+  write_file_atomically((dir / sim2real::kTimeseriesFile).string(), vehicle::sensor_log_csv(sim.log()));
   if (snapshots_on) write_file_atomically((dir / "particles.pvd").string(), pvd_collection(snapshots));
   const double sim_time = sim.time();
   nlohmann::json summary = {

@@ -47,6 +47,7 @@ struct SweepOptions {
   double max_time = 40.0;   // s per cycle
   unsigned seed = 1;
   bool quiet = false;
+  bool traces = false;  // each cycle's time series as LEVEL/cycle-I.csv
   std::string json;
 };
 
@@ -140,7 +141,12 @@ std::vector<CycleResult> run_share(Device& dev, const SweepOptions& o, const Fid
   std::vector<CycleResult> results;
   for (int i = index; i < o.samples; i += count) {
     const double s = sample_s(i, o.samples);
-    results.push_back(run_feedback_cycle(dev, lp.scenario, preset, lp.pile, lp.surface, options, s));
+    vehicle::SensorLog trace;
+    results.push_back(run_feedback_cycle(dev, lp.scenario, preset, lp.pile, lp.surface, options, s,
+                                         o.traces ? &trace : nullptr));
+    if (o.traces)
+      write_file_atomically((std::filesystem::path(o.out) / preset.name / ("cycle-" + std::to_string(i) + ".csv")).string(),
+                            vehicle::sensor_log_csv(trace));
     const CycleResult& r = results.back();
     if (verbose)
       std::cerr << "  " << preset.name << " s = " << std::fixed << std::setprecision(3) << s << ": M "
@@ -318,6 +324,8 @@ void add_sweep_command(CLI::App& app) {
   cmd->add_option("--max-time", o->max_time, "time limit of one cycle [s]")->capture_default_str()->check(CLI::PositiveNumber);
   cmd->add_option("--seed", o->seed, "random seed of the pile's particle sizes and jitter")->capture_default_str();
   cmd->add_option("--json", o->json, "also write the summary to this file ('-' for stdout)");
+  cmd->add_flag("--traces", o->traces, "also write each cycle's 100 Hz time series as LEVEL/cycle-I.csv "
+                                      "(sample I, the run contract's columns)");
   cmd->add_flag("--quiet", o->quiet, "no progress on stderr");
   cmd->callback([o] { sweep(*o); });
 }

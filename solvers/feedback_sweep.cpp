@@ -23,7 +23,7 @@ vehicle::Scenario feedback_scenario(const vehicle::Scenario& scenario, double ap
 
 CycleResult run_feedback_cycle(Device& dev, const vehicle::Scenario& scenario, const FidelityPreset& preset,
                                const PileBuild& pile, const std::vector<std::pair<double, double>>& surface,
-                               const DiggingOptions& options, double s) {
+                               const DiggingOptions& options, double s, vehicle::SensorLog* trace) {
   DiggingSimulation sim(dev, scenario, preset, pile, options);
   const vehicle::WheelLoader& loader = sim.loader();
   // where the bucket reaches the pile: the first scanned point higher than half a grain
@@ -55,6 +55,7 @@ CycleResult run_feedback_cycle(Device& dev, const vehicle::Scenario& scenario, c
   r.work_J = sim.log().work();
   r.fill_start_s = cycle.phase_start(vehicle::CyclePhase::Fill);
   r.breakout_s = cycle.phase_start(vehicle::CyclePhase::Hold);
+  if (trace) *trace = sim.log();
   return r;
 }
 

@@ -28,10 +28,11 @@ struct CycleResult {
 vehicle::Scenario feedback_scenario(const vehicle::Scenario& scenario, double approach, double max_time);
 
 // one loading cycle with the controller at search parameter s, on a pile built for `scenario`
-// (feedback_scenario) and scanned (`surface`, the laser scan's (x, z) points)
+// (feedback_scenario) and scanned (`surface`, the laser scan's (x, z) points); with `trace`, the
+// cycle's 100 Hz sensor log is copied there (to see why a fill ended where it did)
 CycleResult run_feedback_cycle(Device& dev, const vehicle::Scenario& scenario, const FidelityPreset& preset,
                                const PileBuild& pile, const std::vector<std::pair<double, double>>& surface,
-                               const DiggingOptions& options, double s);
+                               const DiggingOptions& options, double s, vehicle::SensorLog* trace = nullptr);
 
 // the sweep's best productivity M/T and where it is
 struct SweepOptimum {

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
 #include <ostream>
+#include <sstream>
 #include <string>
 
 #include "host/error.hpp"
@@ -65,6 +67,13 @@ void write_sensor_csv_row(std::ostream& out, const SensorSample& s) {
   out << s.t << ',' << s.f_lift << ',' << s.f_tilt << ',' << s.f_traction << ',' << s.v_drive << ',' << s.d_lift
       << ',' << s.d_tilt << ',' << s.boom_deg << ',' << s.bucket_deg << ',' << s.pitch_deg << ',' << s.x_vehicle
       << ',' << s.bucket_tip_x << ',' << s.bucket_tip_z << ',' << s.power << '\n';
+}
+
+std::string sensor_log_csv(const SensorLog& log) {
+  std::ostringstream csv;
+  csv << std::setprecision(10) << sensor_csv_header() << '\n';
+  for (const auto& s : log.samples()) write_sensor_csv_row(csv, s);
+  return csv.str();
 }
 
 double work_between(const std::vector<SensorSample>& samples, double t0, double t1) {

@@ -56,6 +56,9 @@ class SensorLog {
   bool has_last_ = false;
 };
 
+// the whole log as the run contract's timeseries.csv (header and one row per sample, 10 digits)
+std::string sensor_log_csv(const SensorLog& log);
+
 // the work [J] of the logged power over [t0, t1] (trapezoids between samples, the window's ends
 // interpolated): the work of a phase, e.g. the digging phase the metrics compare
 double work_between(const std::vector<SensorSample>& samples, double t0, double t1);

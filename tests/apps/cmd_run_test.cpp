@@ -3,6 +3,7 @@
 
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -86,11 +87,16 @@ TEST(SweepRunTest, OneProcessTwoRanksAndTwoShardsAgree) {
     std::ifstream in(p);
     return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   };
-  // one process
-  ASSERT_EQ(std::system((kTalus + args + (base / "one").string() + " 2>/dev/null").c_str()), 0);
+  // one process, with each cycle's time series (--traces: 100 Hz rows up to the 8 s limit)
+  ASSERT_EQ(std::system((kTalus + args + (base / "one").string() + " --traces 2>/dev/null").c_str()), 0);
   const std::string one = read(base / "one" / "D400" / "sweep.csv");
   EXPECT_NE(one.find("\n0,"), std::string::npos) << one;
   EXPECT_NE(one.find("\n1,"), std::string::npos) << one;
+  for (const char* cycle : {"cycle-0.csv", "cycle-1.csv"}) {
+    const std::string trace = read(base / "one" / "D400" / cycle);
+    EXPECT_EQ(trace.rfind("t,f_lift,f_tilt,f_traction,", 0), 0u) << cycle;
+    EXPECT_GE(std::count(trace.begin(), trace.end(), '\n'), 800) << cycle;
+  }
   EXPECT_TRUE(std::filesystem::exists(base / "one" / "sweep.png"));
   EXPECT_TRUE(std::filesystem::exists(base / "one" / "summary.json"));
   // two shards, then --collect
