@@ -1,19 +1,26 @@
 #!/usr/bin/env python3
 """Tables of issue 11's digging studies from talus run summaries (docs/validation.md).
 
+  scripts/dig-tables.py [DIR] [--label TEXT]
+
 Reads DIR/*/summary.json (default out/dig) and prints, as Markdown:
   - per scenario and level: loaded mass and work over pile seeds (mean, coefficient of variation),
-    against the field values;
+    against the field values, labelled TEXT (default: the first stage's "mu_r 0.02, gravel ground");
+  - across levels: each level's seed mean against the finest level run for that scenario;
   - convergence: each run with --dt or --iterations changed against the same level's seed-1 run;
   - the particle rows' residual at the end of each step (median, 95th percentile).
 Run names follow scripts' convention S-L-seedN, S-L-dtX, S-L-itN (the study queue in the docs)."""
+import argparse
 import json
 import pathlib
 import re
 import statistics
-import sys
 
-root = pathlib.Path(sys.argv[1] if len(sys.argv) > 1 else "out/dig")
+ap = argparse.ArgumentParser(description="Markdown tables of the digging studies (docs/validation.md)")
+ap.add_argument("dir", nargs="?", default="out/dig", type=pathlib.Path, help="folder of run folders")
+ap.add_argument("--label", default="mu_r 0.02, gravel ground (now)", help="the first column of these runs' rows")
+args = ap.parse_args()
+root = args.dir
 runs = {}
 earlier = {}
 for f in sorted(root.glob("*/summary.json")):
@@ -32,7 +39,7 @@ print("| gravel | scenario | level | seeds | loaded mass [t] mean (CV) | E_M | w
 print("|---|---|---|---|---|---|---|---|")
 names = {"1.0": "mu_r 1.0 (before)", "0.02": "mu_r 0.02, polished floor"}
 variants = [(names.get(k, k), v) for k, v in sorted(earlier.items(), key=lambda kv: -float(kv[0]))]
-variants.append(("mu_r 0.02, gravel ground (now)", runs))
+variants.append((args.label, runs))
 for label, table in variants:
   for s in ("fb35", "hd27", "rd21"):
     for level in ("D400", "D200", "D100"):
@@ -46,6 +53,23 @@ for label, table in variants:
         spread = lambda x: f"{100*cv(x):.0f} %" if len(x) > 1 else "one seed"
         print(f"| {label} | {s.upper()} | {level} | {len(seeds)} | {mm/1e3:.2f} ({spread(m)}) | {mm/field[s][0]-1:+.2f} "
               f"| {wm/1e3:.0f} ({spread(w)}) | {wm/field[s][1]-1:+.2f} |")
+
+print()
+print("| scenario | level | seeds | loaded mass [t] | against the finest | work [kJ] | against the finest |")
+print("|---|---|---|---|---|---|---|")
+levels = ("D400", "D200", "D100", "D50")
+for s in ("fb35", "hd27", "rd21"):
+    means = {}
+    for level in levels:
+        seeds = [r for (sc, l, k), r in runs.items() if sc == s and l == level and k.startswith("seed")]
+        if seeds:
+            means[level] = (len(seeds), statistics.mean(r["loaded_mass_kg"] for r in seeds),
+                            statistics.mean(r["work_J"] for r in seeds))
+    finest = [l for l in levels if l in means][-1:] or [None]
+    for level, (n, m, w) in means.items():
+        fm, fw = means[finest[0]][1:]
+        rel = lambda a, b: "-" if level == finest[0] else f"{100 * (a / b - 1):+.0f} % vs {finest[0]}"
+        print(f"| {s.upper()} | {level} | {n} | {m / 1e3:.2f} | {rel(m, fm)} | {w / 1e3:.0f} | {rel(w, fw)} |")
 
 print()
 print("| run | loaded mass [t] | change | work [kJ] | change | residual median / p95 [m/s] |")

@@ -65,9 +65,9 @@ TEST(Digging, ScenarioWithoutAPileIsRejected) {
 
 // cohesive soil (the soil_cohesion effect) resists the bucket more: FB35 at D400 pushes the flat
 // bucket deep into the pile at the traction the driveline has, and in cohesive gravel it gets less
-// far by breakout (7 s). Measured: 3.00 m dry, 2.81 m at 5 kPa, 2.74 m at 20 kPa (the mean
-// traction barely moves, +5 %: the driveline is near its limit, so the soil's resistance shows as
-// speed, not force)
+// far by breakout (7 s). Measured with the inputs retuned in issue 11: 3.10 m dry, 2.95 m at
+// 20 kPa (before them: 3.00 m dry, 2.81 m at 5 kPa, 2.74 m at 20 kPa; the mean traction barely
+// moves, +5 %: the driveline is near its limit, so the soil's resistance shows as speed, not force)
 TEST(Digging, CohesiveSoilResistsPenetration) {
   const vehicle::Scenario sc = vehicle::load_scenario("fb35");
   const FidelityPreset& preset = fidelity_preset("D400");
