@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "host/error.hpp"
 #include "vehicle/data_file.hpp"
@@ -247,6 +248,23 @@ Vec3 WheelLoader::bucket_mesh_vertex_world(int i) const {
 }
 
 Vec3 WheelLoader::bucket_tip_world() const { return system_.body(bucket_).point_to_world(tip_local_); }
+
+Vec3 WheelLoader::payload_point_world() const {
+  return system_.body(bucket_).point_to_world(profile_to_body_ * mesh_.volume_centroid);
+}
+
+double WheelLoader::static_tipping_load() const {
+  // the tipping line: under the front wheels' centres (tyres_[0..1] are the front pair)
+  const double x_line = 0.5 * (system_.body(tyres_[0]->wheel()).position.x() +
+                               system_.body(tyres_[1]->wheel()).position.x());
+  // the weight's moment about it [kg m], positive forward (the payload now carried included)
+  double moment = 0.0;
+  for (const auto& b : system_.bodies()) moment += b.mass * (b.position.x() - x_line);
+  // the payload that brings the moment to zero, added to what the bucket already carries
+  const double arm = payload_point_world().x() - x_line;
+  if (!(arm > 0.0)) return std::numeric_limits<double>::infinity();  // load behind the line: no tipping
+  return payload_ - moment / arm;
+}
 
 double WheelLoader::operating_mass() const {
   double m = 0.0;

@@ -55,6 +55,15 @@ class WheelLoader {
   const BucketMesh& bucket_mesh() const { return mesh_; }
   Vec3 bucket_mesh_vertex_world(int i) const;
   Vec3 bucket_tip_world() const;
+  // where the payload sits: the bucket's struck-volume centroid, world frame, current pose
+  Vec3 payload_point_world() const;
+
+  // static stability straight ahead, in the current pose: the payload [kg] at the bucket's
+  // volume centroid at which the rear tyres carry nothing, i.e. the machine turns over its front
+  // tyres' contact line (flat ground, gravity only, bucket clear of the ground; the payload the
+  // machine carries now counts towards it). Measured with the boom at its longest reach and the
+  // bucket curled this is the static tipping load of ISO 14397-1 (docs/vehicle.md)
+  double static_tipping_load() const;
 
   // parts, for sensors and tests
   const std::array<CylinderJoint*, 2>& lift_cylinders() const { return lift_; }

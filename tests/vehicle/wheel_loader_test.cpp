@@ -153,6 +153,60 @@ TEST(WheelLoaderTest, LoadedLiftTimeMatchesCylinderSpeed) {
   EXPECT_GT(s.bucket_tip_z, 3.5);  // full height: class data hinge-pin height about 3.9 m
 }
 
+// the machine posed at its longest reach: settled on its tyres, the bucket curled about 29 deg,
+// the boom raised to about -6 deg (near horizontal), then held still for 3 s
+void pose_at_full_reach(WheelLoader& w) {
+  const auto run = [&](double seconds, double lift, double tilt) {
+    w.set_lift_speed(lift);
+    w.set_tilt_speed(tilt);
+    for (int k = 0; k < static_cast<int>(std::lround(seconds / kH)); ++k) w.step(kH);
+  };
+  run(0.2, 0.0, 0.0);
+  run(0.9, 0.0, 0.15);
+  run(5.4, 0.1, 0.0);
+  run(3.0, 0.0, 0.0);
+}
+
+// static stability: the payload the moment balance says tips the machine (static_tipping_load)
+// is where the dynamics tip it. Empty and at half of it, the rear tyres carry what the balance
+// predicts, (T - P) g arm / wheelbase, within 5 % (measured: 51.0 kN against 51.0 kN empty, 23.7
+// against 24.4 kN at half); at 110 % they are off the ground. (Close to T the front tyres' deflection pitches the machine forward and T
+// itself falls by 5 %: the balance is checked away from it.) The value is printed: about 5.3 t,
+// half of what ISO 14397-1 asks of a machine sold with a 3.0 m^3 gravel bucket (docs/vehicle.md,
+// "Static stability"; not yet met)
+TEST(WheelLoaderTest, StaticTippingLoadIsWhereTheRearTyresLiftOff) {
+  WheelLoader empty(machine());
+  pose_at_full_reach(empty);
+  const double tipping = empty.static_tipping_load();
+  const auto s = read_sensors(empty, 0);
+  std::cout << "[ measured ] static tipping load at boom " << s.boom_deg << " deg, bucket " << s.bucket_deg
+            << " deg: " << tipping << " kg\n";
+  ASSERT_GT(tipping, 1000.0);
+  ASSERT_LT(tipping, 60000.0);
+  // the rear tyres' load with a payload, posed the same way, and what the balance predicts
+  struct RearLoad {
+    double measured, predicted;
+  };
+  const auto rear_load = [&](double payload) {
+    WheelLoader w(machine(), payload);
+    pose_at_full_reach(w);
+    const double x_front = w.bodies()[w.tyres()[0]->wheel()].position.x();
+    const double wheelbase = x_front - w.bodies()[w.tyres()[2]->wheel()].position.x();
+    const double arm = w.payload_point_world().x() - x_front;
+    return RearLoad{w.tyres()[2]->normal_force() + w.tyres()[3]->normal_force(),
+                    (w.static_tipping_load() - payload) * kG * arm / wheelbase};
+  };
+  for (const double share : {0.0, 0.5}) {
+    const RearLoad r = rear_load(share * tipping);
+    std::cout << "[ measured ] rear tyres at " << 100 * share << " % of it: " << r.measured / 1e3
+              << " kN (moment balance " << r.predicted / 1e3 << " kN)\n";
+    EXPECT_NEAR(r.measured, r.predicted, 0.05 * r.predicted);
+  }
+  const RearLoad over = rear_load(1.1 * tipping);
+  std::cout << "[ measured ] rear tyres at 110 %: " << over.measured / 1e3 << " kN\n";
+  EXPECT_LT(over.measured, 100.0);  // N: off the ground
+}
+
 // overload on a fixed rig: the lift cylinders stall at their force limit and do not extend
 TEST(MotorTest, OverloadedLiftStallsAtForceLimit) {
   WheelLoader w(machine(), 60000.0);
