@@ -47,19 +47,21 @@ void add_metric_flags(CLI::App* cmd, MetricFlags& f) {
   cmd->add_option("--force-constant", f.force_constant_N,
                   "force constant of the vehicle that forces are divided by [N] "
                   "(default: operating weight 15175 kg * 9.80665 m/s^2)")
-      ->check(CLI::PositiveNumber);
+      ->check(finite_number())->check(CLI::PositiveNumber);
   cmd->add_option("--force-norm", f.force_norm,
                   "force error normaliser: 'max' = max |reference| (paper default), "
                   "'constant' = one force constant")
       ->check(CLI::IsMember({"max", "constant"}));
   f.dig_start = cmd->add_option("--dig-start", f.dig_start_s,
-                                "start of the digging window [s] (default: reference summary)");
+                                "start of the digging window [s] (default: reference summary)")
+                      ->check(finite_number());
   f.dig_end = cmd->add_option("--dig-end", f.dig_end_s,
-                              "end of the digging window [s] (default: reference summary)");
+                              "end of the digging window [s] (default: reference summary)")
+                    ->check(finite_number());
   f.l_norm = cmd->add_option("--l-norm", f.l_norm_m,
                              "trajectory normaliser L_norm [m] (default: extent of the "
                              "reference bucket-tip trajectory)")
-                 ->check(CLI::PositiveNumber);
+                 ->check(finite_number())->check(CLI::PositiveNumber);
   cmd->add_option("--decimals", f.decimals, "decimal places of the printed table")
       ->check(CLI::Range(0, 17));
 }

@@ -310,7 +310,7 @@ void add_run_command(CLI::App& app) {
   cmd->add_option("--json", opts->json, "also write the summary to this file ('-' for stdout)");
   cmd->add_option("--snapshot-interval", opts->snapshot_interval, "simulated seconds between particle snapshots "
                                                                   "(.vtp); 0 for none")
-      ->capture_default_str()->check(CLI::NonNegativeNumber);
+      ->capture_default_str()->check(finite_number())->check(CLI::NonNegativeNumber);
   cmd->add_option("--sweep", opts->sweep, "particle sweeps: pgs or jacobi")->capture_default_str();
   cmd->add_option("--seed", opts->seed, "random seed of the pile's particle sizes and jitter")->capture_default_str();
   cmd->add_flag("--quiet", opts->quiet, "no progress on stderr");

@@ -224,7 +224,7 @@ void add_synth_command(CLI::App& app) {
   cmd->add_option("--vary-inputs", o->vary_inputs, "vary the operator's inputs like a repetition of the test: "
                                                    "each series scaled by up to this fraction and shifted by up to "
                                                    "this many seconds (drawn from --seed; metadata.json records them)")
-      ->capture_default_str()->check(CLI::Range(0.0, 0.5));
+      ->capture_default_str()->check(finite_number())->check(CLI::Range(0.0, 0.5));
   cmd->add_option("--pile-seed", o->run.seed, "random seed of the pile's particles")->capture_default_str();
   cmd->add_option("--out", o->run.out, "the measured-run folder to write")->required();
   cmd->add_option("--answer-key", o->answer_key, "where the answer key goes (default: OUT.answer.json, beside OUT)");

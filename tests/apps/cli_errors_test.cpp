@@ -52,4 +52,36 @@ TEST(CliErrors, MalformedProfileNamesFileAndField) {
   EXPECT_NE(o.err.find("width_m"), std::string::npos) << o.err;
 }
 
+// every numeric flag refuses NaN and infinity before anything runs, naming the flag: CLI11's range
+// checks compare, and every comparison with NaN is false (`repose --diameter nan` hung the device
+// in the contact colouring; `repose --friction nan` exited 0 with a 0.85 deg heap)
+TEST(CliErrors, NonFiniteNumbersAreBadInputNamingTheFlag) {
+  const std::string out = " --out " + (std::filesystem::temp_directory_path() / "talus_unused_nan").string();
+  const char* cases[][2] = {
+      {"repose --diameter nan", "--diameter"},
+      {"repose --dt nan", "--dt"},
+      {"repose --friction nan", "--friction"},
+      {"repose --rolling inf", "--rolling"},
+      {"repose --wall-speed nan", "--wall-speed"},
+      {"pile --level D400 --max-time nan", "--max-time"},
+      {"run --scenario hd27 --fidelity D400 --snapshot-interval nan", "--snapshot-interval"},
+      {"sweep --fidelity D400 --approach nan", "--approach"},
+      {"sweep --fidelity D400 --max-time inf", "--max-time"},
+      {"synth --scenario flat-lift --vary-inputs nan", "--vary-inputs"},
+  };
+  for (const auto& c : cases) {
+    const Outcome o = run("", std::string(c[0]) + out);
+    EXPECT_EQ(o.code, 2) << c[0] << ": " << o.err;
+    EXPECT_NE(o.err.find(c[1]), std::string::npos) << c[0] << ": " << o.err;
+    EXPECT_NE(o.err.find("finite number"), std::string::npos) << c[0] << ": " << o.err;
+  }
+  // the flags without --out: bench and the metric flags of compare
+  for (const char* args : {"bench dem --settle-dt nan", "compare --sim a --ref b --l-norm nan",
+                           "compare --sim a --ref b --dig-start nan", "compare --sim a --ref b --force-constant inf"}) {
+    const Outcome o = run("", args);
+    EXPECT_EQ(o.code, 2) << args << ": " << o.err;
+    EXPECT_NE(o.err.find("finite number"), std::string::npos) << args << ": " << o.err;
+  }
+}
+
 }  // namespace
