@@ -33,6 +33,13 @@ for f in sorted(root.glob("*/summary.json")):
     if m:
         earlier.setdefault(m.group(3), {})[(m.group(1), m.group(2), m.group(4))] = json.loads(f.read_text())
 
+# convergence over pile seeds: S-L-dtX-seedN and S-L-itN-seedN, the same seeds with one knob changed
+ensembles = {}
+for f in sorted(root.glob("*/summary.json")):
+    m = re.fullmatch(r"(fb35|hd27|rd21)-(D\d+)-(dt[\d.]+|it\d+)-seed\d+", f.parent.name)
+    if m:
+        ensembles.setdefault(m.groups(), []).append(json.loads(f.read_text()))
+
 field = {"fb35": (3460, 209e3), "hd27": (2700, 127e3), "rd21": (2100, 112e3)}
 
 print("| gravel | scenario | level | seeds | loaded mass [t] mean (CV) | E_M | work [kJ] mean (CV) | E_W |")
@@ -90,3 +97,26 @@ for (s, level, k), r in sorted(runs.items(), key=order):
     dw = r["work_J"] / base["work_J"] - 1
     print(f"| {s.upper()}-{level} {k} ({r['dt_s']*1e3:g} ms, {r['iterations']} sweeps) | {r['loaded_mass_kg']/1e3:.2f} "
           f"| {100*dm:+.1f} % | {r['work_J']/1e3:.0f} | {100*dw:+.1f} % | {res_text} |")
+
+if ensembles:
+    # the study knob's effect on the seed ensemble's mean, against the seed-to-seed spread: with a
+    # coefficient of variation c over n seeds the mean itself is uncertain by about c / sqrt(n)
+    print()
+    print("| scenario | level | Δt, sweeps | seeds | loaded mass [t] mean (CV) | change of the mean | "
+          "work [kJ] mean (CV) | change of the mean |")
+    print("|---|---|---|---|---|---|---|---|")
+    stat = lambda x: (statistics.mean(x), statistics.pstdev(x) / statistics.mean(x))
+    for s in ("fb35", "hd27", "rd21"):
+        for level in ("D400", "D200", "D100"):
+            base = [r for (sc, l, k), r in runs.items() if sc == s and l == level and k.startswith("seed")]
+            rows = [("level's", base)] + [(k, v) for (sc, l, k), v in sorted(ensembles.items())
+                                          if sc == s and l == level]
+            if len(rows) == 1 or len(base) < 2:
+                continue
+            (bm, _), (bw, _) = stat([r["loaded_mass_kg"] for r in base]), stat([r["work_J"] for r in base])
+            for k, rs in rows:
+                (mm, mc), (wm, wc) = stat([r["loaded_mass_kg"] for r in rs]), stat([r["work_J"] for r in rs])
+                knob = f"{rs[0]['dt_s'] * 1e3:g} ms, {rs[0]['iterations']}"
+                change = lambda a, b: "-" if k == "level's" else f"{100 * (a / b - 1):+.1f} %"
+                print(f"| {s.upper()} | {level} | {knob} | {len(rs)} | {mm / 1e3:.2f} ({100 * mc:.0f} %) | {change(mm, bm)} "
+                      f"| {wm / 1e3:.0f} ({100 * wc:.0f} %) | {change(wm, bw)} |")
