@@ -144,9 +144,10 @@ std::vector<CycleResult> run_share(Device& dev, const SweepOptions& o, const Fid
     vehicle::SensorLog trace;
     results.push_back(run_feedback_cycle(dev, lp.scenario, preset, lp.pile, lp.surface, options, s,
                                          o.traces ? &trace : nullptr));
-    if (o.traces)
-      write_file_atomically((std::filesystem::path(o.out) / preset.name / ("cycle-" + std::to_string(i) + ".csv")).string(),
-                            vehicle::sensor_log_csv(trace));
+    if (o.traces) {
+      const auto path = std::filesystem::path(o.out) / preset.name / ("cycle-" + std::to_string(i) + ".csv");
+      write_file_atomically(path.string(), vehicle::sensor_log_csv(trace));
+    }
     const CycleResult& r = results.back();
     if (verbose)
       std::cerr << "  " << preset.name << " s = " << std::fixed << std::setprecision(3) << s << ": M "

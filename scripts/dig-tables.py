@@ -41,6 +41,20 @@ for f in sorted(root.glob("*/summary.json")):
         ensembles.setdefault(m.groups(), []).append(json.loads(f.read_text()))
 
 field = {"fb35": (3460, 209e3), "hd27": (2700, 127e3), "rd21": (2100, 112e3)}
+scenarios = ("fb35", "hd27", "rd21")
+levels = ("D400", "D200", "D100", "D50")
+
+
+def seed_runs(table, s, level):
+    """The runs of scenario s at a level that differ only in their pile seed (S-L-seedN)."""
+    return [r for (sc, l, k), r in table.items() if sc == s and l == level and k.startswith("seed")]
+
+
+def mean_cv(x):
+    """Mean and coefficient of variation (population standard deviation over the mean: the spread
+    of these seeds, not an estimate of a standard error)."""
+    return statistics.mean(x), (statistics.pstdev(x) / statistics.mean(x) if len(x) > 1 else float("nan"))
+
 
 print("| gravel | scenario | level | seeds | loaded mass [t] mean (CV) | E_M | work [kJ] mean (CV) | E_W |")
 print("|---|---|---|---|---|---|---|---|")
@@ -48,27 +62,24 @@ names = {"1.0": "mu_r 1.0 (before)", "0.02": "mu_r 0.02, polished floor"}
 variants = [(names.get(k, k), v) for k, v in sorted(earlier.items(), key=lambda kv: -float(kv[0]))]
 variants.append((args.label, runs))
 for label, table in variants:
-  for s in ("fb35", "hd27", "rd21"):
-    for level in ("D400", "D200", "D100"):
-        seeds = [r for (sc, l, k), r in table.items() if sc == s and l == level and k.startswith("seed")]
-        if not seeds:
-            continue
-        m = [r["loaded_mass_kg"] for r in seeds]
-        w = [r["work_J"] for r in seeds]
-        cv = lambda x: statistics.pstdev(x) / statistics.mean(x) if len(x) > 1 else float("nan")
-        mm, wm = statistics.mean(m), statistics.mean(w)
-        spread = lambda x: f"{100*cv(x):.0f} %" if len(x) > 1 else "one seed"
-        print(f"| {label} | {s.upper()} | {level} | {len(seeds)} | {mm/1e3:.2f} ({spread(m)}) | {mm/field[s][0]-1:+.2f} "
-              f"| {wm/1e3:.0f} ({spread(w)}) | {wm/field[s][1]-1:+.2f} |")
+    for s in scenarios:
+        for level in levels:
+            seeds = seed_runs(table, s, level)
+            if not seeds:
+                continue
+            (mm, mc) = mean_cv([r["loaded_mass_kg"] for r in seeds])
+            (wm, wc) = mean_cv([r["work_J"] for r in seeds])
+            spread = lambda c: f"{100 * c:.0f} %" if len(seeds) > 1 else "one seed"
+            print(f"| {label} | {s.upper()} | {level} | {len(seeds)} | {mm / 1e3:.2f} ({spread(mc)}) "
+                  f"| {mm / field[s][0] - 1:+.2f} | {wm / 1e3:.0f} ({spread(wc)}) | {wm / field[s][1] - 1:+.2f} |")
 
 print()
 print("| scenario | level | seeds | loaded mass [t] | against the finest | work [kJ] | against the finest |")
 print("|---|---|---|---|---|---|---|")
-levels = ("D400", "D200", "D100", "D50")
-for s in ("fb35", "hd27", "rd21"):
+for s in scenarios:
     means = {}
     for level in levels:
-        seeds = [r for (sc, l, k), r in runs.items() if sc == s and l == level and k.startswith("seed")]
+        seeds = seed_runs(runs, s, level)
         if seeds:
             means[level] = (len(seeds), statistics.mean(r["loaded_mass_kg"] for r in seeds),
                             statistics.mean(r["work_J"] for r in seeds))
@@ -90,7 +101,8 @@ for (s, level, k), r in sorted(runs.items(), key=order):
     if k.startswith("seed") and k != "seed1":
         continue
     if base is None or k == "seed1":
-        print(f"| {s.upper()}-{level} ({r['dt_s']*1e3:g} ms, {r['iterations']} sweeps) | {r['loaded_mass_kg']/1e3:.2f} | - "
+        print(f"| {s.upper()}-{level} ({r['dt_s']*1e3:g} ms, {r['iterations']} sweeps) "
+              f"| {r['loaded_mass_kg']/1e3:.2f} | - "
               f"| {r['work_J']/1e3:.0f} | - | {res_text} |")
         continue
     dm = r["loaded_mass_kg"] / base["loaded_mass_kg"] - 1
@@ -99,24 +111,31 @@ for (s, level, k), r in sorted(runs.items(), key=order):
           f"| {100*dm:+.1f} % | {r['work_J']/1e3:.0f} | {100*dw:+.1f} % | {res_text} |")
 
 if ensembles:
-    # the study knob's effect on the seed ensemble's mean, against the seed-to-seed spread: with a
-    # coefficient of variation c over n seeds the mean itself is uncertain by about c / sqrt(n)
+    # the study knob's effect over the same pile seeds: each seed's run with the knob changed
+    # against that seed's run at the level's settings, the mean change and its standard error
+    # (sample standard deviation of the paired changes over sqrt(n)); a change within about two
+    # standard errors is what the seeds' own spread can make
     print()
-    print("| scenario | level | Δt, sweeps | seeds | loaded mass [t] mean (CV) | change of the mean | "
-          "work [kJ] mean (CV) | change of the mean |")
+    print("| scenario | level | Δt, sweeps | seeds | loaded mass [t] mean (CV) | paired change ± SE | "
+          "work [kJ] mean (CV) | paired change ± SE |")
     print("|---|---|---|---|---|---|---|---|")
-    stat = lambda x: (statistics.mean(x), statistics.pstdev(x) / statistics.mean(x))
-    for s in ("fb35", "hd27", "rd21"):
-        for level in ("D400", "D200", "D100"):
-            base = [r for (sc, l, k), r in runs.items() if sc == s and l == level and k.startswith("seed")]
-            rows = [("level's", base)] + [(k, v) for (sc, l, k), v in sorted(ensembles.items())
-                                          if sc == s and l == level]
-            if len(rows) == 1 or len(base) < 2:
+
+    def paired(changed, base, key):
+        by_seed = {r["seed"]: r[key] for r in base}
+        d = [r[key] / by_seed[r["seed"]] - 1 for r in changed if r["seed"] in by_seed]
+        se = statistics.stdev(d) / len(d) ** 0.5 if len(d) > 1 else float("nan")
+        return f"{100 * statistics.mean(d):+.1f} ± {100 * se:.1f} %"
+
+    for s in scenarios:
+        for level in levels:
+            base = seed_runs(runs, s, level)
+            studies = [(k, v) for (sc, l, k), v in sorted(ensembles.items()) if sc == s and l == level]
+            if not studies or len(base) < 2:
                 continue
-            (bm, _), (bw, _) = stat([r["loaded_mass_kg"] for r in base]), stat([r["work_J"] for r in base])
-            for k, rs in rows:
-                (mm, mc), (wm, wc) = stat([r["loaded_mass_kg"] for r in rs]), stat([r["work_J"] for r in rs])
+            for k, rs in [("level's", base)] + studies:
+                (mm, mc) = mean_cv([r["loaded_mass_kg"] for r in rs])
+                (wm, wc) = mean_cv([r["work_J"] for r in rs])
                 knob = f"{rs[0]['dt_s'] * 1e3:g} ms, {rs[0]['iterations']}"
-                change = lambda a, b: "-" if k == "level's" else f"{100 * (a / b - 1):+.1f} %"
-                print(f"| {s.upper()} | {level} | {knob} | {len(rs)} | {mm / 1e3:.2f} ({100 * mc:.0f} %) | {change(mm, bm)} "
-                      f"| {wm / 1e3:.0f} ({100 * wc:.0f} %) | {change(wm, bw)} |")
+                change = lambda key: "-" if k == "level's" else paired(rs, base, key)
+                print(f"| {s.upper()} | {level} | {knob} | {len(rs)} | {mm / 1e3:.2f} ({100 * mc:.0f} %) "
+                      f"| {change('loaded_mass_kg')} | {wm / 1e3:.0f} ({100 * wc:.0f} %) | {change('work_J')} |")

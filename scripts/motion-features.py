@@ -14,29 +14,39 @@ Exit status: 0 when every run meets every target, 1 when one does not, 2 on bad 
 
 Features (t from the start of the run, tip = the bucket's cutting edge in the plane of motion):
   entry_s                    first time the tip reaches the pile's toe (scan height above toe_height_m)
-  tip_height_m               median tip height while it travels the first metre past the toe
+  tip_height_m               median tip height while it travels the first metre past the toe (never
+                             when it does not get a metre in before the machine backs)
   max_depth_below_surface_m  deepest the tip goes under the scanned (pre-dig) surface
   penetration_m              furthest the tip goes past the toe
   lift_start_s               first time the boom cylinder has extended lift_start_stroke_m past its
-                             length at the start (the machine starts at rest)
+                             length at the start (the machine starts at rest); the threshold delays it
+                             by 5 mm over the cylinder's speed: 0.1 s at FB35's slight lift
+                             (0.05 m/s), 0.02 s at HD27's full-speed lift (0.218 m/s)
   tilt_at_reversal_deg       bucket angle when the machine first backs at more than reversal_speed
-  bucket_end_s               first time the tilt cylinder is within end_margin_m of its longest length
+  bucket_end_s               first time the tilt cylinder is within end_margin_m of the end of its
+                             stroke (the machine file's length_range; never when it stops short)
 """
 import argparse
 import bisect
 import csv
 import json
-import math
 import pathlib
 import statistics
 import sys
 
 # thresholds of the definitions above; each is a choice of this script, stated with its reason
-toe_height_m = 0.05        # the scan's first point above the floor's particle layer (grains 30-40 mm)
+toe_height_m = 0.05        # where the bucket first meets grains: the scan's first point off the floor
+                           # (flat static ground; the smallest grains, D100, stand 0.1 m). The
+                           # force-feedback cycle detects the pile at half a grain (feedback_sweep.cpp),
+                           # a threshold for a controller, not a measurement of the operator's motion
 entry_travel_m = 1.0       # "during penetration": the first metre past the toe
 lift_start_stroke_m = 0.005  # 5 mm of boom cylinder: beyond the few mm the linkage settles under load
 reversal_speed = 0.3       # m/s backwards: a deliberate reverse, not the push-back of a stalled bucket
-end_margin_m = 0.005       # 5 mm short of the tilt cylinder's longest recorded length counts as the end
+end_margin_m = 0.005       # 5 mm short of the tilt cylinder's full stroke counts as its end
+
+# what measure() returns, in this order (the targets of a scenario's motion block must be among them)
+FEATURES = ("toe_x_m", "entry_s", "tip_height_m", "max_depth_below_surface_m", "penetration_m",
+            "lift_start_s", "tilt_at_reversal_deg", "bucket_end_s")
 
 
 def fail(message):
@@ -78,24 +88,38 @@ def surface(scan, x):
     return z0 + (z1 - z0) * (x - x0) / (x1 - x0)
 
 
-def measure(rows, scan):
-    """The features of the module docstring; None where the run never shows the motion."""
+def tilt_stroke(machine_path):
+    """The tilt cylinder's stroke [m] from a machine file: d_tilt runs from 0 to it."""
+    machine = json.loads(machine_path.read_text())
+    for c in machine.get("cylinders", []):
+        if c.get("role") == "tilt":
+            low, high = c["length_range"]["value"]
+            return high - low
+    fail(f"{machine_path}: no cylinder with role 'tilt'; the bucket's end cannot be measured")
+
+
+def measure(rows, scan, stroke):
+    """The features of the module docstring; None where the run never shows the motion. stroke:
+    the tilt cylinder's stroke [m]."""
     toe = next((x for x, z in scan if z > toe_height_m), None)
     if toe is None:
         fail("the scan never rises above the floor: no pile to dig")
     entry = next((r for r in rows if r["bucket_tip_x"] >= toe), None)
     f = {"toe_x_m": toe, "entry_s": entry["t"] if entry else None}
     if entry is None:
-        return f | {k: None for k in ("tip_height_m", "max_depth_below_surface_m", "penetration_m",
-                                      "lift_start_s", "tilt_at_reversal_deg", "bucket_end_s")}
+        return f | {k: None for k in FEATURES[2:]}
     after = [r for r in rows if r["t"] >= entry["t"]]
-    # tip height over the first metre of penetration (until the tip first passes it)
-    first_metre = []
+    # tip height over the first metre of penetration: from entry until the tip first passes it,
+    # none when the machine backs first
+    first_metre, reached = [], False
     for r in after:
         if r["bucket_tip_x"] >= toe + entry_travel_m:
+            reached = True
+            break
+        if r["v_drive"] < -reversal_speed:
             break
         first_metre.append(r["bucket_tip_z"])
-    f["tip_height_m"] = statistics.median(first_metre) if first_metre else None
+    f["tip_height_m"] = statistics.median(first_metre) if reached and first_metre else None
     # how deep and how far the tip went
     f["max_depth_below_surface_m"] = max(surface(scan, r["bucket_tip_x"]) - r["bucket_tip_z"] for r in after)
     f["penetration_m"] = max(r["bucket_tip_x"] for r in after) - toe
@@ -105,9 +129,8 @@ def measure(rows, scan):
     # the bucket's angle when the operator reverses
     reverse = next((r for r in after if r["v_drive"] < -reversal_speed), None)
     f["tilt_at_reversal_deg"] = reverse["bucket_deg"] if reverse else None
-    # the tilt cylinder at its end
-    longest = max(r["d_tilt"] for r in rows)
-    f["bucket_end_s"] = next((r["t"] for r in rows if r["d_tilt"] >= longest - end_margin_m), None)
+    # the tilt cylinder at the end of its stroke
+    f["bucket_end_s"] = next((r["t"] for r in rows if r["d_tilt"] >= stroke - end_margin_m), None)
     return f
 
 
@@ -117,6 +140,8 @@ def judge(features, targets):
     for name, t in targets.items():
         if not isinstance(t, dict):
             continue
+        if name not in FEATURES:
+            fail(f"motion target '{name}' is not a measured feature; use one of {', '.join(FEATURES)}")
         value = features.get(name)
         if "target" in t:
             want = f"{t['target']} +- {t['tolerance']}"
@@ -144,10 +169,14 @@ def main():
         path = args.scenario or here / "data" / "scenarios" / f"{summary['scenario'].lower()}.json"
         if not path.is_file():
             fail(f"{path}: no such scenario file; pass --scenario FILE")
-        targets = json.loads(path.read_text()).get("motion")
+        scenario = json.loads(path.read_text())
+        targets = scenario.get("motion")
         if not isinstance(targets, dict):
             fail(f"{path}: has no 'motion' block of targets; add one (docs/digging.md) or pass --scenario")
-        features = measure(rows, scan)
+        machine = here / "data" / "machines" / f"{scenario.get('machine', 'wa320')}.json"
+        if not machine.is_file():
+            fail(f"{path}: field 'machine' names {machine}, which does not exist; fix the name")
+        features = measure(rows, scan, tilt_stroke(machine))
         verdicts = judge(features, targets)
         ok = all(v[3] for v in verdicts)
         all_ok &= ok
