@@ -42,8 +42,8 @@ TEST(FeedbackSweep, DomainTransferAsThePaperDefinesIt) {
 TEST(FeedbackSweep, FeedbackScenarioStartsFiveMetresFromThePile) {
   const vehicle::Scenario base = vehicle::load_scenario("fb35");
   const vehicle::Scenario s = feedback_scenario(base, 5.0, 30.0);
-  // the machine's reference pose has its bucket tip at x = 3.45 m (data/machines/wa320.json)
-  EXPECT_NEAR(s.pile_toe_x, 3.45 + 5.0, 1e-9);
+  // the machine's reference pose has its bucket tip at x = 2.70 m (data/machines/wa320.json)
+  EXPECT_NEAR(s.pile_toe_x, 2.70 + 5.0, 1e-9);
   EXPECT_DOUBLE_EQ(s.duration, 30.0);
   EXPECT_THROW(feedback_scenario(vehicle::load_scenario("flat-lift"), 5.0, 30.0), InputError);
 }

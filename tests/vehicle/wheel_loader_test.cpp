@@ -168,25 +168,33 @@ void pose_at_full_reach(WheelLoader& w) {
 }
 
 // static stability: the payload the moment balance says tips the machine (static_tipping_load)
-// is where the dynamics tip it. Empty and at half of it, the rear tyres carry what the balance
-// predicts, (T - P) g arm / wheelbase, within 5 % (measured: 51.0 kN against 51.0 kN empty, 23.7
-// against 24.4 kN at half); at 90 % they still carry load (1 kN), at 110 % they are off the
-// ground. (Close to T the front tyres' deflection pitches the machine forward and T itself falls
-// by 5 %.) The value is printed: about 5.3 t, half of what ISO 14397-1 asks of a machine sold
-// with a 3.0 m^3 gravel bucket (docs/vehicle.md,
-// "Static stability"; not yet met)
-TEST(WheelLoaderTest, StaticTippingLoadIsWhereTheRearTyresLiftOff) {
+// against the class data, and against the dynamics.
+// - The straight tipping load at full reach lies in the class's band: at least the WA320-5's
+//   full-turn tipping load scaled to this machine's mass (11.02 t at 14.56 t operating mass, a
+//   ratio of 0.757, Marini, "Test macchine" n. 63: 11.5 t; straight is always above full turn) and
+//   at most 1.2 times that (straight over full-turn load of articulated loaders, about 1.1-1.2):
+//   measured 12.8 t (docs/vehicle.md, "Static stability").
+// - Empty and at half of it, the rear tyres carry what the balance in the same pose predicts,
+//   (T - P) g arm / wheelbase, within 5 % (measured: 90.4 kN against 90.4 kN empty, 41.0 against
+//   42.1 kN at half).
+// - ISO 14397-1: a machine sold with a 3.0 m^3 bucket for 1727 kg/m^3 gravel must hold twice
+//   its heaped load (10.4 t) at full reach: the rear tyres stay on the ground (measured 10.8 kN)
+//   although the soft tyres (the paper's 1 MPa) pitch the machine 4 deg forward; at 110 % of T
+//   they are off the ground.
+TEST(WheelLoaderTest, StaticTippingLoadMeetsTheClassDataAndTheDynamics) {
   WheelLoader empty(machine());
   pose_at_full_reach(empty);
   const double tipping = empty.static_tipping_load();
   const auto s = read_sensors(empty, 0);
   std::cout << "[ measured ] static tipping load at boom " << s.boom_deg << " deg, bucket " << s.bucket_deg
             << " deg: " << tipping << " kg\n";
-  ASSERT_GT(tipping, 1000.0);
-  ASSERT_LT(tipping, 60000.0);
+  constexpr double kFullTurnPerMass = 11020.0 / 14560.0;  // WA320-5 (Marini, Test macchine n. 63)
+  const double class_floor = kFullTurnPerMass * empty.operating_mass();
+  EXPECT_GT(tipping, class_floor);
+  EXPECT_LT(tipping, 1.2 * class_floor);
   // the rear tyres' load with a payload, posed the same way, and what the balance predicts
   struct RearLoad {
-    double measured, predicted;
+    double measured, predicted, balance;
   };
   const auto rear_load = [&](double payload) {
     WheelLoader w(machine(), payload);
@@ -195,7 +203,7 @@ TEST(WheelLoaderTest, StaticTippingLoadIsWhereTheRearTyresLiftOff) {
     const double wheelbase = x_front - w.bodies()[w.tyres()[2]->wheel()].position.x();
     const double arm = w.payload_point_world().x() - x_front;
     return RearLoad{w.tyres()[2]->normal_force() + w.tyres()[3]->normal_force(),
-                    (w.static_tipping_load() - payload) * kG * arm / wheelbase};
+                    (w.static_tipping_load() - payload) * kG * arm / wheelbase, w.static_tipping_load()};
   };
   for (const double share : {0.0, 0.5}) {
     const RearLoad r = rear_load(share * tipping);
@@ -203,13 +211,16 @@ TEST(WheelLoaderTest, StaticTippingLoadIsWhereTheRearTyresLiftOff) {
               << " kN (moment balance " << r.predicted / 1e3 << " kN)\n";
     EXPECT_NEAR(r.measured, r.predicted, 0.05 * r.predicted);
   }
-  // the balance's own check of T: below it the rear tyres stay down, above it they lift (at 0 and
-  // T/2 the prediction is -moment g / wheelbase, whatever T is)
-  const RearLoad under = rear_load(0.9 * tipping), over = rear_load(1.1 * tipping);
-  std::cout << "[ measured ] rear tyres at 90 %: " << under.measured / 1e3 << " kN, at 110 %: "
-            << over.measured / 1e3 << " kN\n";
-  EXPECT_GT(under.measured, 100.0);  // N: still on the ground
-  EXPECT_LT(over.measured, 100.0);   // N: off the ground
+  // twice the heaped 3.0 m^3 of the field's gravel (ISO 14397-1's operating load is half the
+  // tipping load): held, and the balance in that pose agrees
+  constexpr double kIsoPayload = 2.0 * 3.0 * 1727.0;  // kg
+  const RearLoad iso = rear_load(kIsoPayload), over = rear_load(1.1 * tipping);
+  std::cout << "[ measured ] rear tyres with " << kIsoPayload << " kg: " << iso.measured / 1e3
+            << " kN (balance in that pose: T " << iso.balance << " kg), at 110 % of T: " << over.measured / 1e3
+            << " kN\n";
+  EXPECT_GT(iso.measured, 100.0);  // N: still on the ground
+  EXPECT_GT(iso.balance, kIsoPayload);
+  EXPECT_LT(over.measured, 100.0);  // N: off the ground
 }
 
 // overload on a fixed rig: the lift cylinders stall at their force limit and do not extend
