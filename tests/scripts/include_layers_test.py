@@ -1,0 +1,275 @@
+#!/usr/bin/env python3
+"""Include direction of the top-level source folders (issue 12, "folders that are layers").
+
+Every project include is written folder-relative to the repository root ("solvers/dem_world.hpp").
+The folders form layers, lowest first (LAYERS below): a file may include files of its own folder and
+of lower layers, never of a higher one. The upward includes that exist today are listed one by one
+in GRANDFATHERED, each with where its code should move; the list may only shrink. The test fails on
+an upward include not in the list, on a list entry that no longer occurs (delete it), and on an
+include whose folder is not in the layer table. docs/architecture.md explains the layers."""
+import pathlib
+import re
+import unittest
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+
+# the layers, lowest first; folders in one inner list share a layer
+LAYERS = [
+    # OpenCL C kernels (*.cl) and the plain-C layouts shared with C++ (common.h, dem_types.h)
+    ["kernels"],
+    # OpenCL runtime (device, typed buffers, programs from the embedded kernels, scan) and the error types
+    ["host"],
+    # the machine: rigid bodies, joints, cylinders, driveline, tyres, wheel loader, sensors, effects, scenarios
+    ["vehicle"],
+    # the particle world and its coupling: DEM stepper, contact sweeps, bucket rows, split solver, rigid tools, digging
+    ["solvers"],
+    # the soil on the DEM world: particles, piles, settling, heap/shear/collapse/cutting tests, bucket fill
+    ["terrain"],
+    # measured runs, metrics, replay, residuals, diagnosis: simulation against the field
+    ["sim2real"],
+    # presentation: result files, images, plots, ray-traced renders, progress lines
+    ["io"],
+    # the `talus` command-line tool, one file per subcommand
+    ["apps"],
+]
+
+# folders of one layer that may include each other, as (including, included); none today
+PEERS = set()
+
+# the files whose includes are checked
+SOURCE_SUFFIXES = (".cpp", ".hpp", ".h", ".cl")
+
+# why each grandfathered include is wrong, and where its code should move (issue 12)
+DIRECT_SOLVER = ("only vehicle/multibody uses the vehicle's MCP solver: move solvers/mcp, direct_solver, "
+                 "spook (and dense_reference) under the vehicle (into vehicle/, or a numerics layer below it)")
+CHANNELS = ("the sensor channel names belong to the sensors: move the channel list into vehicle/sensors.hpp "
+            "and let sim2real/timeseries take it from there")
+DATA_FILES = "locating files in data/ is not presentation: move io/data_files to host/"
+PROGRESS = "Progress is a runtime utility, not presentation: move io/progress to host/"
+ATOMIC_WRITE = ("write_file_atomically is a file utility, not presentation: move it from io/output to host/ "
+                "(with make_output_dir, temporary_name, write_json)")
+PARTICLES = ("Particles (the granular system, its material and walls) is the DEM stepper's input: "
+             "move terrain/particles to solvers/")
+BUCKET_CONTACTS = ("bucket contact detection (Embree closest points, device-side selection) is step 3 of the "
+                   "coupled step: move terrain/bucket_contacts, bucket_selection and embree to solvers/")
+DIGGING = ("digging runs a whole scenario (pile, machine, split solver): move solvers/digging and "
+           "feedback_sweep to a layer above terrain")
+
+# the upward includes that exist today, as (file, included file, why); issue 12 removes them
+GRANDFATHERED = [
+    # vehicle -> solvers
+    ("vehicle/multibody.cpp", "solvers/spook.hpp", DIRECT_SOLVER),
+    ("vehicle/multibody.hpp", "solvers/direct_solver.hpp", DIRECT_SOLVER),
+    # vehicle -> sim2real
+    ("vehicle/effects_builtin.cpp", "sim2real/timeseries.hpp", CHANNELS),
+    # vehicle -> io
+    ("vehicle/data_file.cpp", "io/data_files.hpp", DATA_FILES),
+    # solvers -> terrain
+    ("solvers/dem_reference.hpp", "terrain/particles.hpp", PARTICLES),
+    ("solvers/dem_settings.hpp", "terrain/particles.hpp", PARTICLES),
+    ("solvers/dem_world.hpp", "terrain/particles.hpp", PARTICLES),
+    ("solvers/bucket_rows.hpp", "terrain/bucket_contacts.hpp", BUCKET_CONTACTS),
+    ("solvers/split_solver.hpp", "terrain/bucket_contacts.hpp", BUCKET_CONTACTS),
+    ("solvers/split_solver.hpp", "terrain/bucket_selection.hpp", BUCKET_CONTACTS),
+    ("solvers/tool_world.hpp", "terrain/bucket_contacts.hpp", BUCKET_CONTACTS),
+    ("solvers/tool_world.hpp", "terrain/bucket_selection.hpp", BUCKET_CONTACTS),
+    ("solvers/tool_world.hpp", "terrain/embree.hpp", BUCKET_CONTACTS),
+    ("solvers/digging.cpp", "terrain/bucket_fill.hpp", DIGGING),
+    ("solvers/digging.hpp", "terrain/pile.hpp", DIGGING),
+    # solvers -> io
+    ("solvers/digging.hpp", "io/progress.hpp", PROGRESS),
+    # terrain -> io
+    ("terrain/collapse_test.hpp", "io/progress.hpp", PROGRESS),
+    ("terrain/cutting_test.hpp", "io/progress.hpp", PROGRESS),
+    ("terrain/heap.hpp", "io/progress.hpp", PROGRESS),
+    ("terrain/pile.hpp", "io/progress.hpp", PROGRESS),
+    ("terrain/settle.hpp", "io/progress.hpp", PROGRESS),
+    ("terrain/shear_test.hpp", "io/progress.hpp", PROGRESS),
+    ("terrain/soil_sample.hpp", "io/progress.hpp", PROGRESS),
+    ("terrain/pile.cpp", "io/data_files.hpp", DATA_FILES),
+    # sim2real -> io
+    ("sim2real/replay.hpp", "io/progress.hpp", PROGRESS),
+    ("sim2real/measured.cpp", "io/output.hpp", ATOMIC_WRITE),
+]
+
+# comments (blanked, newlines kept), raw strings (blanked) and ordinary literals (kept as they are),
+# matched left to right so that "/*" inside a string or "//" inside a comment is read correctly;
+# an ordinary literal ends at its line, so a stray quote (a digit separator) cannot swallow code
+_LEXEMES = re.compile(
+    r"""//[^\n]*"""
+    r"""|/\*.*?(?:\*/|\Z)"""
+    r"""|(?<![A-Za-z0-9_])(?:u8|[uUL])?R"(?P<delim>[^()\\\s"]{0,16})\(.*?(?:\)(?P=delim)"|\Z)"""
+    r"""|"(?:\\.|[^"\\\n])*\""""
+    r"""|'(?:\\.|[^'\\\n])*'""",
+    re.DOTALL)
+_INCLUDE = re.compile(r'[ \t]*#[ \t]*include[ \t]*"([^"\n]*)"')
+
+
+def _blank(match):
+    text = match.group(0)
+    if text[0] in "\"'":
+        return text
+    return re.sub(r"[^\n]", " ", text)
+
+
+def parse_includes(text):
+    """The quoted includes of one source text, as (line, path), outside comments and raw strings."""
+    code = _LEXEMES.sub(_blank, text)
+    found = []
+    for number, line in enumerate(code.split("\n"), 1):
+        match = _INCLUDE.match(line)
+        if match:
+            found.append((number, match.group(1)))
+    return found
+
+
+def read_sources(root, layers=LAYERS):
+    """Every source file under the layer folders, as {folder-relative path: text}."""
+    sources = {}
+    for folder in (f for layer in layers for f in layer):
+        for path in sorted((root / folder).rglob("*")):
+            if path.is_file() and path.suffix in SOURCE_SUFFIXES:
+                sources[path.relative_to(root).as_posix()] = path.read_text(encoding="utf-8", errors="replace")
+    return sources
+
+
+def check(sources, layers=LAYERS, peers=PEERS, grandfathered=GRANDFATHERED):
+    """The rule's violations in `sources` ({path: text}), one message each; empty when all is well."""
+    problems = []
+    rank = {}
+    for index, layer in enumerate(layers):
+        for folder in layer:
+            if folder in rank:
+                problems.append(f"LAYERS: folder '{folder}' appears in two layers")
+            rank.setdefault(folder, index)
+    order = " < ".join(" = ".join(layer) for layer in layers)
+    rule = f"rule: a file includes only its own folder and lower layers ({order})"
+    for a, b in sorted(peers):
+        if rank.get(a) is None or rank.get(a) != rank.get(b):
+            problems.append(f"PEERS: ({a}, {b}) are not two folders of one layer")
+
+    allowed = set()
+    for file, included, _ in grandfathered:
+        if (file, included) in allowed:
+            problems.append(f"GRANDFATHERED: {file} -> {included} is listed twice: delete one entry")
+        allowed.add((file, included))
+    seen = set()
+
+    for path in sorted(sources):
+        here = path.split("/")[0]
+        for line, included in parse_includes(sources[path]):
+            there = included.split("/")[0] if "/" in included else ""
+            where = f'{path}:{line}: #include "{included}"'
+            if there not in rank:
+                named = f"folder '{there}'" if there else "no folder"
+                problems.append(f"{where} names {named}, not a layer of LAYERS; {rule}; "
+                                f"include by the folder-relative path, or add the folder to LAYERS")
+            elif here == there or rank[there] < rank[here] or (here, there) in peers:
+                if (path, included) in allowed:
+                    seen.add((path, included))
+                    problems.append(f"{where}: GRANDFATHERED lists it, but it no longer goes upward: "
+                                    f"delete the entry from tests/scripts/include_layers_test.py")
+            elif (path, included) in allowed:
+                seen.add((path, included))
+            elif rank[there] == rank[here]:
+                problems.append(f"{where}: '{here}' and '{there}' share a layer but are not PEERS; {rule}")
+            else:
+                problems.append(f"{where}: '{here}' (layer {rank[here]}) includes the higher layer "
+                                f"'{there}' (layer {rank[there]}); {rule}; move what it needs down, or this file up "
+                                f"(docs/architecture.md, \"Where new code goes\"), rather than adding to GRANDFATHERED")
+
+    for file, included in sorted(allowed - seen):
+        problems.append(f"GRANDFATHERED: {file} -> {included} no longer occurs: "
+                        f"delete the entry from tests/scripts/include_layers_test.py")
+    return problems
+
+
+class IncludeLayersTest(unittest.TestCase):
+    def assert_layered(self, problems):
+        if problems:
+            self.fail(f"{len(problems)} problem(s) with the include layers:\n" + "\n".join(problems))
+
+    def test_repository_includes_go_downward(self):
+        sources = read_sources(ROOT)
+        # guard against a wrong root: the scan must see the project's folders
+        self.assertIn("solvers/dem_world.hpp", sources, f"no sources under {ROOT}")
+        self.assert_layered(check(sources))
+
+
+class CheckerTest(unittest.TestCase):
+    """The parser and the rule on small in-memory trees."""
+
+    # a small order for the synthetic trees: low < mid < top, with peer folders side and wing in mid
+    LAYERS = [["low"], ["mid", "side", "wing"], ["top"]]
+    PEERS = {("mid", "side")}
+
+    def problems(self, sources, grandfathered=()):
+        return check(sources, self.LAYERS, self.PEERS, list(grandfathered))
+
+    def test_parser_reads_includes_outside_comments_and_strings(self):
+        text = "\n".join([
+            '#include "low/a.hpp"',
+            '  #  include   "low/b.h"  // why',
+            "#include <vector>",
+            '// #include "top/commented.hpp"',
+            '/* block comment with data/*.json inside',
+            '#include "top/in_block.hpp"',
+            '*/ #include "low/after_block.hpp"',
+            'const char* s = "/* not a comment";',
+            '#include "low/after_string.cl"',
+            'auto raw = R"x(',
+            '#include "top/in_raw_string.hpp"',
+            ')x";',
+            "int n = 1'000;",
+            '#include "low/after_separator.hpp"',
+        ])
+        self.assertEqual(parse_includes(text), [
+            (1, "low/a.hpp"), (2, "low/b.h"), (7, "low/after_block.hpp"), (9, "low/after_string.cl"),
+            (14, "low/after_separator.hpp")])
+
+    def test_downward_same_folder_and_peer_includes_pass(self):
+        self.assertEqual([], self.problems({
+            "top/t.cpp": '#include "top/t.hpp"\n#include "mid/m.hpp"\n#include "low/l.h"\n',
+            "mid/m.hpp": '#include "low/l.h"\n#include "side/s.hpp"\n'}))
+
+    def test_synthetic_upward_include_fails_naming_file_line_and_rule(self):
+        problems = self.problems({"low/l.cpp": '#include "low/l.hpp"\n\n#include "top/t.hpp"\n'})
+        self.assertEqual(1, len(problems), problems)
+        self.assertIn('low/l.cpp:3: #include "top/t.hpp"', problems[0])
+        self.assertIn("includes the higher layer 'top'", problems[0])
+        self.assertIn("rule: a file includes only its own folder and lower layers (low < mid = side = wing < top)",
+                      problems[0])
+
+    def test_same_layer_needs_peers(self):
+        problems = self.problems({"side/s.cpp": '#include "mid/m.hpp"\n', "mid/w.cpp": '#include "wing/w.hpp"\n'})
+        self.assertEqual(2, len(problems), problems)
+        self.assertIn("'mid' and 'wing' share a layer but are not PEERS", problems[0])
+        self.assertIn("'side' and 'mid' share a layer but are not PEERS", problems[1])
+
+    def test_grandfathered_passes_and_stale_entries_fail(self):
+        sources = {"low/l.cpp": '#include "top/t.hpp"\n', "mid/m.cpp": '#include "low/l.hpp"\n'}
+        self.assertEqual([], self.problems(sources, [("low/l.cpp", "top/t.hpp", "why")]))
+        gone = self.problems(sources, [("low/l.cpp", "top/t.hpp", "why"), ("low/l.cpp", "top/gone.hpp", "why")])
+        self.assertEqual(1, len(gone), gone)
+        self.assertIn("low/l.cpp -> top/gone.hpp no longer occurs", gone[0])
+        self.assertIn("delete the entry", gone[0])
+        downward = self.problems(sources, [("low/l.cpp", "top/t.hpp", "why"), ("mid/m.cpp", "low/l.hpp", "why")])
+        self.assertEqual(1, len(downward), downward)
+        self.assertIn("mid/m.cpp:1", downward[0])
+        self.assertIn("no longer goes upward: delete the entry", downward[0])
+
+    def test_unknown_folders_fail(self):
+        problems = self.problems({"mid/m.cpp": '#include "tests/util.hpp"\n#include "m.hpp"\n'})
+        self.assertEqual(2, len(problems), problems)
+        self.assertIn("mid/m.cpp:1: #include \"tests/util.hpp\" names folder 'tests', not a layer", problems[0])
+        self.assertIn("mid/m.cpp:2: #include \"m.hpp\" names no folder", problems[1])
+
+    def test_bad_tables_fail(self):
+        problems = check({}, [["a"], ["b", "a"]], {("a", "b")}, [])
+        self.assertEqual(2, len(problems), problems)
+        self.assertIn("folder 'a' appears in two layers", problems[0])
+        self.assertIn("PEERS: (a, b) are not two folders of one layer", problems[1])
+
+
+if __name__ == "__main__":
+    unittest.main()
