@@ -7,7 +7,7 @@
 
 #include "apps/commands.hpp"
 #include "host/device.hpp"
-#include "io/output.hpp"
+#include "host/files.hpp"
 #include "terrain/pile.hpp"
 #include "terrain/scenes.hpp"
 #include "terrain/settle.hpp"

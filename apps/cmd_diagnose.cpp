@@ -13,7 +13,7 @@
 #include "apps/commands.hpp"
 #include "host/device.hpp"
 #include "host/error.hpp"
-#include "io/output.hpp"
+#include "host/files.hpp"
 #include "io/plot.hpp"
 #include "sim2real/diagnose.hpp"
 

@@ -4,6 +4,7 @@
 
 #include "apps/commands.hpp"
 #include "host/device.hpp"
+#include "host/files.hpp"
 #include "io/image.hpp"
 #include "io/output.hpp"
 #include "terrain/pile.hpp"

@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "apps/commands.hpp"
-#include "io/output.hpp"
+#include "host/files.hpp"
 #include "io/plot.hpp"
 #include "sim2real/table.hpp"
 #include "sim2real/timeseries.hpp"

@@ -21,9 +21,9 @@
 
 #include "apps/commands.hpp"
 #include "host/error.hpp"
-#include "io/output.hpp"
+#include "host/files.hpp"
+#include "host/progress.hpp"
 #include "io/plot.hpp"
-#include "io/progress.hpp"
 #include "solvers/feedback_sweep.hpp"
 #include "vehicle/data_file.hpp"
 

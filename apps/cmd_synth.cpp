@@ -19,7 +19,7 @@
 #include "apps/commands.hpp"
 #include "apps/run.hpp"
 #include "host/error.hpp"
-#include "io/output.hpp"
+#include "host/files.hpp"
 #include "sim2real/measured.hpp"
 #include "vehicle/data_file.hpp"
 #include "vehicle/scenario.hpp"

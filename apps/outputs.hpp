@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "host/files.hpp"
 #include "io/image.hpp"
 #include "io/output.hpp"
 #include "terrain/particles.hpp"

@@ -9,7 +9,7 @@
 #include <numeric>
 
 #include "host/error.hpp"
-#include "io/output.hpp"
+#include "host/files.hpp"
 
 namespace talus {
 

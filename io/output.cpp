@@ -1,50 +1,8 @@
 #include "io/output.hpp"
 
-#include <unistd.h>
-
-#include <cstdio>
-#include <filesystem>
-#include <fstream>
 #include <sstream>
 
-#include "host/error.hpp"
-
 namespace talus {
-
-void make_output_dir(const std::string& dir) {
-  std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (ec) throw InputError("--out " + dir + ": cannot create the folder (" + ec.message() + ")");
-}
-
-std::string temporary_name(const std::string& path) {
-  // unique per process, so two runs writing the same file cannot mix their halves
-  return path + ".tmp" + std::to_string(::getpid());
-}
-
-void write_file_atomically(const std::string& path, const std::string& content) {
-  std::string tmp = temporary_name(path);
-  std::error_code ec;
-  {
-    std::ofstream out(tmp, std::ios::binary);
-    if (!out) throw Error(path + ": cannot write (check the folder exists and is writable)");
-    out << content;
-    out.close();
-    if (!out) {
-      std::filesystem::remove(tmp, ec);
-      throw Error(path + ": write failed (disk full?); the previous file, if any, is untouched");
-    }
-  }
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::filesystem::remove(tmp, ec);
-    throw Error(path + ": cannot move the finished file into place (" + ec.message() + ")");
-  }
-}
-
-void write_json(const std::string& path, const nlohmann::json& j) {
-  write_file_atomically(path, j.dump(2) + "\n");
-}
 
 std::string particles_csv(const Particles& p) {
   std::ostringstream os;

@@ -16,7 +16,7 @@
 #include <mutex>
 
 #include "host/error.hpp"
-#include "io/output.hpp"
+#include "host/files.hpp"
 
 namespace talus {
 

@@ -5,7 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "host/error.hpp"
-#include "io/output.hpp"
+#include "host/files.hpp"
 
 namespace talus::sim2real {
 

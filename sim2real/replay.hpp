@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "io/progress.hpp"
+#include "host/progress.hpp"
 #include "sim2real/measured.hpp"
 #include "sim2real/timeseries.hpp"
 #include "vehicle/effect.hpp"

@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "io/progress.hpp"
+#include "host/progress.hpp"
 #include "solvers/split_solver.hpp"
 #include "terrain/pile.hpp"
 #include "vehicle/effect.hpp"

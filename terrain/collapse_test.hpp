@@ -12,7 +12,7 @@
 // as its near side lies within one D of the front so far (a stray grain that bounced ahead does
 // not count, as in the experiments' photographs).
 #pragma once
-#include "io/progress.hpp"
+#include "host/progress.hpp"
 #include "solvers/dem_world.hpp"
 
 namespace talus {

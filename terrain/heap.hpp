@@ -2,7 +2,7 @@
 // walls on a rough base, the walls are removed ("lifted"), and the particles run out into a
 // heap whose flank angle is the angle of repose. Nothing imposes the heap's shape.
 #pragma once
-#include "io/progress.hpp"
+#include "host/progress.hpp"
 #include "solvers/dem_world.hpp"
 
 namespace talus {

@@ -6,8 +6,8 @@
 #include <nlohmann/json.hpp>
 #include <random>
 
+#include "host/data_files.hpp"
 #include "host/error.hpp"
-#include "io/data_files.hpp"
 
 namespace talus {
 

@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "io/progress.hpp"
+#include "host/progress.hpp"
 #include "solvers/dem_world.hpp"
 #include "terrain/particles.hpp"
 

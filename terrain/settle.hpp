@@ -1,6 +1,6 @@
 // Letting a granular system come to rest, and measures of its state.
 #pragma once
-#include "io/progress.hpp"
+#include "host/progress.hpp"
 #include "solvers/dem_world.hpp"
 
 namespace talus {

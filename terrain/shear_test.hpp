@@ -25,7 +25,7 @@
 #pragma once
 #include <vector>
 
-#include "io/progress.hpp"
+#include "host/progress.hpp"
 #include "solvers/dem_world.hpp"
 
 namespace talus {

@@ -10,10 +10,10 @@
 #include <memory>
 #include <vector>
 
-#include "io/progress.hpp"
+#include "host/progress.hpp"
 #include "solvers/dem_world.hpp"
-#include "terrain/pile.hpp"
 #include "terrain/particles.hpp"
+#include "terrain/pile.hpp"
 
 namespace talus {
 

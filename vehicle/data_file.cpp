@@ -4,8 +4,8 @@
 #include <filesystem>
 #include <fstream>
 
+#include "host/data_files.hpp"
 #include "host/error.hpp"
-#include "io/data_files.hpp"
 
 namespace talus::vehicle {
 
@@ -73,7 +73,7 @@ double DataFile::plain_number(const nlohmann::json& j, const std::string& where,
 std::string find_data_file(const std::string& name_or_path, const std::string& subdir) {
   namespace fs = std::filesystem;
   if (fs::exists(name_or_path) && fs::is_regular_file(name_or_path)) return name_or_path;
-  // a shipped name: data/<subdir>/<name>.json where io/data_files looks for data
+  // a shipped name: data/<subdir>/<name>.json where host/data_files looks for data
   return locate_data_file(subdir + "/" + name_or_path + ".json");
 }
 

@@ -31,7 +31,7 @@ class DataFile {
 };
 
 // a data file by name or path: an existing path as given, else <dir>/<name>.json under the source
-// tree, the current directory or TALUS_DATA_DIR (io/data_files.hpp)
+// tree, the current directory or TALUS_DATA_DIR (host/data_files.hpp)
 std::string find_data_file(const std::string& name_or_path, const std::string& subdir);
 
 }  // namespace talus::vehicle

@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "host/error.hpp"
-#include "io/output.hpp"
+#include "host/files.hpp"
 #include "io/plot.hpp"
 #include "sim2real/timeseries.hpp"
 

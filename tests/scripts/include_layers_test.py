@@ -44,10 +44,6 @@ DIRECT_SOLVER = ("only vehicle/multibody uses the vehicle's MCP solver: move sol
                  "spook (and dense_reference) under the vehicle (into vehicle/, or a numerics layer below it)")
 CHANNELS = ("the sensor channel names belong to the sensors: move the channel list into vehicle/sensors.hpp "
             "and let sim2real/timeseries take it from there")
-DATA_FILES = "locating files in data/ is not presentation: move io/data_files to host/"
-PROGRESS = "Progress is a runtime utility, not presentation: move io/progress to host/"
-ATOMIC_WRITE = ("write_file_atomically is a file utility, not presentation: move it from io/output to host/ "
-                "(with make_output_dir, temporary_name, write_json)")
 PARTICLES = ("Particles (the granular system, its material and walls) is the DEM stepper's input: "
              "move terrain/particles to solvers/")
 BUCKET_CONTACTS = ("bucket contact detection (Embree closest points, device-side selection) is step 3 of the "
@@ -62,8 +58,6 @@ GRANDFATHERED = [
     ("vehicle/multibody.hpp", "solvers/direct_solver.hpp", DIRECT_SOLVER),
     # vehicle -> sim2real
     ("vehicle/effects_builtin.cpp", "sim2real/timeseries.hpp", CHANNELS),
-    # vehicle -> io
-    ("vehicle/data_file.cpp", "io/data_files.hpp", DATA_FILES),
     # solvers -> terrain
     ("solvers/dem_reference.hpp", "terrain/particles.hpp", PARTICLES),
     ("solvers/dem_settings.hpp", "terrain/particles.hpp", PARTICLES),
@@ -76,20 +70,6 @@ GRANDFATHERED = [
     ("solvers/tool_world.hpp", "terrain/embree.hpp", BUCKET_CONTACTS),
     ("solvers/digging.cpp", "terrain/bucket_fill.hpp", DIGGING),
     ("solvers/digging.hpp", "terrain/pile.hpp", DIGGING),
-    # solvers -> io
-    ("solvers/digging.hpp", "io/progress.hpp", PROGRESS),
-    # terrain -> io
-    ("terrain/collapse_test.hpp", "io/progress.hpp", PROGRESS),
-    ("terrain/cutting_test.hpp", "io/progress.hpp", PROGRESS),
-    ("terrain/heap.hpp", "io/progress.hpp", PROGRESS),
-    ("terrain/pile.hpp", "io/progress.hpp", PROGRESS),
-    ("terrain/settle.hpp", "io/progress.hpp", PROGRESS),
-    ("terrain/shear_test.hpp", "io/progress.hpp", PROGRESS),
-    ("terrain/soil_sample.hpp", "io/progress.hpp", PROGRESS),
-    ("terrain/pile.cpp", "io/data_files.hpp", DATA_FILES),
-    # sim2real -> io
-    ("sim2real/replay.hpp", "io/progress.hpp", PROGRESS),
-    ("sim2real/measured.cpp", "io/output.hpp", ATOMIC_WRITE),
 ]
 
 # comments (blanked, newlines kept), raw strings (blanked) and ordinary literals (kept as they are),

@@ -1,4 +1,4 @@
-#include "io/progress.hpp"
+#include "host/progress.hpp"
 
 #include <unistd.h>
 

@@ -1,4 +1,4 @@
-#include "io/data_files.hpp"
+#include "host/data_files.hpp"
 
 #include <cstdlib>
 #include <filesystem>

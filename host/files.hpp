@@ -1,0 +1,17 @@
+// Writing files: every file goes to a temporary name first and is renamed into place, so an
+// interrupted or failed run never leaves a half-written file behind nor clobbers an old one.
+#pragma once
+#include <nlohmann/json.hpp>
+#include <string>
+
+namespace talus {
+
+// creates the folder (and parents); InputError naming it when impossible
+void make_output_dir(const std::string& dir);
+// a temporary name next to `path`, unique to this process
+std::string temporary_name(const std::string& path);
+// writes `content` to a temporary name, then renames it to path
+void write_file_atomically(const std::string& path, const std::string& content);
+void write_json(const std::string& path, const nlohmann::json& j);
+
+}  // namespace talus
