@@ -20,6 +20,15 @@ std::string temporary_name(const std::string& path) {
   return path + ".tmp" + std::to_string(::getpid());
 }
 
+void move_into_place(const std::string& tmp, const std::string& path) {
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) {
+    std::filesystem::remove(tmp, ec);
+    throw Error(path + ": cannot move the finished file into place (" + ec.message() + ")");
+  }
+}
+
 void write_file_atomically(const std::string& path, const std::string& content) {
   std::string tmp = temporary_name(path);
   std::error_code ec;
@@ -33,11 +42,7 @@ void write_file_atomically(const std::string& path, const std::string& content) 
       throw Error(path + ": write failed (disk full?); the previous file, if any, is untouched");
     }
   }
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::filesystem::remove(tmp, ec);
-    throw Error(path + ": cannot move the finished file into place (" + ec.message() + ")");
-  }
+  move_into_place(tmp, path);
 }
 
 void write_json(const std::string& path, const nlohmann::json& j) {

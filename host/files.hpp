@@ -10,6 +10,9 @@ namespace talus {
 void make_output_dir(const std::string& dir);
 // a temporary name next to `path`, unique to this process
 std::string temporary_name(const std::string& path);
+// renames the finished temporary file `tmp` to `path`; on failure removes it and throws Error
+// naming `path` (writers that stream their own format, like PNG, end with this)
+void move_into_place(const std::string& tmp, const std::string& path);
 // writes `content` to a temporary name, then renames it to path
 void write_file_atomically(const std::string& path, const std::string& content);
 void write_json(const std::string& path, const nlohmann::json& j);

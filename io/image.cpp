@@ -60,11 +60,7 @@ void Image::write_png(const std::string& path) const {
     std::filesystem::remove(tmp, ec);
     throw Error(path + ": write failed (disk full?); the previous image, if any, is untouched");
   }
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::filesystem::remove(tmp, ec);
-    throw Error(path + ": cannot move the finished image into place (" + ec.message() + ")");
-  }
+  move_into_place(tmp, path);
 }
 
 Image side_view(const Particles& p, int width) {
