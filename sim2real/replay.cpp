@@ -17,10 +17,7 @@ TimeSeries to_timeseries(const std::vector<vehicle::SensorSample>& samples) {
   TimeSeries ts;
   for (auto& column : ts.columns) column.reserve(samples.size());
   for (const auto& s : samples) {
-    const double row[kChannelCount] = {s.t,         s.f_lift,    s.f_tilt,    s.f_traction,   s.v_drive,
-                                       s.d_lift,    s.d_tilt,    s.boom_deg,  s.bucket_deg,   s.pitch_deg,
-                                       s.x_vehicle, s.bucket_tip_x, s.bucket_tip_z, s.power};
-    for (size_t c = 0; c < kChannelCount; ++c) ts.columns[c].push_back(row[c]);
+    for (size_t c = 0; c < kChannelCount; ++c) ts.columns[c].push_back(s.*vehicle::kSensorChannels[c].field);
   }
   return ts;
 }

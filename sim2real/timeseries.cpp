@@ -37,6 +37,13 @@ std::vector<std::string> split_csv_line(const std::string& line) {
   return out;
 }
 
+// the contract's header line: every channel's name, comma-separated, in file order
+std::string contract_header() {
+  std::string h;
+  for (std::size_t c = 0; c < kChannelCount; ++c) h += (c ? "," : "") + std::string(kChannelNames[c]);
+  return h;
+}
+
 [[noreturn]] void fail(const fs::path& file, std::size_t line, const std::string& field,
                        const std::string& problem) {
   std::ostringstream msg;
@@ -106,9 +113,7 @@ TimeSeries load_timeseries(const fs::path& file) {
     }
     if (found == header.size()) {
       fail(file, line_no, kChannelNames[c],
-           "missing column; the header must name every channel of the contract "
-           "(t,f_lift,f_tilt,f_traction,v_drive,d_lift,d_tilt,boom_deg,bucket_deg,pitch_deg,"
-           "x_vehicle,bucket_tip_x,bucket_tip_z,power)");
+           "missing column; the header must name every channel of the contract (" + contract_header() + ")");
     }
     index[c] = found;
   }
@@ -149,8 +154,7 @@ void save_timeseries(const fs::path& file, const TimeSeries& series) {
     }
   }
   std::ostringstream out;
-  for (std::size_t c = 0; c < kChannelCount; ++c) out << (c ? "," : "") << kChannelNames[c];
-  out << "\n";
+  out << contract_header() << "\n";
   for (std::size_t n = 0; n < series.size(); ++n) {
     for (std::size_t c = 0; c < kChannelCount; ++c) {
       out << (c ? "," : "") << format_number(series.columns[c][n]);

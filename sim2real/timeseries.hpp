@@ -10,21 +10,14 @@
 #include <string>
 #include <vector>
 
+#include "vehicle/sensor_channels.hpp"
+
 namespace talus::sim2real {
 
-// the channel contract, in file order (SPEC.md §2.4, paper Table 1), all SI:
-// t [s]; cylinder and traction forces [N]; drive speed [m/s]; cylinder extensions [m];
-// boom, bucket (relative to chassis) and chassis pitch angles [deg]; vehicle position and
-// bucket tip [m]; power [W]
-enum class Channel : std::size_t {
-  t, f_lift, f_tilt, f_traction, v_drive, d_lift, d_tilt, boom_deg, bucket_deg, pitch_deg,
-  x_vehicle, bucket_tip_x, bucket_tip_z, power
-};
-inline constexpr std::size_t kChannelCount = 14;
-inline constexpr std::array<const char*, kChannelCount> kChannelNames = {
-    "t",          "f_lift",    "f_tilt",     "f_traction",   "v_drive",
-    "d_lift",     "d_tilt",    "boom_deg",   "bucket_deg",   "pitch_deg",
-    "x_vehicle",  "bucket_tip_x", "bucket_tip_z", "power"};
+// the channel contract (names, order, units) is the sensors': vehicle/sensor_channels.hpp
+using vehicle::Channel;
+using vehicle::kChannelCount;
+using vehicle::kChannelNames;
 
 // file names inside a run directory
 inline constexpr const char* kTimeseriesFile = "timeseries.csv";

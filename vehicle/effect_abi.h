@@ -26,9 +26,9 @@ extern "C" {
 /* the name of the exported entry point */
 #define TALUS_EFFECT_ENTRY "talus_effect_plugin_entry"
 
-/* one sensor sample (vehicle/sensors.hpp SensorSample): forces [N], speeds [m/s], strokes [m],
- * angles [deg], positions [m], power [W]; lift_rate and tilt_rate are the cylinders' extension
- * rates [m/s] (not in the CSV contract) */
+/* one sensor sample (vehicle/sensor_channels.hpp SensorSample, the same layout): forces [N],
+ * speeds [m/s], strokes [m], angles [deg], positions [m], power [W]; lift_rate and tilt_rate are
+ * the cylinders' extension rates [m/s] (not in the CSV contract) */
 typedef struct talus_sensor_sample {
   double t;
   double f_lift, f_tilt, f_traction;

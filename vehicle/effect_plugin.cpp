@@ -4,6 +4,7 @@
 
 #include <cctype>
 #include <cmath>
+#include <cstddef>
 #include <cstring>
 #include <sstream>
 #include <utility>
@@ -24,6 +25,29 @@ bool is_identifier(const char* s) {
 }
 
 const char* text_or_empty(const char* s) { return s ? s : ""; }
+
+// the C ABI's sample mirrors SensorSample field for field (vehicle/sensor_channels.hpp, where the
+// channels are defined); the compiler holds the two layouts together
+#define TALUS_SAME_FIELD(f) \
+  static_assert(offsetof(talus_sensor_sample, f) == offsetof(SensorSample, f), "ABI field " #f)
+static_assert(sizeof(talus_sensor_sample) == sizeof(SensorSample), "ABI sample size");
+TALUS_SAME_FIELD(t);
+TALUS_SAME_FIELD(f_lift);
+TALUS_SAME_FIELD(f_tilt);
+TALUS_SAME_FIELD(f_traction);
+TALUS_SAME_FIELD(v_drive);
+TALUS_SAME_FIELD(d_lift);
+TALUS_SAME_FIELD(d_tilt);
+TALUS_SAME_FIELD(boom_deg);
+TALUS_SAME_FIELD(bucket_deg);
+TALUS_SAME_FIELD(pitch_deg);
+TALUS_SAME_FIELD(x_vehicle);
+TALUS_SAME_FIELD(bucket_tip_x);
+TALUS_SAME_FIELD(bucket_tip_z);
+TALUS_SAME_FIELD(power);
+TALUS_SAME_FIELD(lift_rate);
+TALUS_SAME_FIELD(tilt_rate);
+#undef TALUS_SAME_FIELD
 
 talus_sensor_sample to_c(const SensorSample& s) {
   return {s.t,         s.f_lift,    s.f_tilt,       s.f_traction,   s.v_drive, s.d_lift,    s.d_tilt,    s.boom_deg,

@@ -6,8 +6,8 @@
 #include <utility>
 
 #include "host/error.hpp"
-#include "sim2real/timeseries.hpp"
 #include "vehicle/effect.hpp"
+#include "vehicle/sensor_channels.hpp"
 
 namespace talus::vehicle {
 
@@ -17,48 +17,46 @@ namespace {
 // pushed and a held cylinder reads no friction (the sign of a zero speed is undefined)
 double regularised_sign(double speed, double ramp_speed) { return std::clamp(speed / ramp_speed, -1.0, 1.0); }
 
-// the sensor channels an effect may act on: the channel contract without time, as
-// sim2real/timeseries.hpp names them, with the field of SensorSample and the unit
+// the largest bias accepted on each channel of the contract (vehicle/sensor_channels.hpp), in its
+// unit: about a tenth of the channel's full scale on this machine class (lift force to 830 kN,
+// traction 120 kN, speed 3.6 m/s, strokes 0.4-1.2 m, angles tens of degrees, positions metres,
+// power 127 kW); a larger offset is a broken sensor, not a bias. Time (column 0) takes none.
+constexpr std::array<double, kChannelCount> kMaxBias = {
+    0.0,    // t [s]
+    100e3,  // f_lift [N]
+    100e3,  // f_tilt [N]
+    20e3,   // f_traction [N]
+    0.5,    // v_drive [m/s]
+    0.1,    // d_lift [m]
+    0.05,   // d_tilt [m]
+    10.0,   // boom_deg [deg]
+    10.0,   // bucket_deg [deg]
+    5.0,    // pitch_deg [deg]
+    1.0,    // x_vehicle [m]
+    1.0,    // bucket_tip_x [m]
+    1.0,    // bucket_tip_z [m]
+    20e3,   // power [W]
+};
+
+// a sensor channel an effect may act on: every channel of the contract but time
 struct ChannelInfo {
   const char* name;
   double SensorSample::*field;
   const char* unit;
-  // the largest bias accepted [unit]: about a tenth of the channel's full scale on this machine
-  // class (lift force to 830 kN, traction 120 kN, speed 3.6 m/s, strokes 0.4-1.2 m, angles tens of
-  // degrees, positions metres, power 127 kW); a larger offset is a broken sensor, not a bias
   double max_bias;
 };
 
-constexpr std::array<ChannelInfo, sim2real::kChannelCount - 1> kChannels = {{
-    {"f_lift", &SensorSample::f_lift, "N", 100e3},
-    {"f_tilt", &SensorSample::f_tilt, "N", 100e3},
-    {"f_traction", &SensorSample::f_traction, "N", 20e3},
-    {"v_drive", &SensorSample::v_drive, "m/s", 0.5},
-    {"d_lift", &SensorSample::d_lift, "m", 0.1},
-    {"d_tilt", &SensorSample::d_tilt, "m", 0.05},
-    {"boom_deg", &SensorSample::boom_deg, "deg", 10.0},
-    {"bucket_deg", &SensorSample::bucket_deg, "deg", 10.0},
-    {"pitch_deg", &SensorSample::pitch_deg, "deg", 5.0},
-    {"x_vehicle", &SensorSample::x_vehicle, "m", 1.0},
-    {"bucket_tip_x", &SensorSample::bucket_tip_x, "m", 1.0},
-    {"bucket_tip_z", &SensorSample::bucket_tip_z, "m", 1.0},
-    {"power", &SensorSample::power, "W", 20e3},
-}};
-
-// the table follows the contract's order (checked once, at the first use)
-const ChannelInfo& channel_info(const std::string& name) {
-  for (size_t i = 0; i < kChannels.size(); ++i) {
-    if (std::string(kChannels[i].name) != sim2real::kChannelNames[i + 1])
-      throw Error("effects: channel table out of step with sim2real/timeseries.hpp at '" +
-                  std::string(kChannels[i].name) + "'");
-    if (name == kChannels[i].name) return kChannels[i];
+ChannelInfo channel_info(const std::string& name) {
+  for (std::size_t c = 1; c < kChannelCount; ++c) {
+    const SensorChannel& ch = kSensorChannels[c];
+    if (name == ch.name) return ChannelInfo{ch.name, ch.field, ch.unit, kMaxBias[c]};
   }
   throw Error("effects: no sensor channel '" + name + "'");
 }
 
 std::vector<std::string> channel_names() {
   std::vector<std::string> names;
-  for (const auto& c : kChannels) names.emplace_back(c.name);
+  for (std::size_t c = 1; c < kChannelCount; ++c) names.emplace_back(kSensorChannels[c].name);
   return names;
 }
 
@@ -247,11 +245,12 @@ class SensorBias : public Effect {
  public:
   SensorBias() : Effect("sensor_bias", "a constant offset on one sensor channel") {
     channel_ = add_option({"channel", "f_lift", channel_names(), "the sensor channel (timeseries.csv column)"});
-    bias_ = add_parameter({"bias", 0.0, -kChannels[0].max_bias, kChannels[0].max_bias, kChannels[0].unit,
+    const ChannelInfo initial = channel_info(option_value(channel_));
+    bias_ = add_parameter({"bias", 0.0, -initial.max_bias, initial.max_bias, initial.unit,
                            "offset added to the channel, in the channel's unit"});
   }
   void changed() override {
-    const ChannelInfo& ch = channel_info(option_value(channel_));
+    const ChannelInfo ch = channel_info(option_value(channel_));
     field_ = ch.field;
     redefine_parameter(bias_, -ch.max_bias, ch.max_bias, ch.unit);
   }

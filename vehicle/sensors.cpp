@@ -58,15 +58,19 @@ SensorSample read_sensors(const WheelLoader& loader, double t) {
   return s;
 }
 
-const char* sensor_csv_header() {
-  return "t,f_lift,f_tilt,f_traction,v_drive,d_lift,d_tilt,boom_deg,bucket_deg,pitch_deg,x_vehicle,"
-         "bucket_tip_x,bucket_tip_z,power";
+const std::string& sensor_csv_header() {
+  // built once from the channel table (immutable after that)
+  static const std::string header = [] {
+    std::string h;
+    for (const auto& c : kSensorChannels) h += (h.empty() ? "" : ",") + std::string(c.name);
+    return h;
+  }();
+  return header;
 }
 
 void write_sensor_csv_row(std::ostream& out, const SensorSample& s) {
-  out << s.t << ',' << s.f_lift << ',' << s.f_tilt << ',' << s.f_traction << ',' << s.v_drive << ',' << s.d_lift
-      << ',' << s.d_tilt << ',' << s.boom_deg << ',' << s.bucket_deg << ',' << s.pitch_deg << ',' << s.x_vehicle
-      << ',' << s.bucket_tip_x << ',' << s.bucket_tip_z << ',' << s.power << '\n';
+  for (std::size_t c = 0; c < kChannelCount; ++c) out << (c ? "," : "") << s.*kSensorChannels[c].field;
+  out << '\n';
 }
 
 std::string sensor_log_csv(const SensorLog& log) {

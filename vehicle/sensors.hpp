@@ -1,35 +1,21 @@
 // The sensors of SPEC §2.4 (paper Table 1), sampled from the wheel loader's state after a step, and
 // the 100 Hz log with power P = f_tr v + f_l ḋ_l + f_t ḋ_t and work W = ∫ P dt.
-// Conventions: forces in N (cylinder: positive pushes it longer; traction: positive forward on the
-// machine), lengths in m, angles in degrees positive nose-up / boom-up / bucket-curled, measured in
-// the front frame's x-z plane; d_lift and d_tilt are strokes (pin-to-pin length minus closed length),
-// d_lift the mean of the two lift cylinders and f_lift their sum.
+// The channels, their conventions and units: vehicle/sensor_channels.hpp.
 #pragma once
 #include <iosfwd>
 #include <string>
 #include <vector>
 
+#include "vehicle/sensor_channels.hpp"
 #include "vehicle/wheel_loader.hpp"
 
 namespace talus::vehicle {
 
-struct SensorSample {
-  double t = 0.0;
-  double f_lift = 0.0, f_tilt = 0.0, f_traction = 0.0;
-  double v_drive = 0.0;
-  double d_lift = 0.0, d_tilt = 0.0;
-  double boom_deg = 0.0, bucket_deg = 0.0, pitch_deg = 0.0;
-  double x_vehicle = 0.0;
-  double bucket_tip_x = 0.0, bucket_tip_z = 0.0;
-  double power = 0.0;
-  double lift_rate = 0.0, tilt_rate = 0.0;  // ḋ_l, ḋ_t [m/s] (not in the CSV contract)
-};
-
 // the sensors at time t, from the last step's forces and the current state
 SensorSample read_sensors(const WheelLoader& loader, double t);
 
-// the CSV header of the run contract
-const char* sensor_csv_header();
+// the CSV header of the run contract: kSensorChannels' names, comma-separated
+const std::string& sensor_csv_header();
 void write_sensor_csv_row(std::ostream& out, const SensorSample& s);
 
 // samples at a fixed rate and integrates the work

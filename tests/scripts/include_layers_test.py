@@ -42,8 +42,6 @@ SOURCE_SUFFIXES = (".cpp", ".hpp", ".h", ".cl")
 # why each grandfathered include is wrong, and where its code should move (issue 12)
 DIRECT_SOLVER = ("only vehicle/multibody uses the vehicle's MCP solver: move solvers/mcp, direct_solver, "
                  "spook (and dense_reference) under the vehicle (into vehicle/, or a numerics layer below it)")
-CHANNELS = ("the sensor channel names belong to the sensors: move the channel list into vehicle/sensors.hpp "
-            "and let sim2real/timeseries take it from there")
 PARTICLES = ("Particles (the granular system, its material and walls) is the DEM stepper's input: "
              "move terrain/particles to solvers/")
 BUCKET_CONTACTS = ("bucket contact detection (Embree closest points, device-side selection) is step 3 of the "
@@ -56,8 +54,6 @@ GRANDFATHERED = [
     # vehicle -> solvers
     ("vehicle/multibody.cpp", "solvers/spook.hpp", DIRECT_SOLVER),
     ("vehicle/multibody.hpp", "solvers/direct_solver.hpp", DIRECT_SOLVER),
-    # vehicle -> sim2real
-    ("vehicle/effects_builtin.cpp", "sim2real/timeseries.hpp", CHANNELS),
     # solvers -> terrain
     ("solvers/dem_reference.hpp", "terrain/particles.hpp", PARTICLES),
     ("solvers/dem_settings.hpp", "terrain/particles.hpp", PARTICLES),
