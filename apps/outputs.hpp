@@ -10,7 +10,7 @@
 #include "host/files.hpp"
 #include "io/image.hpp"
 #include "io/output.hpp"
-#include "terrain/particles.hpp"
+#include "solvers/particles.hpp"
 
 namespace talus::app {
 

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "terrain/particles.hpp"
+#include "solvers/particles.hpp"
 
 namespace talus {
 

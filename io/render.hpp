@@ -16,8 +16,8 @@
 #include <vector>
 
 #include "io/image.hpp"
+#include "solvers/particles.hpp"
 #include "terrain/embree.hpp"
-#include "terrain/particles.hpp"
 
 namespace talus {
 

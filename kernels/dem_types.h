@@ -51,10 +51,10 @@ typedef struct {
   tl_float speculative;   // extra contact distance for fast approach, 2 h v_max [m]
   // cohesion of particle pairs closer than margin_rel R*: the tensile force a pair holds is
   // cohesion R*^2 [N]
-  // (terrain/particles.hpp Material::cohesion, Rumpf's law); 0 for dry gravel
+  // (solvers/particles.hpp Material::cohesion, Rumpf's law); 0 for dry gravel
   tl_float cohesion;
   // rolling resistance of a grain against static geometry (ground, walls): mu_r of
-  // terrain/particles.hpp Material::ground_rolling, with R* = r
+  // solvers/particles.hpp Material::ground_rolling, with R* = r
   tl_float ground_rolling;
 } TlStepParams;
 

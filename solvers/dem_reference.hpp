@@ -13,7 +13,7 @@
 #include "kernels/common.h"
 #include "kernels/dem_types.h"
 #include "solvers/dem_settings.hpp"
-#include "terrain/particles.hpp"
+#include "solvers/particles.hpp"
 
 namespace talus::reference {
 

@@ -2,7 +2,7 @@
 #pragma once
 #include <string>
 
-#include "terrain/particles.hpp"
+#include "solvers/particles.hpp"
 
 namespace talus {
 

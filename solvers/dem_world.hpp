@@ -14,7 +14,7 @@
 #include "solvers/contact_sweep.hpp"
 #include "solvers/dem_buffers.hpp"
 #include "solvers/dem_settings.hpp"
-#include "terrain/particles.hpp"
+#include "solvers/particles.hpp"
 
 namespace talus {
 

@@ -31,8 +31,8 @@
 #include <array>
 #include <vector>
 
+#include "solvers/particles.hpp"
 #include "terrain/embree.hpp"
-#include "terrain/particles.hpp"
 #include "vehicle/bucket_mesh.hpp"
 #include "vehicle/wheel_loader.hpp"
 

@@ -17,8 +17,8 @@
 #pragma once
 #include <vector>
 
+#include "solvers/particles.hpp"
 #include "terrain/bucket_contacts.hpp"
-#include "terrain/particles.hpp"
 #include "vehicle/bucket_mesh.hpp"
 
 namespace talus {

@@ -15,8 +15,8 @@
 #include <optional>
 #include <vector>
 
+#include "solvers/particles.hpp"
 #include "terrain/embree.hpp"
-#include "terrain/particles.hpp"
 
 namespace talus {
 

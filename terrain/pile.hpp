@@ -8,7 +8,7 @@
 
 #include "host/progress.hpp"
 #include "solvers/dem_world.hpp"
-#include "terrain/particles.hpp"
+#include "solvers/particles.hpp"
 
 namespace talus {
 

@@ -3,7 +3,7 @@
 #include <vector>
 
 #include "solvers/dem_settings.hpp"
-#include "terrain/particles.hpp"
+#include "solvers/particles.hpp"
 
 namespace talus {
 

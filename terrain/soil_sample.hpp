@@ -12,7 +12,7 @@
 
 #include "host/progress.hpp"
 #include "solvers/dem_world.hpp"
-#include "terrain/particles.hpp"
+#include "solvers/particles.hpp"
 #include "terrain/pile.hpp"
 
 namespace talus {

@@ -45,7 +45,7 @@ struct EffectOption {
 // what an effect may change in the soil, once before a run with particles (the baseline gravel is
 // dry and cohesionless); a run without particles has no soil and ignores it
 struct SoilProperties {
-  double cohesion = 0.0;  // bulk tensile strength [Pa] (terrain/particles.hpp Material::cohesion)
+  double cohesion = 0.0;  // bulk tensile strength [Pa] (solvers/particles.hpp Material::cohesion)
 };
 
 // target speeds [m/s]: drive (forward positive), lift and tilt cylinders (extension positive)

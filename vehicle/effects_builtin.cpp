@@ -311,7 +311,7 @@ class SensorDelay : public Effect {
 
 // --- soil_cohesion --------------------------------------------------------------------------
 // moist or cohesive gravel: touching particles hold tension (kernels/solver.cl, Rumpf's law in
-// terrain/particles.hpp), so the soil resists the bucket more, breaks out in lumps and holds
+// solvers/particles.hpp), so the soil resists the bucket more, breaks out in lumps and holds
 // steeper faces. Acts from the start of the run on the settled pile (whose shape the scan gives)
 class SoilCohesion : public Effect {
  public:

@@ -17,17 +17,19 @@ ROOT = pathlib.Path(__file__).resolve().parents[2]
 LAYERS = [
     # OpenCL C kernels (*.cl) and the plain-C layouts shared with C++ (common.h, dem_types.h)
     ["kernels"],
-    # OpenCL runtime (device, typed buffers, programs from the embedded kernels, scan) and the error types
+    # OpenCL runtime (device, typed buffers, programs from the embedded kernels, scan), error types, and the
+    # utilities every layer uses (progress lines, data files, atomic writes)
     ["host"],
     # the machine: rigid bodies, joints, cylinders, driveline, tyres, wheel loader, sensors, effects, scenarios
     ["vehicle"],
-    # the particle world and its coupling: DEM stepper, contact sweeps, bucket rows, split solver, rigid tools, digging
+    # the particle world and its coupling: particles, DEM stepper, contact sweeps, bucket rows, split solver,
+    # rigid tools, digging
     ["solvers"],
-    # the soil on the DEM world: particles, piles, settling, heap/shear/collapse/cutting tests, bucket fill
+    # the soil on the DEM world: piles, settling, heap/shear/collapse/cutting tests, bucket fill
     ["terrain"],
     # measured runs, metrics, replay, residuals, diagnosis: simulation against the field
     ["sim2real"],
-    # presentation: result files, images, plots, ray-traced renders, progress lines
+    # presentation: particle files, images, plots, ray-traced renders
     ["io"],
     # the `talus` command-line tool, one file per subcommand
     ["apps"],
@@ -42,8 +44,6 @@ SOURCE_SUFFIXES = (".cpp", ".hpp", ".h", ".cl")
 # why each grandfathered include is wrong, and where its code should move (issue 12)
 DIRECT_SOLVER = ("only vehicle/multibody uses the vehicle's MCP solver: move solvers/mcp, direct_solver, "
                  "spook (and dense_reference) under the vehicle (into vehicle/, or a numerics layer below it)")
-PARTICLES = ("Particles (the granular system, its material and walls) is the DEM stepper's input: "
-             "move terrain/particles to solvers/")
 BUCKET_CONTACTS = ("bucket contact detection (Embree closest points, device-side selection) is step 3 of the "
                    "coupled step: move terrain/bucket_contacts, bucket_selection and embree to solvers/")
 DIGGING = ("digging runs a whole scenario (pile, machine, split solver): move solvers/digging and "
@@ -55,9 +55,6 @@ GRANDFATHERED = [
     ("vehicle/multibody.cpp", "solvers/spook.hpp", DIRECT_SOLVER),
     ("vehicle/multibody.hpp", "solvers/direct_solver.hpp", DIRECT_SOLVER),
     # solvers -> terrain
-    ("solvers/dem_reference.hpp", "terrain/particles.hpp", PARTICLES),
-    ("solvers/dem_settings.hpp", "terrain/particles.hpp", PARTICLES),
-    ("solvers/dem_world.hpp", "terrain/particles.hpp", PARTICLES),
     ("solvers/bucket_rows.hpp", "terrain/bucket_contacts.hpp", BUCKET_CONTACTS),
     ("solvers/split_solver.hpp", "terrain/bucket_contacts.hpp", BUCKET_CONTACTS),
     ("solvers/split_solver.hpp", "terrain/bucket_selection.hpp", BUCKET_CONTACTS),

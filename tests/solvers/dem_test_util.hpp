@@ -17,7 +17,7 @@
 #include "host/device.hpp"
 #include "solvers/dem_reference.hpp"
 #include "solvers/dem_settings.hpp"
-#include "terrain/particles.hpp"
+#include "solvers/particles.hpp"
 
 namespace talus::test {
 

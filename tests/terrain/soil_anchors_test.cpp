@@ -1,6 +1,6 @@
 // The gravel against the soil anchors of SPEC §7 (issue 11), measured from particle positions and
 // forces with the full tests of terrain/shear_test, collapse_test and cutting_test: the paper's
-// parameters (mu 0.3, mu_r 0.02, terrain/particles.hpp) give the paper's soil, and blocking
+// parameters (mu 0.3, mu_r 0.02, solvers/particles.hpp) give the paper's soil, and blocking
 // rolling (mu_r 1.0, talus's earlier calibration to a heap angle) does not. docs/soil.md has the
 // tables these reproduce at CI size.
 #include <gtest/gtest.h>

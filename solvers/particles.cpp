@@ -1,4 +1,4 @@
-#include "terrain/particles.hpp"
+#include "solvers/particles.hpp"
 
 #include <algorithm>
 #include <cmath>
