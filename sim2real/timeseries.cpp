@@ -37,13 +37,6 @@ std::vector<std::string> split_csv_line(const std::string& line) {
   return out;
 }
 
-// the contract's header line: every channel's name, comma-separated, in file order
-std::string contract_header() {
-  std::string h;
-  for (std::size_t c = 0; c < kChannelCount; ++c) h += (c ? "," : "") + std::string(kChannelNames[c]);
-  return h;
-}
-
 [[noreturn]] void fail(const fs::path& file, std::size_t line, const std::string& field,
                        const std::string& problem) {
   std::ostringstream msg;
@@ -113,7 +106,7 @@ TimeSeries load_timeseries(const fs::path& file) {
     }
     if (found == header.size()) {
       fail(file, line_no, kChannelNames[c],
-           "missing column; the header must name every channel of the contract (" + contract_header() + ")");
+           "missing column; the header must name every channel of the contract (" + vehicle::channel_header() + ")");
     }
     index[c] = found;
   }
@@ -154,7 +147,7 @@ void save_timeseries(const fs::path& file, const TimeSeries& series) {
     }
   }
   std::ostringstream out;
-  out << contract_header() << "\n";
+  out << vehicle::channel_header() << "\n";
   for (std::size_t n = 0; n < series.size(); ++n) {
     for (std::size_t c = 0; c < kChannelCount; ++c) {
       out << (c ? "," : "") << format_number(series.columns[c][n]);

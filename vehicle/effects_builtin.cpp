@@ -17,26 +17,45 @@ namespace {
 // pushed and a held cylinder reads no friction (the sign of a zero speed is undefined)
 double regularised_sign(double speed, double ramp_speed) { return std::clamp(speed / ramp_speed, -1.0, 1.0); }
 
-// the largest bias accepted on each channel of the contract (vehicle/sensor_channels.hpp), in its
-// unit: about a tenth of the channel's full scale on this machine class (lift force to 830 kN,
-// traction 120 kN, speed 3.6 m/s, strokes 0.4-1.2 m, angles tens of degrees, positions metres,
-// power 127 kW); a larger offset is a broken sensor, not a bias. Time (column 0) takes none.
-constexpr std::array<double, kChannelCount> kMaxBias = {
-    0.0,    // t [s]
-    100e3,  // f_lift [N]
-    100e3,  // f_tilt [N]
-    20e3,   // f_traction [N]
-    0.5,    // v_drive [m/s]
-    0.1,    // d_lift [m]
-    0.05,   // d_tilt [m]
-    10.0,   // boom_deg [deg]
-    10.0,   // bucket_deg [deg]
-    5.0,    // pitch_deg [deg]
-    1.0,    // x_vehicle [m]
-    1.0,    // bucket_tip_x [m]
-    1.0,    // bucket_tip_z [m]
-    20e3,   // power [W]
+// the largest bias accepted on each channel but time, in the channel's unit
+// (vehicle/sensor_channels.hpp): about a tenth of the channel's full scale on this machine class
+// (lift force to 830 kN, traction 120 kN, speed 3.6 m/s, strokes 0.4-1.2 m, angles tens of
+// degrees, positions metres, power 127 kW); a larger offset is a broken sensor, not a bias
+struct BiasLimit {
+  Channel channel;
+  double max_bias;
 };
+constexpr std::array<BiasLimit, kChannelCount - 1> kMaxBias = {{
+    {Channel::f_lift, 100e3},
+    {Channel::f_tilt, 100e3},
+    {Channel::f_traction, 20e3},
+    {Channel::v_drive, 0.5},
+    {Channel::d_lift, 0.1},
+    {Channel::d_tilt, 0.05},
+    {Channel::boom_deg, 10.0},
+    {Channel::bucket_deg, 10.0},
+    {Channel::pitch_deg, 5.0},
+    {Channel::x_vehicle, 1.0},
+    {Channel::bucket_tip_x, 1.0},
+    {Channel::bucket_tip_z, 1.0},
+    {Channel::power, 20e3},
+}};
+
+// the limit of column c, or a negative value when the table has none
+constexpr double max_bias_of(std::size_t c) {
+  for (const BiasLimit& b : kMaxBias) {
+    if (static_cast<std::size_t>(b.channel) == c) return b.max_bias;
+  }
+  return -1.0;
+}
+// every channel but time has its limit
+constexpr bool every_channel_has_a_bias_limit() {
+  for (std::size_t c = 1; c < kChannelCount; ++c) {
+    if (max_bias_of(c) < 0.0) return false;
+  }
+  return true;
+}
+static_assert(every_channel_has_a_bias_limit(), "kMaxBias lacks a channel of the contract");
 
 // a sensor channel an effect may act on: every channel of the contract but time
 struct ChannelInfo {
@@ -49,7 +68,7 @@ struct ChannelInfo {
 ChannelInfo channel_info(const std::string& name) {
   for (std::size_t c = 1; c < kChannelCount; ++c) {
     const SensorChannel& ch = kSensorChannels[c];
-    if (name == ch.name) return ChannelInfo{ch.name, ch.field, ch.unit, kMaxBias[c]};
+    if (name == ch.name) return ChannelInfo{ch.name, ch.field, ch.unit, max_bias_of(c)};
   }
   throw Error("effects: no sensor channel '" + name + "'");
 }

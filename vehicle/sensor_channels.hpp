@@ -10,6 +10,7 @@
 #pragma once
 #include <array>
 #include <cstddef>
+#include <string>
 #include <string_view>
 
 namespace talus::vehicle {
@@ -65,6 +66,13 @@ inline constexpr std::array<const char*, kChannelCount> kChannelNames = [] {
   for (std::size_t c = 0; c < kChannelCount; ++c) names[c] = kSensorChannels[c].name;
   return names;
 }();
+
+// the header line of timeseries.csv: every channel's name, comma-separated, in file order
+inline std::string channel_header() {
+  std::string header;
+  for (const SensorChannel& c : kSensorChannels) header += (header.empty() ? "" : ",") + std::string(c.name);
+  return header;
+}
 
 // the enumerator and the table name the same column
 constexpr bool names_column(Channel c, std::string_view name) {

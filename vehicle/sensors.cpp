@@ -59,12 +59,7 @@ SensorSample read_sensors(const WheelLoader& loader, double t) {
 }
 
 const std::string& sensor_csv_header() {
-  // built once from the channel table (immutable after that)
-  static const std::string header = [] {
-    std::string h;
-    for (const auto& c : kSensorChannels) h += (h.empty() ? "" : ",") + std::string(c.name);
-    return h;
-  }();
+  static const std::string header = channel_header();  // built once, immutable
   return header;
 }
 
