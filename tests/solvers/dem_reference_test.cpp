@@ -414,10 +414,14 @@ void compare_rows(const std::vector<ref::Row>& got, const std::vector<ref::Row>&
     geometry.vector(g.normal, w.normal, 0.0, 0.0, at("row", k));
     geometry.vector(g.arm_a, w.arm_a, 0.0, 0.0, at("row", k));
     geometry.vector(g.arm_b, w.arm_b, 0.0, 0.0, at("row", k));
-    // exact, except a pulling warm start clamped to the bond limit (float h F_c vs double)
+    // exact, except a pulling warm start clamped to the bond limit (float h F_c vs double). The
+    // cones' radii mu (lambda_n + h F_c) and mu_r R* (lambda_n + h F_c) cancel when a pulling
+    // impulse nears the bond limit, so a clamped impulse is good to float's rounding of the
+    // terms, 1e-6 of mu (|lambda_n| + h F_c), not of the small radius itself
+    const double bond_terms = std::abs(w.impulse_n) + w.cohesion;
     impulses.scalar(g.impulse_n, w.impulse_n, 1e-6, 0.0, at("row", k));
-    impulses.vector(g.impulse_t, w.impulse_t, rel, 1e-12, at("row", k));
-    impulses.vector(g.impulse_r, w.impulse_r, rel, 1e-15, at("row", k));
+    impulses.vector(g.impulse_t, w.impulse_t, rel, 1e-12 + 1e-6 * w.friction * bond_terms, at("row", k));
+    impulses.vector(g.impulse_r, w.impulse_r, rel, 1e-15 + 1e-6 * w.rolling_limit * bond_terms, at("row", k));
   }
   for (const Tally* t : {&rhs, &inv_dn, &sigma, &inv_dt, &inv_dr, &coef, &geometry, &impulses})
     t->expect_within();
