@@ -9,6 +9,7 @@
 
 #include "apps/commands.hpp"
 #include "host/error.hpp"
+#include "host/files.hpp"
 #include "sim2real/table.hpp"
 #include "sim2real/timeseries.hpp"
 

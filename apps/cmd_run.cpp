@@ -1,7 +1,7 @@
 // `talus run --scenario NAME [--fidelity LEVEL] --out DIR`: replay a scenario's feedforward
 // target speeds on the wheel loader and write DIR/timeseries.csv (100 Hz sensors, SPEC §2.4) and
 // DIR/summary.json. Scenarios with a pile (FB35, HD27, RD21) dig in a particle pile built at the
-// fidelity level (solvers/digging.hpp) and also write the pile's laser scan, particle snapshots
+// fidelity level (digging/digging.hpp) and also write the pile's laser scan, particle snapshots
 // for ParaView, and PNG figures. --effect NAME:key=value,... adds model extensions (vehicle/effect.hpp,
 // docs/effects.md), --effect-plugin FILE loads more from a shared library; summary.json lists them.
 #include <algorithm>
@@ -24,7 +24,7 @@
 #include "io/render.hpp"
 #include "sim2real/replay.hpp"
 #include "sim2real/timeseries.hpp"
-#include "solvers/digging.hpp"
+#include "digging/digging.hpp"
 #include "vehicle/data_file.hpp"
 #include "vehicle/effect.hpp"
 #include "vehicle/effect_plugin.hpp"
@@ -70,12 +70,16 @@ std::string effects_note(const vehicle::EffectSet& effects) {
   return note.str();
 }
 
-void emit_summary(const RunOptions& o, const nlohmann::json& summary) {
-  write_json((std::filesystem::path(o.out) / sim2real::kSummaryFile).string(), summary);
+// DIR/timeseries.csv and DIR/summary.json through the contract's writers, and the summary where
+// --json asks for it
+void write_run(const RunOptions& o, const sim2real::Run& run) {
+  const std::filesystem::path dir(o.out);
+  sim2real::save_timeseries(dir / sim2real::kTimeseriesFile, run.series);
+  sim2real::save_summary(dir / sim2real::kSummaryFile, run.summary);
   if (o.json == "-") {
-    std::cout << summary.dump(2) << "\n";
+    std::cout << sim2real::to_json(run.summary).dump(2) << "\n";
   } else if (!o.json.empty()) {
-    write_json(o.json, summary);
+    write_json(o.json, sim2real::to_json(run.summary));
   }
 }
 
@@ -95,19 +99,17 @@ void run_vehicle_only(const RunOptions& o, const vehicle::Scenario& sc, vehicle:
   const vehicle::SensorLog log = sim2real::simulate_on_flat_ground(sc, effects, &progress);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   progress.finish();
-  write_file_atomically((std::filesystem::path(o.out) / sim2real::kTimeseriesFile).string(), vehicle::sensor_log_csv(log));
-  const nlohmann::json summary = {{"scenario", sc.name},
-                                  {"work_J", log.work()},
-                                  {"loaded_mass_kg", sc.payload},
-                                  {"sim_time_s", steps * sc.timestep},
-                                  {"wall_time_s", wall},
-                                  {"realtime_factor", wall > 0 ? steps * sc.timestep / wall : 0.0},
-                                  {"effects", effects.to_json()}};
-  emit_summary(o, summary);
+  sim2real::Run run = sim2real::vehicle_run(sc, log);
+  const double realtime_factor = wall > 0 ? steps * sc.timestep / wall : 0.0;
+  run.summary.details = {{"sim_time_s", steps * sc.timestep},
+                         {"wall_time_s", wall},
+                         {"realtime_factor", realtime_factor},
+                         {"effects", effects.to_json()}};
+  write_run(o, run);
   if (!o.quiet)
     std::cerr << "talus run: wrote " << o.out << "/timeseries.csv (" << log.samples().size()
               << " samples) and summary.json; work " << log.work() / 1e3 << " kJ, real-time factor "
-              << summary["realtime_factor"].get<double>() << "\n";
+              << realtime_factor << "\n";
 }
 
 // a ParaView collection of the snapshots with their times (File > Open particles.pvd)
@@ -184,7 +186,7 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
 
   // the run, with snapshots at the interval
   if (!effects.empty()) std::cerr << "talus run: effects: " << effects_note(effects) << "\n";
-  DiggingSimulation sim(dev, sc, preset, pile, options, effects.empty() ? nullptr : &effects);
+  DiggingSimulation sim(dev, sc, preset, pile, options, &effects);
   std::filesystem::create_directories(dir / "snapshots");
   std::vector<std::pair<double, std::string>> snapshots;
   auto snapshot = [&](const Particles& p) {
@@ -199,11 +201,7 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
   // download the particles, are not)
   Progress progress("dig " + sc.name + " " + preset.name, sc.duration, !o.quiet);
   const int note_every = std::max(1, static_cast<int>(std::lround(kProgressNoteInterval / preset.dt)));
-  double dig_wall = 0.0;
-  for (int k = 1; !sim.done(); ++k) {
-    const auto t0 = std::chrono::steady_clock::now();
-    sim.step();
-    dig_wall += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double dig_wall = sim.run([&](int k) {
     if (snapshots_on && k % every == 0) snapshot(sim.particles());
     if (!o.quiet && k % note_every == 0) {
       std::ostringstream note;
@@ -211,36 +209,32 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
            << sim.loaded_mass() << " kg in the bucket";
       progress.update(sim.time(), note.str());
     }
-  }
+  });
   const Particles final_particles = sim.particles();
-  const double loaded = sim.loaded_mass();
+  sim2real::Run run = sim2real::dig_run(sc, preset.name, sim);
+  const double loaded = run.summary.loaded_mass_kg;
   progress.finish(std::to_string(static_cast<long>(std::lround(loaded))) + " kg loaded");
 
-  // outputs: time series, snapshots' collection, summary, figures
-  write_file_atomically((dir / sim2real::kTimeseriesFile).string(), vehicle::sensor_log_csv(sim.log()));
+  // outputs: snapshots' collection, time series and summary, figures
   if (snapshots_on) write_file_atomically((dir / "particles.pvd").string(), pvd_collection(snapshots));
   const double sim_time = sim.time();
-  nlohmann::json summary = {
-      {"scenario", sc.name},
-      {"fidelity", preset.name},
+  const double realtime_factor = dig_wall > 0 ? sim_time / dig_wall : 0.0;
+  nlohmann::json& details = run.summary.details;
+  details = {
       {"particles", static_cast<int>(pile.particles.size())},
       {"dt_s", preset.dt},
       {"iterations", preset.iterations},
       {"rolling_resistance", options.soil.rolling},
       {"seed", o.seed},
       {"form_speed_m_s", options.pile.form_speed},
-      {"loaded_mass_kg", loaded},
-      {"work_J", vehicle::work_between(sim.log().samples(), sc.dig_start, sc.dig_end)},
       {"work_total_J", sim.log().work()},
       {"sim_time_s", sim_time},
       {"wall_time_s", dig_wall},
-      {"realtime_factor", dig_wall > 0 ? sim_time / dig_wall : 0.0},
+      {"realtime_factor", realtime_factor},
       {"pile_build_wall_s", pile_wall},
       {"pile_bulk_density", pile.bulk_density},
       {"pile_toe_shift_m", pile.toe_shift},
       {"scan_face_angle_deg", scan.face_angle_deg},
-      {"dig_start_s", sc.dig_start},
-      {"dig_end_s", sc.dig_end},
       {"coupling",
        {{"steps_with_bucket_contacts", sim.contact_steps()},
         {"mean_passes", sim.mean_passes()},
@@ -256,16 +250,17 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
     std::vector<double> r = sim.step_residuals();
     std::sort(r.begin(), r.end());
     auto quantile = [&](double q) { return r[static_cast<size_t>(q * static_cast<double>(r.size() - 1))]; };
-    summary["step_residual_m_s"] = {{"median", quantile(0.5)}, {"p95", quantile(0.95)}, {"steps", r.size()}};
+    details["step_residual_m_s"] = {{"median", quantile(0.5)}, {"p95", quantile(0.95)}, {"steps", r.size()}};
   }
   if (sc.field_loaded_mass_kg > 0) {
-    summary["field_loaded_mass_kg"] = sc.field_loaded_mass_kg;
-    summary["field_work_J"] = sc.field_work_J;
+    details["field_loaded_mass_kg"] = sc.field_loaded_mass_kg;
+    details["field_work_J"] = sc.field_work_J;
   }
-  emit_summary(o, summary);
+  run.dir = dir;
+  write_run(o, run);
 
-  // figures: the channels, the bucket tip over the scanned pile, power, and the rendered side view
-  const sim2real::Run run = sim2real::load_run(dir);
+  // figures from the run in memory: the channels, the bucket tip over the scanned pile, power,
+  // and the rendered side view
   channel_figure({run}, nullptr).write_png((dir / "channels.png").string(), kFigureWidth, kFigureHeight);
   std::vector<std::pair<double, double>> surface;
   for (const auto& q : scan.points) surface.emplace_back(q.x(), q.y());
@@ -276,7 +271,7 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
   view.hi = Vec3(placed.rear_wall_x, 3.0, 4.0);
   write_render((dir / "side.png").string(), final_particles, sim.loader(), view);
   std::cerr << "talus run: " << sc.name << " " << preset.name << ": " << loaded << " kg loaded, work in the "
-            << "digging phase " << summary["work_J"].get<double>() / 1e3 << " kJ, real-time factor " << summary["realtime_factor"].get<double>()
+            << "digging phase " << run.summary.work_J / 1e3 << " kJ, real-time factor " << realtime_factor
             << "; results in " << o.out << "\n";
 }
 

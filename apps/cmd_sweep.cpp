@@ -24,7 +24,7 @@
 #include "host/files.hpp"
 #include "host/progress.hpp"
 #include "io/plot.hpp"
-#include "solvers/feedback_sweep.hpp"
+#include "digging/feedback_sweep.hpp"
 #include "vehicle/data_file.hpp"
 
 namespace talus::app {
@@ -146,7 +146,7 @@ std::vector<CycleResult> run_share(Device& dev, const SweepOptions& o, const Fid
                                          o.traces ? &trace : nullptr));
     if (o.traces) {
       const auto path = std::filesystem::path(o.out) / preset.name / ("cycle-" + std::to_string(i) + ".csv");
-      write_file_atomically(path.string(), vehicle::sensor_log_csv(trace));
+      write_file_atomically(path.string(), vehicle::sensor_csv(trace.samples()));
     }
     const CycleResult& r = results.back();
     if (verbose)

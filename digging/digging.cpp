@@ -1,6 +1,7 @@
-#include "solvers/digging.hpp"
+#include "digging/digging.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 
 #include "host/error.hpp"
@@ -43,7 +44,7 @@ PileBuild build_scenario_pile(Device& dev, const vehicle::Scenario& scenario, co
 DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scenario, const FidelityPreset& preset,
                                      const PileBuild& pile, const DiggingOptions& options,
                                      vehicle::EffectSet* effects)
-    : dev_(dev), scenario_(scenario), preset_(preset), log_(100.0), effects_(effects) {
+    : dev_(dev), scenario_(scenario), preset_(preset), log_(100.0), effects_(effects ? *effects : no_effects_) {
   if (!scenario.pile) throw InputError(scenario.path + ": scenario '" + scenario.name + "' has no pile (\"pile\": false)");
   loader_ = std::make_unique<vehicle::WheelLoader>(vehicle::machine_file(scenario), scenario.payload);
 
@@ -60,20 +61,27 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
   settings.iterations = preset.iterations;
   settings.sweep = options.sweep;
   settings.max_speed = options.max_particle_speed;
-  // the soil: the dry gravel, or what the effects make of it (soil_cohesion)
+  // the soil: the options' gravel, and what the effects make of it (soil_cohesion)
   Material soil = options.soil;
-  if (effects_) soil.cohesion = effects_->soil().cohesion;
+  soil.cohesion = effects_.soil({options.soil.cohesion}).cohesion;
   dem_ = std::make_unique<DemWorld>(dev, soil, settings, pile.bounds, pile.geoms);
   dem_->set_particles(pile.particles);
   split_ = std::make_unique<SplitSolver>(dev, *dem_, *loader_, options.coupling);
   steps_total_ = static_cast<int>(std::lround(scenario.duration / h));
-  if (effects_) {
-    // the effects start with the settled machine at t = 0
-    effects_->reset(*loader_, 0.0);
-    log_.after_step(effects_->sensors(0.0, vehicle::read_sensors(*loader_, 0.0)), 0.0);
-  } else {
-    log_.after_step(*loader_, 0.0, 0.0);
+  // the effects start with the settled machine at t = 0
+  vehicle::start_with_effects(*loader_, effects_, log_);
+}
+
+double DiggingSimulation::run(const std::function<void(int)>& after_step) {
+  double wall = 0.0;
+  for (int k = 1; !done(); ++k) {
+    // one timed step, then the caller's work
+    const auto start = std::chrono::steady_clock::now();
+    step();
+    wall += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (after_step) after_step(k);
   }
+  return wall;
 }
 
 void DiggingSimulation::step() {
@@ -82,22 +90,13 @@ void DiggingSimulation::step() {
 }
 
 void DiggingSimulation::step(double drive, double lift, double tilt) {
-  // the targets, one coupled step, the sensors after it
+  // the targets, one coupled step through the effects, the sensors after it (the clock counts
+  // steps, so every run samples the same instants)
   const double h = preset_.dt;
-  vehicle::ActuatorCommands u{drive, lift, tilt};
-  if (effects_) u = effects_->commands(time_, h, u);
-  loader_->set_drive_speed(u.drive);
-  loader_->set_lift_speed(u.lift);
-  loader_->set_tilt_speed(u.tilt);
-  if (effects_) effects_->before_step(time_, h, *loader_);
-  split_->step();
+  const double t_end = (steps_done_ + 1) * h;
+  vehicle::step_with_effects(*loader_, effects_, time_, h, t_end, {drive, lift, tilt}, [&] { split_->step(); }, &log_);
   ++steps_done_;
-  time_ = steps_done_ * h;
-  if (effects_) {
-    log_.after_step(effects_->sensors(h, vehicle::read_sensors(*loader_, time_)), h);
-  } else {
-    log_.after_step(*loader_, time_, h);
-  }
+  time_ = t_end;
   // coupling bookkeeping
   const CouplingStats& s = split_->stats();
   if (s.bucket_contacts > 0) {

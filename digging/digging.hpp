@@ -7,6 +7,7 @@
 // One timestep for both sides, the level's (paper Table 3), so the coupling stays implicit; the
 // sensors are logged at 100 Hz (interpolated within steps longer than 10 ms, vehicle/sensors.hpp).
 #pragma once
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -47,15 +48,22 @@ class DiggingSimulation {
   // the scenario must have a pile; `pile` from build_scenario_pile (or a saved one). With
   // `effects` (model extensions, vehicle/effect.hpp; not owned, must outlive the simulation) the
   // set is reset when the machine has settled, and every step's commands, limits and forces and
-  // the logged sensors go through it: log() records what the sensors report
+  // the logged sensors go through it: log() records what the sensors report. Without, the run
+  // steps through an empty set of its own, the identity
   DiggingSimulation(Device& dev, const vehicle::Scenario& scenario, const FidelityPreset& preset,
                     const PileBuild& pile, const DiggingOptions& options, vehicle::EffectSet* effects = nullptr);
+  // it points into itself (the empty effect set), so it stays where it was built
+  DiggingSimulation(const DiggingSimulation&) = delete;
+  DiggingSimulation& operator=(const DiggingSimulation&) = delete;
 
   // one step with the scenario's controls at the current time
   void step();
   // one step with the given target speeds [m/s] (a controller instead of the scenario's inputs);
   // with effects, these are the operator's targets before on_commands
   void step(double drive, double lift, double tilt);
+  // the run loop: steps with the scenario's controls to the end, calling after_step(k) after step
+  // k = 1, 2, ... (snapshots, progress: not timed); returns the wall time of the steps alone [s]
+  double run(const std::function<void(int)>& after_step = {});
   double time() const { return time_; }
   int steps_total() const { return steps_total_; }
   bool done() const { return steps_done_ >= steps_total_; }
@@ -90,7 +98,8 @@ class DiggingSimulation {
   std::unique_ptr<DemWorld> dem_;
   std::unique_ptr<SplitSolver> split_;
   vehicle::SensorLog log_;
-  vehicle::EffectSet* effects_ = nullptr;
+  vehicle::EffectSet no_effects_;
+  vehicle::EffectSet& effects_;  // the caller's, or no_effects_
   double time_ = 0.0;
   int steps_done_ = 0, steps_total_ = 0;
   int contact_steps_ = 0, max_passes_ = 0, capped_steps_ = 0;

@@ -1,4 +1,4 @@
-#include "solvers/feedback_sweep.hpp"
+#include "digging/feedback_sweep.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "solvers/digging.hpp"
+#include "digging/digging.hpp"
 #include "vehicle/force_feedback.hpp"
 
 namespace talus {

@@ -8,7 +8,7 @@
 #include <string>
 
 #include "host/error.hpp"
-#include "terrain/bucket_contacts.hpp"
+#include "solvers/bucket_contacts.hpp"
 #include "vehicle/bucket_mesh.hpp"
 
 namespace talus {

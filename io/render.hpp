@@ -17,7 +17,7 @@
 
 #include "io/image.hpp"
 #include "solvers/particles.hpp"
-#include "terrain/embree.hpp"
+#include "solvers/embree.hpp"
 
 namespace talus {
 

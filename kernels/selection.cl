@@ -1,6 +1,6 @@
 // Particles inside an axis-aligned box (the bucket's world bounds grown by the largest radius
 // and the contact margin): a flag per particle, then a compaction at offsets from a prefix sum,
-// so the selected indices come out in index order (terrain/bucket_selection.cpp).
+// so the selected indices come out in index order (solvers/bucket_selection.cpp).
 
 __kernel void box_flags(__global const float4* position, int n, float4 lo, float4 hi,
                         __global int* flags) {

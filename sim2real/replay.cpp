@@ -6,49 +6,51 @@
 
 #include "host/device.hpp"
 #include "host/error.hpp"
-#include "solvers/digging.hpp"
+#include "digging/digging.hpp"
 #include "terrain/pile.hpp"
 #include "vehicle/data_file.hpp"
 #include "vehicle/wheel_loader.hpp"
 
 namespace talus::sim2real {
 
-TimeSeries to_timeseries(const std::vector<vehicle::SensorSample>& samples) {
-  TimeSeries ts;
-  for (auto& column : ts.columns) column.reserve(samples.size());
-  for (const auto& s : samples) {
-    for (size_t c = 0; c < kChannelCount; ++c) ts.columns[c].push_back(s.*vehicle::kSensorChannels[c].field);
-  }
-  return ts;
-}
-
 vehicle::SensorLog simulate_on_flat_ground(const vehicle::Scenario& sc, vehicle::EffectSet& effects,
                                            Progress* progress) {
   vehicle::WheelLoader loader(vehicle::machine_file(sc), sc.payload);
   vehicle::SensorLog log(100.0);
   const int steps = static_cast<int>(std::llround(sc.duration / sc.timestep));
-  // the first sample at rest, through the effects' sensors when there are any
-  if (effects.empty()) {
-    log.after_step(loader, 0.0, 0.0);
-  } else {
-    effects.reset(loader, 0.0);
-    log.after_step(effects.sensors(0.0, vehicle::read_sensors(loader, 0.0)), 0.0);
-  }
+  // the first sample at rest, through the effects (an empty set is the identity)
+  vehicle::start_with_effects(loader, effects, log);
   for (int k = 0; k < steps; ++k) {
-    // feedforward targets at the start of the step
-    const double t = k * sc.timestep;
-    if (effects.empty()) {
-      loader.set_drive_speed(sc.drive(t));
-      loader.set_lift_speed(sc.lift(t));
-      loader.set_tilt_speed(sc.tilt(t));
-      loader.step(sc.timestep);
-      log.after_step(loader, (k + 1) * sc.timestep, sc.timestep);
-    } else {
-      vehicle::step_with_effects(loader, effects, t, sc.timestep, {sc.drive(t), sc.lift(t), sc.tilt(t)}, &log);
-    }
+    // feedforward targets at the start of the step; the clock counts steps
+    const double h = sc.timestep;
+    const double t = k * h;
+    vehicle::step_with_effects(loader, effects, t, h, (k + 1) * h, {sc.drive(t), sc.lift(t), sc.tilt(t)},
+                               [&] { loader.step(h); }, &log);
     if (progress) progress->update((k + 1) * sc.timestep);
   }
   return log;
+}
+
+Run vehicle_run(const vehicle::Scenario& scenario, const vehicle::SensorLog& log) {
+  Run run;
+  run.series = to_timeseries(log.samples());
+  run.summary.scenario = scenario.name;
+  run.summary.fidelity = "vehicle";
+  run.summary.loaded_mass_kg = scenario.payload;
+  run.summary.work_J = log.work();
+  return run;
+}
+
+Run dig_run(const vehicle::Scenario& scenario, const std::string& fidelity, const DiggingSimulation& sim) {
+  Run run;
+  run.series = to_timeseries(sim.log().samples());
+  run.summary.scenario = scenario.name;
+  run.summary.fidelity = fidelity;
+  run.summary.loaded_mass_kg = sim.loaded_mass();
+  run.summary.work_J = vehicle::work_between(sim.log().samples(), scenario.dig_start, scenario.dig_end);
+  run.summary.dig_start_s = scenario.dig_start;
+  run.summary.dig_end_s = scenario.dig_end;
+  return run;
 }
 
 vehicle::Scenario measured_scenario(const MeasuredRun& measured) {
@@ -112,15 +114,8 @@ Replay::~Replay() = default;
 Run Replay::simulate(vehicle::EffectSet& effects) {
   const auto start = std::chrono::steady_clock::now();
   Run run;
-  run.dir = measured_.run.dir;
-  run.summary.scenario = scenario_.name;
   if (!scenario_.pile) {
-    // the machine alone: the payload is the load, the work that of the whole run
-    const vehicle::SensorLog log = simulate_on_flat_ground(scenario_, effects);
-    run.series = to_timeseries(log.samples());
-    run.summary.fidelity = "vehicle";
-    run.summary.loaded_mass_kg = scenario_.payload;
-    run.summary.work_J = log.work();
+    run = vehicle_run(scenario_, simulate_on_flat_ground(scenario_, effects));
   } else {
     // the pile at the level, once; every simulation digs a copy of it
     const FidelityPreset& preset = fidelity_preset(options_.fidelity);
@@ -133,15 +128,11 @@ Run Replay::simulate(vehicle::EffectSet& effects) {
       progress.finish(std::to_string(pile_->particles.size()) + " particles");
       scan_rms_ = scan_difference(measured_.meta.pile_scan, scan_pile(pile_->particles, placed, preset.diameter).points);
     }
-    DiggingSimulation sim(*device_, scenario_, preset, *pile_, digging, effects.empty() ? nullptr : &effects);
-    while (!sim.done()) sim.step();
-    run.series = to_timeseries(sim.log().samples());
-    run.summary.fidelity = preset.name;
-    run.summary.loaded_mass_kg = sim.loaded_mass();
-    run.summary.work_J = vehicle::work_between(sim.log().samples(), scenario_.dig_start, scenario_.dig_end);
-    run.summary.dig_start_s = scenario_.dig_start;
-    run.summary.dig_end_s = scenario_.dig_end;
+    DiggingSimulation sim(*device_, scenario_, preset, *pile_, digging, &effects);
+    sim.run();
+    run = dig_run(scenario_, preset.name, sim);
   }
+  run.dir = measured_.run.dir;
   ++simulations_;
   wall_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return run;

@@ -21,18 +21,22 @@
 
 namespace talus {
 class Device;
+class DiggingSimulation;
 struct PileBuild;
 }  // namespace talus
 
 namespace talus::sim2real {
 
-// the channel contract of logged sensor samples
-TimeSeries to_timeseries(const std::vector<vehicle::SensorSample>& samples);
-
 // a scenario without particles on flat ground with the effects (may be empty): the 100 Hz log
 // of what the sensors report
 vehicle::SensorLog simulate_on_flat_ground(const vehicle::Scenario& scenario, vehicle::EffectSet& effects,
                                            Progress* progress = nullptr);
+
+// a finished run in memory, as the contract reads it: the sensors' series and the summary's
+// fields. The machine alone: the payload is the load, the work that of the whole run (fidelity
+// "vehicle"). A dig: the loaded mass now, the work of the scenario's digging phase and its marks
+Run vehicle_run(const vehicle::Scenario& scenario, const vehicle::SensorLog& log);
+Run dig_run(const vehicle::Scenario& scenario, const std::string& fidelity, const DiggingSimulation& sim);
 
 // the scenario that metadata.json describes: the named scenario (data/scenarios, any case) with
 // the run's operator inputs and pile toe; InputError naming the metadata's field 'scenario'

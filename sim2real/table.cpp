@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "host/error.hpp"
+#include "host/files.hpp"
 
 namespace talus::sim2real {
 

@@ -1,15 +1,19 @@
 #include "sim2real/timeseries.hpp"
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
 
 #include "host/error.hpp"
+#include "host/files.hpp"
+#include "vehicle/sensors.hpp"
 
 namespace talus::sim2real {
 
@@ -19,6 +23,8 @@ namespace {
 
 // digits that round-trip a double exactly (std::numeric_limits<double>::max_digits10)
 constexpr int kRoundTripDigits = 17;
+// summary.json's fields that RunSummary holds by name; any other key is a detail
+constexpr const char* kSummaryFields[] = {"loaded_mass_kg", "work_J", "scenario", "fidelity", "dig_start_s", "dig_end_s"};
 
 std::string trim(const std::string& s) {
   const auto first = s.find_first_not_of(" \t\r");
@@ -139,22 +145,31 @@ TimeSeries load_timeseries(const fs::path& file) {
   return series;
 }
 
-void save_timeseries(const fs::path& file, const TimeSeries& series) {
+TimeSeries to_timeseries(const std::vector<vehicle::SensorSample>& samples) {
+  TimeSeries ts;
+  for (auto& column : ts.columns) column.reserve(samples.size());
+  for (const auto& s : samples) {
+    for (size_t c = 0; c < kChannelCount; ++c) ts.columns[c].push_back(s.*vehicle::kSensorChannels[c].field);
+  }
+  return ts;
+}
+
+std::vector<vehicle::SensorSample> to_samples(const TimeSeries& series) {
   for (std::size_t c = 1; c < kChannelCount; ++c) {
     if (series.columns[c].size() != series.size()) {
-      throw Error("save_timeseries: channel '" + std::string(kChannelNames[c]) +
-                  "' has a different length from t");
+      throw Error("time series: channel '" + std::string(kChannelNames[c]) + "' has a different length from t");
     }
   }
-  std::ostringstream out;
-  out << vehicle::channel_header() << "\n";
+  std::vector<vehicle::SensorSample> samples(series.size());
   for (std::size_t n = 0; n < series.size(); ++n) {
-    for (std::size_t c = 0; c < kChannelCount; ++c) {
-      out << (c ? "," : "") << format_number(series.columns[c][n]);
-    }
-    out << "\n";
+    for (std::size_t c = 0; c < kChannelCount; ++c) samples[n].*vehicle::kSensorChannels[c].field = series.columns[c][n];
   }
-  write_file_atomically(file, out.str());
+  return samples;
+}
+
+void save_timeseries(const fs::path& file, const TimeSeries& series) {
+  // the sensors' own writer, so simulated and converted runs are written alike
+  write_file_atomically(file, vehicle::sensor_csv(to_samples(series)));
 }
 
 RunSummary load_summary(const fs::path& file) {
@@ -202,10 +217,15 @@ RunSummary load_summary(const fs::path& file) {
   if (s.dig_start_s && s.dig_end_s && !(*s.dig_start_s < *s.dig_end_s)) {
     throw InputError(file.string() + ": field 'dig_end_s': must be later than dig_start_s");
   }
+  // the rest, as it stands
+  for (const auto& [key, value] : j.items()) {
+    if (std::find(std::begin(kSummaryFields), std::end(kSummaryFields), key) == std::end(kSummaryFields))
+      s.details[key] = value;
+  }
   return s;
 }
 
-void save_summary(const fs::path& file, const RunSummary& s) {
+nlohmann::json to_json(const RunSummary& s) {
   nlohmann::json j;
   j["loaded_mass_kg"] = s.loaded_mass_kg;
   j["work_J"] = s.work_J;
@@ -213,7 +233,17 @@ void save_summary(const fs::path& file, const RunSummary& s) {
   if (s.fidelity) j["fidelity"] = *s.fidelity;
   if (s.dig_start_s) j["dig_start_s"] = *s.dig_start_s;
   if (s.dig_end_s) j["dig_end_s"] = *s.dig_end_s;
-  write_file_atomically(file, j.dump(2) + "\n");
+  if (!s.details.is_object()) throw Error("run summary: the details must be a JSON object");
+  for (const auto& [key, value] : s.details.items()) {
+    if (std::find(std::begin(kSummaryFields), std::end(kSummaryFields), key) != std::end(kSummaryFields))
+      throw Error("run summary: detail '" + key + "' is one of the contract's fields; set the field instead");
+    j[key] = value;
+  }
+  return j;
+}
+
+void save_summary(const fs::path& file, const RunSummary& s) {
+  write_file_atomically(file, to_json(s).dump(2) + "\n");
 }
 
 Run load_run(const fs::path& dir) {
@@ -270,25 +300,6 @@ TimeSeries resample(const TimeSeries& series, const std::vector<double>& t_new) 
     out.columns[c] = interpolate(series[Channel::t], series.columns[c], t_new);
   }
   return out;
-}
-
-void write_file_atomically(const fs::path& file, const std::string& text) {
-  fs::path tmp = file;
-  tmp += ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw Error(tmp.string() + ": cannot open for writing");
-    out << text;
-    out.flush();
-    if (!out) throw Error(tmp.string() + ": write failed (disk full?)");
-  }
-  std::error_code ec;
-  fs::rename(tmp, file, ec);
-  if (ec) {
-    const std::string reason = ec.message();
-    fs::remove(tmp, ec);
-    throw Error(file.string() + ": cannot rename the temporary file into place: " + reason);
-  }
 }
 
 }  // namespace talus::sim2real

@@ -6,6 +6,7 @@
 #include <array>
 #include <cstddef>
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
@@ -33,6 +34,10 @@ struct TimeSeries {
   std::size_t size() const { return columns[0].size(); }
 };
 
+// logged sensor samples as the channel contract's columns, and back
+TimeSeries to_timeseries(const std::vector<vehicle::SensorSample>& samples);
+std::vector<vehicle::SensorSample> to_samples(const TimeSeries& series);
+
 // summary.json: the scalars of one run
 struct RunSummary {
   double loaded_mass_kg = 0.0;          // soil mass in the bucket after the cycle [kg]
@@ -41,7 +46,13 @@ struct RunSummary {
   std::optional<std::string> fidelity;  // e.g. "D50", "G200", "field"
   std::optional<double> dig_start_s;    // phase marks: start and end of the digging phase [s]
   std::optional<double> dig_end_s;
+  // everything else the run reports (particles, timing, coupling, effects, ...): written beside
+  // the fields above, read back as it stands; a key of the fields above is an error
+  nlohmann::json details = nlohmann::json::object();
 };
+
+// the summary as summary.json's object (Error when a detail's key is one of the contract's)
+nlohmann::json to_json(const RunSummary& summary);
 
 struct Run {
   std::filesystem::path dir;
@@ -73,9 +84,5 @@ std::vector<double> interpolate(const std::vector<double>& t, const std::vector<
 
 // every channel of `series` interpolated onto the time base t_new (which becomes its t)
 TimeSeries resample(const TimeSeries& series, const std::vector<double>& t_new);
-
-// writes text to `file` through a temporary sibling and a rename, so a reader never sees a
-// half-written file and an old file survives a failed write
-void write_file_atomically(const std::filesystem::path& file, const std::string& text);
 
 }  // namespace talus::sim2real

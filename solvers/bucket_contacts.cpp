@@ -1,4 +1,4 @@
-#include "terrain/bucket_contacts.hpp"
+#include "solvers/bucket_contacts.hpp"
 
 #include <algorithm>
 #include <cmath>

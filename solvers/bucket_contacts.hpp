@@ -32,7 +32,7 @@
 #include <vector>
 
 #include "solvers/particles.hpp"
-#include "terrain/embree.hpp"
+#include "solvers/embree.hpp"
 #include "vehicle/bucket_mesh.hpp"
 #include "vehicle/wheel_loader.hpp"
 
@@ -61,7 +61,7 @@ struct Aabb {
 };
 
 // the box where particles can touch the bucket: its world bounds grown by r_max (1 + margin_rel);
-// BucketScene::select_candidates and DeviceBoxSelection (terrain/bucket_selection.hpp) search it
+// BucketScene::select_candidates and DeviceBoxSelection (solvers/bucket_selection.hpp) search it
 Aabb candidate_box(const Aabb& bucket_bounds, double r_max, double margin_rel);
 
 // which part of the triangle the closest point lies on

@@ -22,7 +22,7 @@
 #include "kernels/common.h"
 #include "kernels/dem_types.h"
 #include "solvers/dem_reference.hpp"
-#include "terrain/bucket_contacts.hpp"
+#include "solvers/bucket_contacts.hpp"
 
 namespace talus {
 

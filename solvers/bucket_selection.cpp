@@ -1,4 +1,4 @@
-#include "terrain/bucket_selection.hpp"
+#include "solvers/bucket_selection.hpp"
 
 #include <algorithm>
 

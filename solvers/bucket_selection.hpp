@@ -1,5 +1,5 @@
 // Device-side selection of the particles near the bucket (SPEC §1 step 3): only these go to
-// the Embree closest-point queries on the host (terrain/bucket_contacts.hpp). The box is the
+// the Embree closest-point queries on the host (solvers/bucket_contacts.hpp). The box is the
 // bucket's world bounds grown by the largest radius and the contact margin, as the host
 // selection BucketScene::select_candidates; float rounding is covered by growing it a further
 // part per million, so the device never misses a particle the host would select.
@@ -8,7 +8,7 @@
 
 #include "host/device.hpp"
 #include "host/scan.hpp"
-#include "terrain/bucket_contacts.hpp"
+#include "solvers/bucket_contacts.hpp"
 
 namespace talus {
 

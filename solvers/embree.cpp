@@ -1,4 +1,4 @@
-#include "terrain/embree.hpp"
+#include "solvers/embree.hpp"
 
 #include <algorithm>
 #include <cstring>

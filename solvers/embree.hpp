@@ -1,5 +1,5 @@
 // Owning handles for Embree 3 objects (device, scene, geometry) and error checking that turns
-// Embree's error codes into talus::Error naming the failed call. Used by terrain/bucket_contacts
+// Embree's error codes into talus::Error naming the failed call. Used by solvers/bucket_contacts
 // (closest-point queries on the bucket mesh) and terrain/heightmap (rays on the terrain surface).
 //
 // Embree reports errors through rtcGetDeviceError and an optional callback; the callback here only

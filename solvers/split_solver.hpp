@@ -26,8 +26,8 @@
 
 #include "solvers/bucket_rows.hpp"
 #include "solvers/dem_world.hpp"
-#include "terrain/bucket_contacts.hpp"
-#include "terrain/bucket_selection.hpp"
+#include "solvers/bucket_contacts.hpp"
+#include "solvers/bucket_selection.hpp"
 #include "vehicle/wheel_loader.hpp"
 
 namespace talus {

@@ -3,7 +3,7 @@
 // loading platen of the shear box (issue 11, terrain/shear_test and terrain/cutting_test).
 //
 // A tool is the bucket of the coupled step without the vehicle behind it. Its contacts come from
-// the same Embree closest-point queries (terrain/bucket_contacts), its rows are the same bucket
+// the same Embree closest-point queries (solvers/bucket_contacts), its rows are the same bucket
 // rows (solvers/bucket_rows), solved on the device by the same kernel after every particle sweep;
 // only the mobility W that the vehicle's direct solve gives the bucket is the tool's own:
 //   - kinematic (W = 0): the motion is prescribed, the particles cannot push the tool; the rows'
@@ -21,15 +21,15 @@
 #include "host/device.hpp"
 #include "solvers/bucket_rows.hpp"
 #include "solvers/dem_world.hpp"
-#include "terrain/bucket_contacts.hpp"
-#include "terrain/bucket_selection.hpp"
-#include "terrain/embree.hpp"
+#include "solvers/bucket_contacts.hpp"
+#include "solvers/bucket_selection.hpp"
+#include "solvers/embree.hpp"
 #include "vehicle/bucket_mesh.hpp"
 
 namespace talus {
 
 // appends a closed box (12 triangles, outward faces) with centre `centre` and half extents `half`,
-// in the mesh's own frame; the shell contacts of terrain/bucket_contacts make it solid from outside
+// in the mesh's own frame; the shell contacts of solvers/bucket_contacts make it solid from outside
 void add_box(vehicle::BucketMesh& mesh, const Vec3& centre, const Vec3& half);
 
 struct Tool {

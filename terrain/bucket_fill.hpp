@@ -18,7 +18,7 @@
 #include <vector>
 
 #include "solvers/particles.hpp"
-#include "terrain/bucket_contacts.hpp"
+#include "solvers/bucket_contacts.hpp"
 #include "vehicle/bucket_mesh.hpp"
 
 namespace talus {

@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "solvers/particles.hpp"
-#include "terrain/embree.hpp"
+#include "solvers/embree.hpp"
 
 namespace talus {
 

@@ -1,11 +1,11 @@
-#include "solvers/dense_reference.hpp"
+#include "vehicle/dense_reference.hpp"
 
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
-namespace talus::solvers {
+namespace talus::vehicle {
 
 namespace {
 
@@ -114,4 +114,4 @@ McpResult solve_dense_reference(const BoundedMcp& problem, const DenseReferenceO
   return r;
 }
 
-}  // namespace talus::solvers
+}  // namespace talus::vehicle

@@ -1,12 +1,12 @@
-// Dense reference solver for the bounded MCP of solvers/mcp.hpp, for tests only: block principal
+// Dense reference solver for the bounded MCP of vehicle/mcp.hpp, for tests only: block principal
 // pivoting (Júdice & Pires 1994, box-constrained form) with Murty's single-pivot rule as the
 // fallback that guarantees termination, and an Eigen LDLT of the free block each iteration.
 // Deliberately a different algorithm and different linear algebra from the direct solver, so that
 // agreement between the two means something. O(n³) per iteration: keep n in the hundreds.
 #pragma once
-#include "solvers/mcp.hpp"
+#include "vehicle/mcp.hpp"
 
-namespace talus::solvers {
+namespace talus::vehicle {
 
 struct DenseReferenceOptions {
   int max_iterations = 0;        // 0: 50 n + 100
@@ -16,4 +16,4 @@ struct DenseReferenceOptions {
 
 McpResult solve_dense_reference(const BoundedMcp& problem, const DenseReferenceOptions& options = {});
 
-}  // namespace talus::solvers
+}  // namespace talus::vehicle

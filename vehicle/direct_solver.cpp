@@ -1,4 +1,4 @@
-#include "solvers/direct_solver.hpp"
+#include "vehicle/direct_solver.hpp"
 
 #include <cholmod.h>
 
@@ -8,7 +8,7 @@
 
 #include "host/error.hpp"
 
-namespace talus::solvers {
+namespace talus::vehicle {
 
 struct DirectSolver::Impl {
   DirectSolverOptions options;
@@ -255,4 +255,4 @@ Eigen::MatrixXd DirectSolver::solve_free(const Eigen::MatrixXd& rhs) const {
   return x;
 }
 
-}  // namespace talus::solvers
+}  // namespace talus::vehicle

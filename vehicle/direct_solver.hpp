@@ -13,9 +13,9 @@
 #pragma once
 #include <memory>
 
-#include "solvers/mcp.hpp"
+#include "vehicle/mcp.hpp"
 
-namespace talus::solvers {
+namespace talus::vehicle {
 
 struct DirectSolverOptions {
   int max_iterations = 0;             // active-set iterations per friction pass; 0: 20 n + 100
@@ -49,4 +49,4 @@ class DirectSolver {
   std::unique_ptr<Impl> impl_;
 };
 
-}  // namespace talus::solvers
+}  // namespace talus::vehicle

@@ -185,8 +185,8 @@ void EffectSet::add(std::unique_ptr<Effect> effect) {
   reset_done_ = false;
 }
 
-SoilProperties EffectSet::soil() const {
-  SoilProperties soil;
+SoilProperties EffectSet::soil(SoilProperties base) const {
+  SoilProperties soil = base;
   for (const auto& e : effects_) e->on_soil(soil);
   return soil;
 }
@@ -253,17 +253,33 @@ SensorSample EffectSet::sensors(double h, const SensorSample& truth) {
   return s;
 }
 
-SensorSample step_with_effects(WheelLoader& loader, EffectSet& effects, double t, double h, ActuatorCommands commands,
+SensorSample start_with_effects(WheelLoader& loader, EffectSet& effects, SensorLog& log) {
+  effects.reset(loader, 0.0);
+  const SensorSample reported = effects.sensors(0.0, read_sensors(loader, 0.0));
+  log.after_step(reported, 0.0);
+  return reported;
+}
+
+SensorSample step_with_effects(WheelLoader& loader, EffectSet& effects, double t, double h, double t_end,
+                               ActuatorCommands commands, const std::function<void()>& advance,
                                SensorLog* log) {
+  // the commands at the step's start, through the effects
   const ActuatorCommands c = effects.commands(t, h, commands);
   loader.set_drive_speed(c.drive);
   loader.set_lift_speed(c.lift);
   loader.set_tilt_speed(c.tilt);
+  // the machine's limits and the effects' wrenches, then the step itself
   effects.before_step(t, h, loader);
-  loader.step(h);
-  const SensorSample reported = effects.sensors(h, read_sensors(loader, t + h));
+  advance();
+  // what the sensors report after it
+  const SensorSample reported = effects.sensors(h, read_sensors(loader, t_end));
   if (log) log->after_step(reported, h);
   return reported;
+}
+
+SensorSample step_with_effects(WheelLoader& loader, EffectSet& effects, double t, double h, ActuatorCommands commands,
+                               SensorLog* log) {
+  return step_with_effects(loader, effects, t, h, t + h, commands, [&] { loader.step(h); }, log);
 }
 
 }  // namespace talus::vehicle

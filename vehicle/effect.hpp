@@ -15,6 +15,7 @@
 // libraries: vehicle/effect_plugin.hpp.
 #pragma once
 #include <array>
+#include <functional>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -154,8 +155,8 @@ class EffectSet {
   const Effect& operator[](size_t i) const { return *effects_.at(i); }
   // [{"name": ..., "params": {...}}, ...]
   nlohmann::json to_json() const;
-  // the soil with every effect's on_soil applied in order, from the dry baseline
-  SoilProperties soil() const;
+  // the soil `base` (by default the dry baseline) with every effect's on_soil applied in order
+  SoilProperties soil(SoilProperties base = {}) const;
 
   // before a run, at time t: resets every effect, takes the machine's current limits as its own
   // (restored before every step) and the true sensors now as the previous sample
@@ -185,9 +186,23 @@ std::vector<std::string> builtin_effect_names();
 // a built-in effect with its defaults; talus::InputError listing the names for an unknown one
 std::unique_ptr<Effect> make_builtin_effect(const std::string& name);
 
-// one step of the machine alone with effects: commands through on_commands, limits and wrenches
-// through on_step, the step, the sensors at t + h through on_sensors into the log; returns what
-// the sensors report. The effect set must have been reset on this loader.
+// Stepping with effects, the one loop every run uses (the machine alone, a dig, a replay). An
+// empty effect set is the identity: commands pass unchanged, the machine keeps its own limits and
+// the sensors report the truth, so a run without effects takes the same path bit for bit.
+
+// the start of a run at t = 0: resets the effects on the settled machine and logs the first
+// sample through them; returns what the sensors report
+SensorSample start_with_effects(WheelLoader& loader, EffectSet& effects, SensorLog& log);
+
+// one step [t, t_end] (t_end = t + h, passed so a run's clock can count steps rather than add
+// them up): commands through on_commands, limits and wrenches through on_step, `advance` moves
+// the machine by h (the machine alone: its own step; in a pile: the coupled split step), then the
+// sensors at t_end through on_sensors into the log; returns what the sensors report. The effect
+// set must have been started on this loader.
+SensorSample step_with_effects(WheelLoader& loader, EffectSet& effects, double t, double h, double t_end,
+                               ActuatorCommands commands, const std::function<void()>& advance,
+                               SensorLog* log);
+// the same for the machine alone on its own step, ending at t + h
 SensorSample step_with_effects(WheelLoader& loader, EffectSet& effects, double t, double h,
                                ActuatorCommands commands, SensorLog* log = nullptr);
 

@@ -1,4 +1,4 @@
-#include "solvers/mcp.hpp"
+#include "vehicle/mcp.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -6,7 +6,7 @@
 
 #include "host/error.hpp"
 
-namespace talus::solvers {
+namespace talus::vehicle {
 
 bool BoundedMcp::has_friction() const {
   return std::any_of(normal.begin(), normal.end(), [](int k) { return k >= 0; });
@@ -65,4 +65,4 @@ double mcp_residual(const BoundedMcp& p, const Eigen::VectorXd& lambda) {
   return r;
 }
 
-}  // namespace talus::solvers
+}  // namespace talus::vehicle

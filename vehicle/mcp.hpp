@@ -11,7 +11,7 @@
 #include <Eigen/SparseCore>
 #include <vector>
 
-namespace talus::solvers {
+namespace talus::vehicle {
 
 struct BoundedMcp {
   Eigen::SparseMatrix<double> A;  // n x n, symmetric, both triangles stored
@@ -49,4 +49,4 @@ double friction_bound_scale(const BoundedMcp& p);
 // (friction rows use the bounds that the normal impulses in lambda give)
 double mcp_residual(const BoundedMcp& p, const Eigen::VectorXd& lambda);
 
-}  // namespace talus::solvers
+}  // namespace talus::vehicle

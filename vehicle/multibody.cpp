@@ -5,7 +5,7 @@
 #include <tuple>
 
 #include "host/error.hpp"
-#include "solvers/spook.hpp"
+#include "vehicle/spook.hpp"
 
 namespace talus::vehicle {
 
@@ -121,7 +121,7 @@ void MultibodySystem::assemble(double h) {
   for (int r = 0; r < m; ++r) assembled_force_range_[r] = {rows_[r].force_min, rows_[r].force_max};
   if (warm_lambda_.size() != m) {
     warm_lambda_ = Eigen::VectorXd::Zero(m);
-    warm_state_.assign(m, solvers::RowState::free);
+    warm_state_.assign(m, RowState::free);
   }
   assembled_ = true;
   solved_ = false;

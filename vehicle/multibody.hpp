@@ -16,7 +16,7 @@
 #include <utility>
 #include <vector>
 
-#include "solvers/direct_solver.hpp"
+#include "vehicle/direct_solver.hpp"
 #include "vehicle/constraint.hpp"
 #include "vehicle/rigid_body.hpp"
 
@@ -60,7 +60,7 @@ class MultibodySystem {
   double timestep() const { return h_; }
   double time() const { return time_; }
   int row_count() const { return static_cast<int>(rows_.size()); }
-  const solvers::McpResult& last_result() const { return result_; }
+  const McpResult& last_result() const { return result_; }
   int bound_passes() const { return bound_passes_; }
   // largest violation of bilateral joint rows at the start of the last step: length [m], angle [rad]
   double max_joint_position_violation() const;
@@ -71,7 +71,7 @@ class MultibodySystem {
   std::vector<std::unique_ptr<Constraint>> constraints_;
   Vec3 gravity_ = Vec3(0.0, 0.0, -9.81);
   std::vector<Vec6> external_;  // per body, this step
-  solvers::DirectSolver solver_;
+  DirectSolver solver_;
   double h_ = 0.0, time_ = 0.0;
   // this step's assembly
   std::vector<ConstraintRow> rows_;
@@ -81,15 +81,15 @@ class MultibodySystem {
   Eigen::SparseMatrix<double> G_;
   Eigen::SparseMatrix<double> minv_;
   Eigen::VectorXd sigma_, rhs_;
-  solvers::BoundedMcp mcp_;
+  BoundedMcp mcp_;
   // the impulse bounds as assembled: solve() starts from them, so bounds that a previous solve
   // of the same step lowered (the engine's speed-dependent torque limit) do not stick when the
   // step is solved again with another external wrench (the particle coupling's outer passes)
   std::vector<std::pair<double, double>> assembled_force_range_;  // per row [N or N m]
-  solvers::McpResult result_;
+  McpResult result_;
   Eigen::VectorXd velocity_after_;  // v⁺ of the last solve
   Eigen::VectorXd warm_lambda_;
-  std::vector<solvers::RowState> warm_state_;
+  std::vector<RowState> warm_state_;
   int bound_passes_ = 0;
   bool assembled_ = false, solved_ = false;
 };

@@ -3,7 +3,7 @@
 //   {"name": "...", "description": "...", "machine": "wa320", "pile": false,
 //    "duration": 12.0, "timestep": 0.005, "payload": 3500,
 //    "drive": [[t, v], ...], "lift": [[t, v], ...], "tilt": [[t, v], ...]}   (s, m/s, kg)
-// Scenarios with "pile": true dig in a particle pile (solvers/digging.hpp); their timestep comes
+// Scenarios with "pile": true dig in a particle pile (digging/digging.hpp); their timestep comes
 // from the fidelity level, and they add
 //    "pile_profile": "default",   the pile's cross-section (data/piles/NAME.json or a path)
 //    "pile_toe_x": 5.0,           world x of the profile's toe (the machine's front axle is at 0)

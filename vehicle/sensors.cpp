@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
+#include <limits>
 #include <ostream>
 #include <sstream>
 #include <string>
@@ -58,20 +59,16 @@ SensorSample read_sensors(const WheelLoader& loader, double t) {
   return s;
 }
 
-const std::string& sensor_csv_header() {
-  static const std::string header = channel_header();  // built once, immutable
-  return header;
-}
 
-void write_sensor_csv_row(std::ostream& out, const SensorSample& s) {
-  for (std::size_t c = 0; c < kChannelCount; ++c) out << (c ? "," : "") << s.*kSensorChannels[c].field;
-  out << '\n';
-}
-
-std::string sensor_log_csv(const SensorLog& log) {
+std::string sensor_csv(const std::vector<SensorSample>& samples) {
+  // digits that round-trip a double exactly (std::numeric_limits<double>::max_digits10)
+  constexpr int kRoundTripDigits = std::numeric_limits<double>::max_digits10;
   std::ostringstream csv;
-  csv << std::setprecision(10) << sensor_csv_header() << '\n';
-  for (const auto& s : log.samples()) write_sensor_csv_row(csv, s);
+  csv << std::setprecision(kRoundTripDigits) << channel_header() << '\n';
+  for (const auto& s : samples) {
+    for (std::size_t c = 0; c < kChannelCount; ++c) csv << (c ? "," : "") << s.*kSensorChannels[c].field;
+    csv << '\n';
+  }
   return csv.str();
 }
 

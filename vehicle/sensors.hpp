@@ -2,7 +2,6 @@
 // the 100 Hz log with power P = f_tr v + f_l ḋ_l + f_t ḋ_t and work W = ∫ P dt.
 // The channels, their conventions and units: vehicle/sensor_channels.hpp.
 #pragma once
-#include <iosfwd>
 #include <string>
 #include <vector>
 
@@ -13,10 +12,6 @@ namespace talus::vehicle {
 
 // the sensors at time t, from the last step's forces and the current state
 SensorSample read_sensors(const WheelLoader& loader, double t);
-
-// the CSV header of the run contract: kSensorChannels' names, comma-separated
-const std::string& sensor_csv_header();
-void write_sensor_csv_row(std::ostream& out, const SensorSample& s);
 
 // samples at a fixed rate and integrates the work
 class SensorLog {
@@ -42,8 +37,10 @@ class SensorLog {
   bool has_last_ = false;
 };
 
-// the whole log as the run contract's timeseries.csv (header and one row per sample, 10 digits)
-std::string sensor_log_csv(const SensorLog& log);
+// samples as the run contract's timeseries.csv: channel_header() and one row per sample, each
+// number with the 17 digits that round-trip a double, so the file reads back as the samples
+// exactly. The one writer of the contract (sim2real::save_timeseries goes through it too)
+std::string sensor_csv(const std::vector<SensorSample>& samples);
 
 // the work [J] of the logged power over [t0, t1] (trapezoids between samples, the window's ends
 // interpolated): the work of a phase, e.g. the digging phase the metrics compare

@@ -1,4 +1,4 @@
-#include "solvers/spook.hpp"
+#include "vehicle/spook.hpp"
 
 #include <string>
 

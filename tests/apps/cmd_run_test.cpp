@@ -41,7 +41,7 @@ TEST(VehicleRunTest, FlatLiftWritesTimeseriesAndSummary) {
 }
 
 // the main job at the coarsest level: the HD27 pile scenario at D400 end to end, with every output
-// the issue names (the physics of the run is tested in tests/solvers/digging_test.cpp)
+// the issue names (the physics of the run is tested in tests/digging/digging_test.cpp)
 TEST(DiggingRunTest, Hd27AtD400WritesTheRunContractSnapshotsAndFigures) {
   const auto dir = std::filesystem::temp_directory_path() / "talus_run_hd27_d400";
   std::filesystem::remove_all(dir);

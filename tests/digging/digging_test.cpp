@@ -1,7 +1,7 @@
-// The type-D digging simulator (solvers/digging): a scenario's pile placed before the machine and
+// The type-D digging simulator (digging/digging): a scenario's pile placed before the machine and
 // dug with the feedforward inputs. These tests measure bounds a broken coupling or a broken
 // loaded-mass rule would cross.
-#include "solvers/digging.hpp"
+#include "digging/digging.hpp"
 
 #include <gtest/gtest.h>
 
@@ -35,12 +35,16 @@ TEST(Digging, Hd27AtD400FillsTheBucketWithinItsHeapedCapacity) {
   DiggingSimulation sim(test::shared_device(), sc, preset, pile, options);
   EXPECT_GT(toe, sim.loader().bucket_tip_world().x());
   const double capacity = sim.loader().bucket_mesh().heaped_volume * 1727.0;
-  // the load checked every half second of the run
+  // the run loop, the load checked every half second of the run; it calls back after every step
   double largest = 0.0;
-  for (int k = 1; !sim.done(); ++k) {
-    sim.step();
+  int calls = 0;
+  const double wall = sim.run([&](int k) {
+    EXPECT_EQ(k, ++calls);
     if (k % static_cast<int>(std::lround(0.5 / preset.dt)) == 0) largest = std::max(largest, sim.loaded_mass());
-  }
+  });
+  EXPECT_EQ(calls, sim.steps_total());
+  EXPECT_TRUE(sim.done());
+  EXPECT_GT(wall, 0.0);
   const double loaded = sim.loaded_mass();
   std::printf("[ measured ] HD27-D400: %.0f kg loaded (largest on the way %.0f kg, capacity %.0f kg); "
               "%d steps touching the bucket, mean passes %.2f, max %d, coupling residual <= %.1e m/s, "

@@ -1,6 +1,6 @@
-// The sweep's measures (solvers/feedback_sweep): best productivity and the paper's domain gap,
+// The sweep's measures (digging/feedback_sweep): best productivity and the paper's domain gap,
 // domain shift and performance drop (paper §7.2), on results whose answers are known by hand.
-#include "solvers/feedback_sweep.hpp"
+#include "digging/feedback_sweep.hpp"
 
 #include <gtest/gtest.h>
 

@@ -11,7 +11,7 @@
 
 #include "host/error.hpp"
 #include "io/render.hpp"
-#include "terrain/bucket_contacts.hpp"
+#include "solvers/bucket_contacts.hpp"
 #include "vehicle/bucket_mesh.hpp"
 
 namespace talus {

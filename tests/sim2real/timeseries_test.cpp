@@ -154,6 +154,36 @@ TEST(TimeseriesTest, SummaryRoundTripAndMissingField) {
   fs::remove_all(dir);
 }
 
+// a simulated run's summary carries more than the contract (particles, timing, coupling): the
+// details are written beside the fields and read back as they stand, and a detail may not stand
+// in for a field
+TEST(TimeseriesTest, SummaryDetailsRoundTripAndCannotShadowAField) {
+  const fs::path dir = test::fresh_temp_dir("ts");
+  RunSummary s = test::reference_summary();
+  s.details = {{"particles", 1234}, {"coupling", {{"max_passes", 3}}}, {"device", "pocl"}};
+  save_summary(dir / "s.json", s);
+  const RunSummary back = load_summary(dir / "s.json");
+  EXPECT_EQ(back.details, s.details);
+  EXPECT_DOUBLE_EQ(back.loaded_mass_kg, test::kRefMassKg);
+  EXPECT_EQ(to_json(back), to_json(s));
+
+  s.details["work_J"] = 1.0;
+  EXPECT_THROW(to_json(s), Error);
+  EXPECT_THROW(save_summary(dir / "t.json", s), Error);
+  EXPECT_FALSE(fs::exists(dir / "t.json"));
+  fs::remove_all(dir);
+}
+
+// the columns of logged samples and back, field for field
+TEST(TimeseriesTest, SamplesAndColumnsConvertBothWays) {
+  const TimeSeries series = test::reference_series();
+  const TimeSeries back = to_timeseries(to_samples(series));
+  for (std::size_t c = 0; c < kChannelCount; ++c) EXPECT_EQ(back.columns[c], series.columns[c]) << kChannelNames[c];
+  TimeSeries ragged = series;
+  ragged[Channel::power].pop_back();
+  EXPECT_THROW(to_samples(ragged), Error);
+}
+
 TEST(TimeseriesTest, WindowAndLinearResampling) {
   // a 50 Hz series offset by 5 ms, resampled onto 100 Hz times: linear channels are exact
   const TimeSeries s = test::reference_series(50.0, 0.005);

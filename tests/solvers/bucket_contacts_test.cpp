@@ -1,4 +1,4 @@
-// terrain/bucket_contacts: the bucket mesh as an Embree scene, closest-point contacts of particles
+// solvers/bucket_contacts: the bucket mesh as an Embree scene, closest-point contacts of particles
 // with its thin plates (both sides, shared edges, inner corners), the host candidate selection,
 // and Embree against a brute-force double-precision reference on random particles.
 #include <gtest/gtest.h>
@@ -10,7 +10,7 @@
 #include <string>
 
 #include "host/error.hpp"
-#include "terrain/bucket_contacts.hpp"
+#include "solvers/bucket_contacts.hpp"
 #include "vehicle/data_file.hpp"
 
 namespace talus {

@@ -1,4 +1,4 @@
-// terrain/bucket_selection: the device selection of particles near the bucket against the
+// solvers/bucket_selection: the device selection of particles near the bucket against the
 // host's double-precision box test, on fresh random particles (seed printed on failure).
 #include <gtest/gtest.h>
 
@@ -6,7 +6,7 @@
 #include <random>
 
 #include "solvers/dem_world.hpp"
-#include "terrain/bucket_selection.hpp"
+#include "solvers/bucket_selection.hpp"
 #include "vehicle/bucket_mesh.hpp"
 
 namespace talus {

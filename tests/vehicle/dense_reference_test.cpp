@@ -1,11 +1,11 @@
 // The dense reference on problems whose solution is known in closed form.
-#include "solvers/dense_reference.hpp"
+#include "vehicle/dense_reference.hpp"
 
 #include <gtest/gtest.h>
 
 #include <limits>
 
-namespace talus::solvers {
+namespace talus::vehicle {
 namespace {
 
 BoundedMcp diagonal_problem() {
@@ -50,4 +50,4 @@ TEST(DirectDenseReferenceTest, FrictionSaturatesAtMuTimesNormal) {
 }
 
 }  // namespace
-}  // namespace talus::solvers
+}  // namespace talus::vehicle

@@ -1,6 +1,6 @@
 // The CHOLMOD active-set solver against the dense block-pivoting reference on random bounded MCPs
 // shaped like multibody systems (A = G M⁻¹ Gᵀ + Σ from random sparse Jacobians).
-#include "solvers/direct_solver.hpp"
+#include "vehicle/direct_solver.hpp"
 
 #include <gtest/gtest.h>
 
@@ -9,9 +9,9 @@
 #include <random>
 
 #include "host/error.hpp"
-#include "solvers/dense_reference.hpp"
+#include "vehicle/dense_reference.hpp"
 
-namespace talus::solvers {
+namespace talus::vehicle {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
@@ -163,4 +163,4 @@ TEST(DirectSolverTest, RejectsMalformedProblem) {
 }
 
 }  // namespace
-}  // namespace talus::solvers
+}  // namespace talus::vehicle

@@ -15,18 +15,20 @@ namespace {
 
 // the header is the contract of SPEC §2.4 written out here by hand (a witness independent of the
 // channel table), and each column carries its own field: a sample whose fields hold their column's
-// index writes 0,1,...,13
-TEST(SensorTest, CsvHeaderIsTheRunContract) {
-  EXPECT_EQ(sensor_csv_header(),
-            "t,f_lift,f_tilt,f_traction,v_drive,d_lift,d_tilt,boom_deg,bucket_deg,pitch_deg,x_vehicle,"
-            "bucket_tip_x,bucket_tip_z,power");
+// index writes 0,1,...,13; a value that needs all of a double's digits is written with them
+TEST(SensorTest, CsvIsTheRunContract) {
   SensorSample s;
   s.t = 0, s.f_lift = 1, s.f_tilt = 2, s.f_traction = 3, s.v_drive = 4, s.d_lift = 5, s.d_tilt = 6;
   s.boom_deg = 7, s.bucket_deg = 8, s.pitch_deg = 9, s.x_vehicle = 10, s.bucket_tip_x = 11;
   s.bucket_tip_z = 12, s.power = 13, s.lift_rate = 99, s.tilt_rate = 99;
-  std::ostringstream row;
-  write_sensor_csv_row(row, s);
-  EXPECT_EQ(row.str(), "0,1,2,3,4,5,6,7,8,9,10,11,12,13\n");
+  SensorSample exact = s;
+  exact.t = 0.1;
+  exact.power = 1.0 / 3.0;
+  EXPECT_EQ(sensor_csv({s, exact}),
+            "t,f_lift,f_tilt,f_traction,v_drive,d_lift,d_tilt,boom_deg,bucket_deg,pitch_deg,x_vehicle,"
+            "bucket_tip_x,bucket_tip_z,power\n"
+            "0,1,2,3,4,5,6,7,8,9,10,11,12,13\n"
+            "0.10000000000000001,1,2,3,4,5,6,7,8,9,10,11,12,0.33333333333333331\n");
 }
 
 // lifting at constant speed: 100 Hz samples, power = f_l ḋ_l (no driving, tilt held), and the work

@@ -1,5 +1,5 @@
 // SPOOK coefficients against their closed forms and against the behaviour they must produce.
-#include "solvers/spook.hpp"
+#include "vehicle/spook.hpp"
 
 #include <gtest/gtest.h>
 
