@@ -41,7 +41,7 @@ __kernel void bucket_warm_start(__global const TlRow* rows, int n_rows, __global
   for (int k = 0; k < n_rows; ++k) {
     TlRow row = rows[k];
     int a = row.a;
-    float3 P = row.impulse_t.w * row.normal.xyz + row.impulse_t.xyz;
+    float3 P = ROW_IMPULSE_N(row) * row.normal.xyz + row.impulse_t.xyz;
     float4 va = velocity[a];
     float4 wa = omega[a];
     velocity[a] = (float4)(va.xyz - va.w * P, va.w);
@@ -68,12 +68,12 @@ __kernel void bucket_sweep(__global TlRow* rows, int n_rows, __global float4* ve
     float3 n = row.normal.xyz;
     float3 arm_a = row.arm_a.xyz;
     float3 arm_b = row.arm_b.xyz;
-    float sigma = row.arm_b.w;
-    float ln = row.impulse_t.w;
+    float ln = ROW_IMPULSE_N(row);
 
-    // normal: the bucket's point velocity against the particle's (its arm is along n)
+    // normal: the bucket's point velocity against the particle's (its arm is along n); the
+    // bucket holds no tensile impulse
     float un = dot(n, vb + cross(wb, arm_b) - va);
-    float ln_new = fmax(0.0f, ln + (row.normal.w - un - sigma * ln) * row.arm_a.w);
+    float ln_new = normal_impulse(ln, ROW_RHS(row), un, ROW_SIGMA(row), ROW_INV_DN(row), 0.0f);
     float3 dp = (ln_new - ln) * n;
     va -= ima * dp;
     bucket_twist_change(W, dp, cross(arm_b, dp), &vb, &wb);
@@ -83,10 +83,7 @@ __kernel void bucket_sweep(__global TlRow* rows, int n_rows, __global float4* ve
     float3 u = (vb + cross(wb, arm_b)) - (va + cross(wa, arm_a));
     float3 ut = u - dot(u, n) * n;
     float3 lt = row.impulse_t.xyz;
-    float3 lt_new = lt - ut * row.impulse_r.w;
-    float tmax = row.coef.x * ln;
-    float tm = length(lt_new);
-    if (tm > tmax) lt_new *= tm > 0.0f ? tmax / tm : 0.0f;
+    float3 lt_new = friction_impulse(lt, ut, ROW_INV_DT(row), ROW_FRICTION(row) * ln);
     float3 dlt = lt_new - lt;
     va -= ima * dlt;
     wa -= iia * cross(arm_a, dlt);
@@ -95,19 +92,13 @@ __kernel void bucket_sweep(__global TlRow* rows, int n_rows, __global float4* ve
     // rolling (on the disc) and twist (about n), both bounded by mu_r R* lambda_n
     float3 wrel = wb - wa;
     float3 lr = row.impulse_r.xyz;
-    float rmax = row.coef.y * ln;
-    float3 lr_t = lr - dot(lr, n) * n;
-    float3 lr_t_new = lr_t - (wrel - dot(wrel, n) * n) * row.coef.z;
-    float rm = length(lr_t_new);
-    if (rm > rmax) lr_t_new *= rm > 0.0f ? rmax / rm : 0.0f;
-    float twist = clamp(dot(lr, n) - dot(wrel, n) * row.coef.z, -rmax, rmax);
-    float3 lr_new = lr_t_new + twist * n;
+    float3 lr_new = rolling_impulse(lr, wrel, n, ROW_INV_DR(row), ROW_ROLLING_LIMIT(row) * ln);
     float3 dlr = lr_new - lr;
     wa -= iia * dlr;
     bucket_twist_change(W, (float3)(0.0f), dlr, &vb, &wb);
 
     rows[k].impulse_t = (float4)(lt_new, ln);
-    rows[k].impulse_r = (float4)(lr_new, row.impulse_r.w);
+    rows[k].impulse_r = (float4)(lr_new, ROW_INV_DT(row));
     velocity[a] = (float4)(va, ima);
     omega[a] = (float4)(wa, iia);
   }

@@ -86,6 +86,20 @@ typedef struct {
   tl_int pad0;
 } TlRow;
 
+#ifdef __OPENCL_VERSION__
+// the packed lanes of a row by name, for a row in registers or in global memory alike (the C++
+// side decodes a row once, in solvers/dem_reference from_device)
+#define ROW_RHS(row) ((row).normal.w)
+#define ROW_INV_DN(row) ((row).arm_a.w)
+#define ROW_SIGMA(row) ((row).arm_b.w)
+#define ROW_IMPULSE_N(row) ((row).impulse_t.w)
+#define ROW_INV_DT(row) ((row).impulse_r.w)
+#define ROW_FRICTION(row) ((row).coef.x)
+#define ROW_ROLLING_LIMIT(row) ((row).coef.y)
+#define ROW_INV_DR(row) ((row).coef.z)
+#define ROW_COHESION(row) ((row).coef.w)
+#endif
+
 // the bucket: one rigid body of the vehicle that particles touch (SPEC §1 steps 3-6). Its rows
 // are TlRow with b = TL_BUCKET_BODY and arm_b the lever arm about the bucket's centre of mass;
 // they live in their own buffer and are solved one after another by one work-item

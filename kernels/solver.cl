@@ -98,7 +98,7 @@ __kernel void apply_gravity(__global float4* velocity, const TlStepParams p) {
 void row_impulse_on(const TlRow* row, int i, float3* lin, float3* ang) {
   float s = row->a == i ? -1.0f : 1.0f;
   float3 arm = row->a == i ? row->arm_a.xyz : row->arm_b.xyz;
-  float3 P = row->impulse_t.w * row->normal.xyz + row->impulse_t.xyz;
+  float3 P = ROW_IMPULSE_N(*row) * row->normal.xyz + row->impulse_t.xyz;
   *lin = s * P;
   *ang = s * (cross(arm, P) + row->impulse_r.xyz);
 }
@@ -126,22 +126,22 @@ __kernel void apply_row_impulses(__global const TlRow* rows, __global const int*
   omega[i] = (float4)(w.xyz + w.w * dw, w.w);
 }
 
-// one contact's rows solved in sequence (normal, friction, rolling) against local copies of
-// the two bodies' velocities. inv_ma/inv_ia/inv_mb/inv_ib are the (possibly split) inverse
-// masses; d_n, d_t, d_r the matching inverse effective masses. Returns the impulse changes.
+// one contact's rows solved in sequence (normal, friction, rolling; the law in contact_law.cl)
+// against local copies of the two bodies' velocities. inv_ma/inv_ia/inv_mb/inv_ib are the
+// (possibly split) inverse masses; d_n, d_t, d_r the matching inverse effective masses. Returns
+// the impulse changes.
 void solve_contact(TlRow* row, float3* va, float3* wa, float3* vb, float3* wb, float inv_ma,
                    float inv_ia, float inv_mb, float inv_ib, float inv_dn, float inv_dt,
                    float inv_dr, float3* d_lin, float3* d_ang) {
   float3 n = row->normal.xyz;
   float3 arm_a = row->arm_a.xyz;
   float3 arm_b = row->arm_b.xyz;
-  float sigma = row->arm_b.w;
-  float ln = row->impulse_t.w;
+  float ln = ROW_IMPULSE_N(*row);
 
   // normal: SPOOK row with compliance, lambda_n >= -h F_c (0 without cohesion)
-  float cohesion = row->coef.w;
+  float cohesion = ROW_COHESION(*row);
   float un = dot(n, *vb - *va);
-  float ln_new = fmax(-cohesion, ln + (row->normal.w - un - sigma * ln) * inv_dn);
+  float ln_new = normal_impulse(ln, ROW_RHS(*row), un, ROW_SIGMA(*row), inv_dn, -cohesion);
   float dln = ln_new - ln;
   *va -= inv_ma * dln * n;
   *vb += inv_mb * dln * n;
@@ -152,10 +152,7 @@ void solve_contact(TlRow* row, float3* va, float3* wa, float3* vb, float3* wb, f
   float3 u = (*vb + cross(*wb, arm_b)) - (*va + cross(*wa, arm_a));
   float3 ut = u - dot(u, n) * n;
   float3 lt = row->impulse_t.xyz;
-  float3 lt_new = lt - ut * inv_dt;
-  float tmax = row->coef.x * (ln + cohesion);
-  float tm = length(lt_new);
-  if (tm > tmax) lt_new *= tm > 0.0f ? tmax / tm : 0.0f;
+  float3 lt_new = friction_impulse(lt, ut, inv_dt, ROW_FRICTION(*row) * (ln + cohesion));
   float3 dlt = lt_new - lt;
   *va -= inv_ma * dlt;
   *wa -= inv_ia * cross(arm_a, dlt);
@@ -166,20 +163,13 @@ void solve_contact(TlRow* row, float3* va, float3* wa, float3* vb, float3* wb, f
   // mu_r R* (lambda_n + h F_c)
   float3 wrel = *wb - *wa;
   float3 lr = row->impulse_r.xyz;
-  float rmax = row->coef.y * (ln + cohesion);
-  float3 lr_n = dot(lr, n) * n;
-  float3 lr_t = lr - lr_n;
-  float3 lr_t_new = lr_t - (wrel - dot(wrel, n) * n) * inv_dr;
-  float rm = length(lr_t_new);
-  if (rm > rmax) lr_t_new *= rm > 0.0f ? rmax / rm : 0.0f;
-  float twist = clamp(dot(lr, n) - dot(wrel, n) * inv_dr, -rmax, rmax);
-  float3 lr_new = lr_t_new + twist * n;
+  float3 lr_new = rolling_impulse(lr, wrel, n, inv_dr, ROW_ROLLING_LIMIT(*row) * (ln + cohesion));
   float3 dlr = lr_new - lr;
   *wa -= inv_ia * dlr;
   *wb += inv_ib * dlr;
 
   row->impulse_t = (float4)(lt_new, ln);
-  row->impulse_r = (float4)(lr_new, row->impulse_r.w);
+  row->impulse_r = (float4)(lr_new, ROW_INV_DT(*row));
   *d_lin = dln * n + dlt;
   *d_ang = dlr;
 }
@@ -210,8 +200,8 @@ __kernel void pgs_colour(__global TlRow* rows, int begin, int end, __global floa
   float4 wb4 = b >= 0 ? omega[b] : (float4)(0.0f);
   float3 va = va4.xyz, wa = wa4.xyz, vb = vb4.xyz, wb = wb4.xyz;
   float3 d_lin, d_ang;
-  solve_contact(&row, &va, &wa, &vb, &wb, va4.w, wa4.w, vb4.w, wb4.w, row.arm_a.w, row.impulse_r.w,
-                row.coef.z, &d_lin, &d_ang);
+  solve_contact(&row, &va, &wa, &vb, &wb, va4.w, wa4.w, vb4.w, wb4.w, ROW_INV_DN(row), ROW_INV_DT(row),
+                ROW_INV_DR(row), &d_lin, &d_ang);
   rows[k].impulse_t = row.impulse_t;
   rows[k].impulse_r = row.impulse_r;
   velocity[a] = (float4)(va, va4.w);
@@ -239,7 +229,7 @@ __kernel void jacobi_rows(__global TlRow* rows, int n_rows, __global const float
   float nb = b >= 0 ? (float)(adj_offsets[b + 1] - adj_offsets[b]) : 0.0f;
   float ima = na * va4.w, iia = na * wa4.w, imb = nb * vb4.w, iib = nb * wb4.w;
   float3 arm_a = row.arm_a.xyz, arm_b = row.arm_b.xyz;
-  float inv_dn = 1.0f / (ima + imb + row.arm_b.w);
+  float inv_dn = 1.0f / (ima + imb + ROW_SIGMA(row));
   float dt_ = ima + iia * dot(arm_a, arm_a) + imb + iib * dot(arm_b, arm_b);
   float dr_ = iia + iib;
   float3 va = va4.xyz, wa = wa4.xyz, vb = vb4.xyz, wb = wb4.xyz;
@@ -288,36 +278,26 @@ __kernel void row_residual(__global const TlRow* rows, int n_rows, __global cons
   float4 va4, wa4, vb4, wb4;
   load_bodies(&row, velocity, omega, &va4, &wa4, &vb4, &wb4);
   float3 n = row.normal.xyz;
-  float ln = row.impulse_t.w;
-  float dn = 1.0f / row.arm_a.w;
+  float ln = ROW_IMPULSE_N(row);
   float un = dot(n, vb4.xyz - va4.xyz);
-  float cohesion = row.coef.w;
-  float rn = (fmax(-cohesion, ln + (row.normal.w - un - row.arm_b.w * ln) / dn) - ln) * dn;
+  float cohesion = ROW_COHESION(row);
+  float rn = (normal_impulse(ln, ROW_RHS(row), un, ROW_SIGMA(row), ROW_INV_DN(row), -cohesion) - ln) /
+             ROW_INV_DN(row);
   float3 u = (vb4.xyz + cross(wb4.xyz, row.arm_b.xyz)) - (va4.xyz + cross(wa4.xyz, row.arm_a.xyz));
   float3 ut = u - dot(u, n) * n;
   float rt = 0.0f;
-  if (row.impulse_r.w > 0.0f) {
-    float dt_ = 1.0f / row.impulse_r.w;
+  if (ROW_INV_DT(row) > 0.0f) {
     float3 lt = row.impulse_t.xyz;
-    float3 lt_new = lt - ut / dt_;
-    float tmax = row.coef.x * (ln + cohesion);
-    float tm = length(lt_new);
-    if (tm > tmax) lt_new *= tm > 0.0f ? tmax / tm : 0.0f;
-    rt = length(lt_new - lt) * dt_;
+    float3 lt_new = friction_impulse(lt, ut, ROW_INV_DT(row), ROW_FRICTION(row) * (ln + cohesion));
+    rt = length(lt_new - lt) / ROW_INV_DT(row);
   }
   // rolling and twist: the same, turned into a velocity by the lever arm's length
   float rr = 0.0f;
-  if (row.coef.z > 0.0f) {
-    float dr = 1.0f / row.coef.z;
+  if (ROW_INV_DR(row) > 0.0f) {
     float3 wrel = wb4.xyz - wa4.xyz;
     float3 lr = row.impulse_r.xyz;
-    float rmax = row.coef.y * (ln + cohesion);
-    float3 lr_t = lr - dot(lr, n) * n;
-    float3 lr_t_new = lr_t - (wrel - dot(wrel, n) * n) / dr;
-    float rm = length(lr_t_new);
-    if (rm > rmax) lr_t_new *= rm > 0.0f ? rmax / rm : 0.0f;
-    float twist = clamp(dot(lr, n) - dot(wrel, n) / dr, -rmax, rmax);
-    rr = length(lr_t_new + twist * n - lr) * dr * length(row.arm_a.xyz);
+    float3 lr_new = rolling_impulse(lr, wrel, n, ROW_INV_DR(row), ROW_ROLLING_LIMIT(row) * (ln + cohesion));
+    rr = length(lr_new - lr) / ROW_INV_DR(row) * length(row.arm_a.xyz);
   }
   residual[k] = rn * rn + rt * rt + rr * rr;
 }

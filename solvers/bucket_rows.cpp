@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "solvers/contact_law.hpp"
 #include "solvers/dem_world.hpp"
 
 namespace talus {
@@ -226,7 +227,7 @@ void bucket_sweep(std::vector<Row>& rows, Particles& particles, BucketBody& buck
 
     // normal
     const double un = n.dot(bucket.velocity + bucket.omega.cross(row.arm_b) - va);
-    const double ln_new = std::max(0.0, ln + (row.rhs - un - row.sigma * ln) * row.inv_dn);
+    const double ln_new = contact_law::normal_impulse(ln, row.rhs, un, row.sigma, row.inv_dn, 0.0);
     const Vec3 dp = (ln_new - ln) * n;
     va -= ima * dp;
     add_twist_change(bucket, dp, row.arm_b.cross(dp));
@@ -235,10 +236,7 @@ void bucket_sweep(std::vector<Row>& rows, Particles& particles, BucketBody& buck
     // friction on the disc
     const Vec3 u = (bucket.velocity + bucket.omega.cross(row.arm_b)) - (va + wa.cross(row.arm_a));
     const Vec3 ut = u - u.dot(n) * n;
-    Vec3 lt_new = row.impulse_t - ut * row.inv_dt;
-    const double tmax = row.friction * ln;
-    const double tm = lt_new.norm();
-    if (tm > tmax) lt_new *= tm > 0.0 ? tmax / tm : 0.0;
+    const Vec3 lt_new = contact_law::friction_impulse(row.impulse_t, ut, row.inv_dt, row.friction * ln);
     const Vec3 dlt = lt_new - row.impulse_t;
     va -= ima * dlt;
     wa -= iia * row.arm_a.cross(dlt);
@@ -247,13 +245,7 @@ void bucket_sweep(std::vector<Row>& rows, Particles& particles, BucketBody& buck
     // rolling and twist
     const Vec3 wrel = bucket.omega - wa;
     const Vec3& lr = row.impulse_r;
-    const double rmax = row.rolling_limit * ln;
-    const Vec3 lr_t = lr - lr.dot(n) * n;
-    Vec3 lr_t_new = lr_t - (wrel - wrel.dot(n) * n) * row.inv_dr;
-    const double rm = lr_t_new.norm();
-    if (rm > rmax) lr_t_new *= rm > 0.0 ? rmax / rm : 0.0;
-    const double twist = std::clamp(lr.dot(n) - wrel.dot(n) * row.inv_dr, -rmax, rmax);
-    const Vec3 lr_new = lr_t_new + twist * n;
+    const Vec3 lr_new = contact_law::rolling_impulse(lr, wrel, n, row.inv_dr, row.rolling_limit * ln);
     const Vec3 dlr = lr_new - lr;
     wa -= iia * dlr;
     add_twist_change(bucket, Vec3::Zero(), dlr);
@@ -269,7 +261,7 @@ void bucket_sweep(std::vector<Row>& rows, Particles& particles, BucketBody& buck
 BucketRowBlock::BucketRowBlock(Device& dev)
     : dev_(dev), rows_(dev, 1), body_(dev, 1), index_(dev, 1), gathered_position_(dev, 1),
       gathered_velocity_(dev, 1), gathered_omega_(dev, 1) {
-  const cl::Program& program = dev.program({"bucket.cl"});
+  const cl::Program& program = dev.program({"contact_law.cl", "bucket.cl"});
   gather_kernel_ = dev.kernel(program, "bucket_gather");
   warm_kernel_ = dev.kernel(program, "bucket_warm_start");
   sweep_kernel_ = dev.kernel(program, "bucket_sweep");

@@ -2,12 +2,19 @@
 // algorithm, so projected Gauss-Seidel and projected Jacobi stay comparable).
 #pragma once
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "host/device.hpp"
 #include "solvers/dem_buffers.hpp"
 #include "solvers/dem_settings.hpp"
 
 namespace talus {
+
+// the kernel files of the contact rows and sweeps, in order: the shared helpers, the contact law
+// (normal, friction and rolling projections), then the rows, sweeps and residual. One list, so
+// every user builds the same program once (Device caches it by its files)
+inline const std::vector<std::string> kSolverProgram = {"dem_common.cl", "contact_law.cl", "solver.cl"};
 
 class ContactSweep {
  public:

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "host/error.hpp"
+#include "solvers/contact_law.hpp"
 
 namespace talus::reference {
 
@@ -68,12 +69,6 @@ BodyVelocity body_velocity(const Particles& bodies, int i) {
   return out;
 }
 
-// scales `impulse` back onto the disc of radius `limit` (a zero vector stays zero)
-void clamp_to_disc(Vec3& impulse, double limit) {
-  double magnitude = impulse.norm();
-  if (magnitude > limit) impulse *= magnitude > 0.0 ? limit / magnitude : 0.0;
-}
-
 // the inverse masses and effective masses one contact is solved with (kernels/solver.cl
 // solve_contact): the bodies' own in PGS, split ones in jacobi
 struct SolveMasses {
@@ -90,7 +85,7 @@ void solve_contact(Row& row, Vec3& va, Vec3& wa, Vec3& vb, Vec3& wb, const Solve
 
   // normal: SPOOK row with compliance, lambda_n >= -h F_c (0 without cohesion)
   double un = n.dot(vb - va);
-  double ln_new = std::max(-row.cohesion, ln + (row.rhs - un - row.sigma * ln) * m.inv_dn);
+  double ln_new = contact_law::normal_impulse(ln, row.rhs, un, row.sigma, m.inv_dn, -row.cohesion);
   double dln = ln_new - ln;
   va -= m.inv_ma * dln * n;
   vb += m.inv_mb * dln * n;
@@ -101,8 +96,7 @@ void solve_contact(Row& row, Vec3& va, Vec3& wa, Vec3& vb, Vec3& wb, const Solve
   Vec3 u = (vb + wb.cross(row.arm_b)) - (va + wa.cross(row.arm_a));
   Vec3 ut = u - u.dot(n) * n;
   Vec3 lt = row.impulse_t;
-  Vec3 lt_new = lt - ut * m.inv_dt;
-  clamp_to_disc(lt_new, row.friction * (ln + row.cohesion));
+  Vec3 lt_new = contact_law::friction_impulse(lt, ut, m.inv_dt, row.friction * (ln + row.cohesion));
   Vec3 dlt = lt_new - lt;
   va -= m.inv_ma * dlt;
   wa -= m.inv_ia * row.arm_a.cross(dlt);
@@ -113,12 +107,7 @@ void solve_contact(Row& row, Vec3& va, Vec3& wa, Vec3& vb, Vec3& wb, const Solve
   // mu_r R* (lambda_n + h F_c)
   Vec3 wrel = wb - wa;
   Vec3 lr = row.impulse_r;
-  double rmax = row.rolling_limit * (ln + row.cohesion);
-  Vec3 lr_t = lr - lr.dot(n) * n;
-  Vec3 lr_t_new = lr_t - (wrel - wrel.dot(n) * n) * m.inv_dr;
-  clamp_to_disc(lr_t_new, rmax);
-  double twist = std::clamp(lr.dot(n) - wrel.dot(n) * m.inv_dr, -rmax, rmax);
-  Vec3 lr_new = lr_t_new + twist * n;
+  Vec3 lr_new = contact_law::rolling_impulse(lr, wrel, n, m.inv_dr, row.rolling_limit * (ln + row.cohesion));
   Vec3 dlr = lr_new - lr;
   wa -= m.inv_ia * dlr;
   wb += m.inv_ib * dlr;
@@ -643,30 +632,23 @@ std::vector<double> row_residuals(const std::vector<Row>& rows, const Particles&
     const Vec3& n = row.normal;
     double ln = row.impulse_n;
     // normal: one projection step, times the effective mass
-    double dn = 1.0 / row.inv_dn;
     double un = n.dot(b.v - a.v);
-    double rn = (std::max(-row.cohesion, ln + (row.rhs - un - row.sigma * ln) / dn) - ln) * dn;
+    double rn = (contact_law::normal_impulse(ln, row.rhs, un, row.sigma, row.inv_dn, -row.cohesion) - ln) / row.inv_dn;
     // friction: the same for the tangential impulse (rows with an effective mass only)
     Vec3 u = (b.v + b.w.cross(row.arm_b)) - (a.v + a.w.cross(row.arm_a));
     Vec3 ut = u - u.dot(n) * n;
     double rt = 0.0;
     if (row.inv_dt > 0.0) {
-      double dt = 1.0 / row.inv_dt;
-      Vec3 lt_new = row.impulse_t - ut / dt;
-      clamp_to_disc(lt_new, row.friction * (ln + row.cohesion));
-      rt = (lt_new - row.impulse_t).norm() * dt;
+      Vec3 lt_new = contact_law::friction_impulse(row.impulse_t, ut, row.inv_dt, row.friction * (ln + row.cohesion));
+      rt = (lt_new - row.impulse_t).norm() / row.inv_dt;
     }
     // rolling and twist, turned into a velocity by the lever arm's length
     double rr = 0.0;
     if (row.inv_dr > 0.0) {
-      double dr = 1.0 / row.inv_dr;
       Vec3 wrel = b.w - a.w;
       const Vec3& lr = row.impulse_r;
-      double rmax = row.rolling_limit * (ln + row.cohesion);
-      Vec3 lr_t_new = (lr - lr.dot(n) * n) - (wrel - wrel.dot(n) * n) / dr;
-      clamp_to_disc(lr_t_new, rmax);
-      double twist = std::clamp(lr.dot(n) - wrel.dot(n) / dr, -rmax, rmax);
-      rr = (lr_t_new + twist * n - lr).norm() * dr * row.arm_a.norm();
+      Vec3 lr_new = contact_law::rolling_impulse(lr, wrel, n, row.inv_dr, row.rolling_limit * (ln + row.cohesion));
+      rr = (lr_new - lr).norm() / row.inv_dr * row.arm_a.norm();
     }
     out.push_back(rn * rn + rt * rt + rr * rr);
   }

@@ -68,7 +68,7 @@ DemWorld::DemWorld(Device& dev, const Material& material, const DemSettings& set
   k_colour_scatter_ = dev.kernel(colour, "colour_scatter");
   k_colour_ranges_ = dev.kernel(colour, "colour_ranges");
   k_identity_ = dev.kernel(colour, "identity_order");
-  const cl::Program& solver = dev.program({"dem_common.cl", "solver.cl"});
+  const cl::Program& solver = dev.program(kSolverProgram);
   k_prepare_ = dev.kernel(solver, "prepare_rows");
   k_gravity_ = dev.kernel(solver, "apply_gravity");
   k_apply_impulses_ = dev.kernel(solver, "apply_row_impulses");

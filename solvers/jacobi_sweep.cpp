@@ -11,7 +11,7 @@ namespace {
 class JacobiSweep : public ContactSweep {
  public:
   JacobiSweep(Device& dev, int particles) : dev_(dev), particles_(particles) {
-    const cl::Program& program = dev.program({"dem_common.cl", "solver.cl"});
+    const cl::Program& program = dev.program(kSolverProgram);
     rows_kernel_ = dev.kernel(program, "jacobi_rows");
     bodies_kernel_ = dev.kernel(program, "jacobi_bodies");
   }

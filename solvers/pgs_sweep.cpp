@@ -10,7 +10,7 @@ namespace {
 class PgsSweep : public ContactSweep {
  public:
   explicit PgsSweep(Device& dev) : dev_(dev) {
-    kernel_ = dev.kernel(dev.program({"dem_common.cl", "solver.cl"}), "pgs_colour");
+    kernel_ = dev.kernel(dev.program(kSolverProgram), "pgs_colour");
   }
   const char* name() const override { return "pgs"; }
 
