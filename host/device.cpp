@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cctype>
 #include <cstdlib>
-#include <filesystem>
 #include <sstream>
 
 #include "host/embedded.hpp"
@@ -19,15 +18,6 @@ std::string lower(std::string s) {
 
 bool contains(const std::string& hay, const std::string& needle) {
   return needle.empty() || lower(hay).find(lower(needle)) != std::string::npos;
-}
-
-// poCL compiles kernels with LLVM on first use and caches the result; keep that cache
-// inside the build folder unless the user chose a place (PoCL reads it at platform init)
-void default_pocl_cache() {
-  if (std::getenv("POCL_CACHE_DIR") != nullptr) return;
-  std::error_code ec;
-  std::filesystem::create_directories(TALUS_DEFAULT_CACHE_DIR, ec);
-  if (!ec) setenv("POCL_CACHE_DIR", TALUS_DEFAULT_CACHE_DIR, 0);
 }
 
 constexpr const char* kInstallHint =
@@ -49,7 +39,6 @@ DeviceChoice device_choice_from_env() {
 }
 
 Device::Device(const DeviceChoice& choice) {
-  default_pocl_cache();
   std::vector<cl::Platform> platforms;
   try {
     cl::Platform::get(&platforms);

@@ -15,8 +15,6 @@ namespace {
 // (cos 37 degrees): features of one bucket are at least 45 degrees apart (bottom/back/sides)
 constexpr double kSameNormal = 0.8;
 
-Vec3 xyz(const cl_float4& f) { return Vec3(f.s[0], f.s[1], f.s[2]); }
-
 // [r]x, the cross-product matrix: skew(r) p = r x p
 Mat3d skew(const Vec3& r) {
   Mat3d s;
@@ -64,13 +62,13 @@ std::vector<int> match_bucket_contacts(const std::vector<BucketContact>& contact
   return match;
 }
 
-std::vector<reference::Row> make_bucket_rows(const std::vector<BucketContact>& contacts,
+std::vector<ContactRow> make_bucket_rows(const std::vector<BucketContact>& contacts,
                                              const Particles& particles, const BucketBody& bucket,
-                                             const Vec3& com, const reference::StepParams& p,
+                                             const Vec3& com, const StepParams& p,
                                              const BucketMaterial& material,
                                              const std::vector<BucketImpulse>& previous,
                                              const std::vector<int>& match) {
-  std::vector<reference::Row> rows;
+  std::vector<ContactRow> rows;
   rows.reserve(contacts.size());
   const double h = p.dt;
   const double upsilon = 1.0 / (1.0 + 4.0 * p.damping_tau / h);
@@ -84,12 +82,12 @@ std::vector<reference::Row> make_bucket_rows(const std::vector<BucketContact>& c
     // normal velocity before the step, predicted overlap, SPOOK with secant Hertz compliance
     const Vec3 v_point = bucket.velocity + bucket.omega.cross(arm_b);
     const double un = n.dot(v_point - particles.velocity[a]);
-    const double stiffness = reference::hertz_stiffness(r, p);
+    const double stiffness = hertz_stiffness(r, p);
     const double overlap = std::max(std::max(-c.gap, -c.gap - h * un), p.overlap_floor_rel * r);
     const double compliance = 1.0 / (stiffness * std::sqrt(overlap));
     const double sigma = 4.0 * compliance * upsilon / (h * h);
 
-    reference::Row row;
+    ContactRow row;
     row.normal = n;
     row.rhs = -(4.0 / h) * upsilon * c.gap + upsilon * un;
     row.arm_a = c.arm_particle;
@@ -123,10 +121,10 @@ std::vector<reference::Row> make_bucket_rows(const std::vector<BucketContact>& c
   return rows;
 }
 
-void set_bucket_effective_masses(std::vector<reference::Row>& rows, const std::vector<BucketContact>& contacts,
+void set_bucket_effective_masses(std::vector<ContactRow>& rows, const std::vector<BucketContact>& contacts,
                                  const Particles& particles, const Mat6& mobility) {
   const double d_r_bucket = largest_eigenvalue(mobility.block<3, 3>(3, 3));
-  for (reference::Row& row : rows) {
+  for (ContactRow& row : rows) {
     const BucketContact& c = contacts.at(row.contact);
     const Vec3& n = row.normal;
     const double inv_m = particles.inv_mass[row.a];
@@ -146,7 +144,7 @@ void set_bucket_effective_masses(std::vector<reference::Row>& rows, const std::v
   }
 }
 
-Vec6 bucket_wrench_impulse(const std::vector<reference::Row>& rows) {
+Vec6 bucket_wrench_impulse(const std::vector<ContactRow>& rows) {
   Vec6 j = Vec6::Zero();
   for (const auto& r : rows) {
     const Vec3 P = r.impulse_n * r.normal + r.impulse_t;
@@ -156,7 +154,7 @@ Vec6 bucket_wrench_impulse(const std::vector<reference::Row>& rows) {
   return j;
 }
 
-std::vector<BucketImpulse> bucket_impulses(const std::vector<reference::Row>& rows,
+std::vector<BucketImpulse> bucket_impulses(const std::vector<ContactRow>& rows,
                                            const std::vector<int>& particle_index) {
   std::vector<BucketImpulse> out;
   out.reserve(rows.size());
@@ -170,20 +168,6 @@ std::vector<BucketImpulse> bucket_impulses(const std::vector<reference::Row>& ro
     out.push_back(b);
   }
   return out;
-}
-
-TlRow to_device(const reference::Row& r) {
-  TlRow d{};
-  d.normal = to_float4(r.normal, r.rhs);
-  d.arm_a = to_float4(r.arm_a, r.inv_dn);
-  d.arm_b = to_float4(r.arm_b, r.sigma);
-  d.impulse_t = to_float4(r.impulse_t, r.impulse_n);
-  d.impulse_r = to_float4(r.impulse_r, r.inv_dt);
-  d.coef = to_float4(Vec3(r.friction, r.rolling_limit, r.inv_dr), 0.0);
-  d.a = r.a;
-  d.b = r.b;
-  d.contact = r.contact;
-  return d;
 }
 
 TlBucketBody to_device(const BucketBody& b) {
@@ -206,8 +190,8 @@ BucketBody from_device(const TlBucketBody& d) {
 
 namespace reference {
 
-void bucket_warm_start(const std::vector<Row>& rows, Particles& particles) {
-  for (const Row& row : rows) {
+void bucket_warm_start(const std::vector<ContactRow>& rows, Particles& particles) {
+  for (const ContactRow& row : rows) {
     const int a = row.a;
     const Vec3 P = row.impulse_n * row.normal + row.impulse_t;
     particles.velocity[a] -= particles.inv_mass[a] * P;
@@ -215,8 +199,8 @@ void bucket_warm_start(const std::vector<Row>& rows, Particles& particles) {
   }
 }
 
-void bucket_sweep(std::vector<Row>& rows, Particles& particles, BucketBody& bucket) {
-  for (Row& row : rows) {
+void bucket_sweep(std::vector<ContactRow>& rows, Particles& particles, BucketBody& bucket) {
+  for (ContactRow& row : rows) {
     const int a = row.a;
     Vec3& va = particles.velocity[a];
     Vec3& wa = particles.omega[a];
@@ -280,7 +264,7 @@ Particles BucketRowBlock::gather(const std::vector<int>& index, const Buffer<cl_
   launch(dev_, gather_kernel_, n, "bucket_gather");
   // orientations are not gathered: the rows do not need them
   const std::vector<cl_float4> identity(n, to_float4(Vec3::Zero(), 1.0));
-  return reference::particles_from_device(gathered_position_.download(n), gathered_velocity_.download(n),
+  return particles_from_device(gathered_position_.download(n), gathered_velocity_.download(n),
                                           gathered_omega_.download(n), identity);
 }
 

@@ -21,8 +21,8 @@
 #include "host/device.hpp"
 #include "kernels/common.h"
 #include "kernels/dem_types.h"
-#include "solvers/dem_reference.hpp"
 #include "solvers/bucket_contacts.hpp"
+#include "solvers/contact_rows.hpp"
 
 namespace talus {
 
@@ -70,9 +70,9 @@ std::vector<int> match_bucket_contacts(const std::vector<BucketContact>& contact
 // centre of mass (arms are taken about it); `previous`/`match` give warm-start impulses (pass
 // empty vectors for none). Each row's `a` is the particle's index in `particles`, b is
 // TL_BUCKET_BODY, `contact` the contact's index.
-std::vector<reference::Row> make_bucket_rows(const std::vector<BucketContact>& contacts,
+std::vector<ContactRow> make_bucket_rows(const std::vector<BucketContact>& contacts,
                                              const Particles& particles, const BucketBody& bucket,
-                                             const Vec3& com, const reference::StepParams& p,
+                                             const Vec3& com, const StepParams& p,
                                              const BucketMaterial& material,
                                              const std::vector<BucketImpulse>& previous,
                                              const std::vector<int>& match);
@@ -80,26 +80,25 @@ std::vector<reference::Row> make_bucket_rows(const std::vector<BucketContact>& c
 // the rows' effective masses (1/D of normal, friction and rolling) for the bucket's mobility W:
 // the only part of a row that depends on W, so a coupled step can make its rows (and take their
 // warm-start wrench) before the vehicle solve that gives W, then set these
-void set_bucket_effective_masses(std::vector<reference::Row>& rows, const std::vector<BucketContact>& contacts,
+void set_bucket_effective_masses(std::vector<ContactRow>& rows, const std::vector<BucketContact>& contacts,
                                  const Particles& particles, const Mat6& mobility);
 
 // the impulse wrench the rows put on the bucket about its centre of mass: sum of [P; arm x P + L]
-Vec6 bucket_wrench_impulse(const std::vector<reference::Row>& rows);
+Vec6 bucket_wrench_impulse(const std::vector<ContactRow>& rows);
 
 // the rows' impulses for the next step's warm start; `particle_index` maps row.a to the
 // particle's index in the whole system
-std::vector<BucketImpulse> bucket_impulses(const std::vector<reference::Row>& rows,
+std::vector<BucketImpulse> bucket_impulses(const std::vector<ContactRow>& rows,
                                            const std::vector<int>& particle_index);
 
-TlRow to_device(const reference::Row& r);
 TlBucketBody to_device(const BucketBody& b);
 BucketBody from_device(const TlBucketBody& b);
 
 namespace reference {
 // kernels/bucket.cl bucket_warm_start: particles receive the rows' starting impulses
-void bucket_warm_start(const std::vector<Row>& rows, Particles& particles);
+void bucket_warm_start(const std::vector<ContactRow>& rows, Particles& particles);
 // kernels/bucket.cl bucket_sweep: one sweep over the rows in order, bucket through W
-void bucket_sweep(std::vector<Row>& rows, Particles& particles, BucketBody& bucket);
+void bucket_sweep(std::vector<ContactRow>& rows, Particles& particles, BucketBody& bucket);
 }  // namespace reference
 
 // the device side: rows, the bucket's state, and the gather of the candidates' state

@@ -12,8 +12,6 @@ namespace talus::reference {
 
 namespace {
 
-Vec3 xyz(const cl_float4& f) { return Vec3(f.s[0], f.s[1], f.s[2]); }
-
 // the margin below which a pair becomes a (possibly speculative) contact
 double contact_margin(double ra, double rb, const StepParams& p) {
   return p.margin_rel * std::min(ra, rb) + p.speculative;
@@ -123,30 +121,6 @@ void solve_contact(Row& row, Vec3& va, Vec3& wa, Vec3& vb, Vec3& wb, const Solve
 
 // ---- conversions from the device layouts ----
 
-StepParams from_device(const TlStepParams& p) {
-  StepParams out;
-  out.gravity = xyz(p.gravity);
-  out.grid_origin = xyz(p.grid_origin);
-  out.cell_size = p.cell_size;
-  out.grid_nx = p.grid_nx;
-  out.grid_ny = p.grid_ny;
-  out.grid_nz = p.grid_nz;
-  out.dt = p.dt;
-  out.young = p.young;
-  out.poisson = p.poisson;
-  out.friction = p.friction;
-  out.rolling = p.rolling;
-  out.damping_tau = p.damping_tau;
-  out.margin_rel = p.margin_rel;
-  out.overlap_floor_rel = p.overlap_floor_rel;
-  out.speculative = p.speculative;
-  out.cohesion = p.cohesion;
-  out.ground_rolling = p.ground_rolling;
-  out.particles = p.particles;
-  out.geoms = p.geoms;
-  return out;
-}
-
 StaticGeom from_device(const TlGeom& g) {
   StaticGeom out;
   out.type = g.type == TL_GEOM_PLANE ? StaticGeom::Type::Plane : StaticGeom::Type::Box;
@@ -171,46 +145,6 @@ Contact from_device(const TlContact& c) {
   out.impulse_r = xyz(c.impulse_r);
   out.a = c.a;
   out.b = c.b;
-  return out;
-}
-
-Row from_device(const TlRow& r) {
-  Row out;
-  out.normal = xyz(r.normal);
-  out.rhs = r.normal.s[3];
-  out.arm_a = xyz(r.arm_a);
-  out.inv_dn = r.arm_a.s[3];
-  out.arm_b = xyz(r.arm_b);
-  out.sigma = r.arm_b.s[3];
-  out.impulse_t = xyz(r.impulse_t);
-  out.impulse_n = r.impulse_t.s[3];
-  out.impulse_r = xyz(r.impulse_r);
-  out.inv_dt = r.impulse_r.s[3];
-  out.friction = r.coef.s[0];
-  out.rolling_limit = r.coef.s[1];
-  out.inv_dr = r.coef.s[2];
-  out.cohesion = r.coef.s[3];
-  out.a = r.a;
-  out.b = r.b;
-  out.contact = r.contact;
-  return out;
-}
-
-Particles particles_from_device(const std::vector<cl_float4>& position,
-                                const std::vector<cl_float4>& velocity,
-                                const std::vector<cl_float4>& omega,
-                                const std::vector<cl_float4>& rotation) {
-  Particles out;
-  for (size_t i = 0; i < position.size(); ++i) {
-    out.position.push_back(xyz(position[i]));
-    out.radius.push_back(position[i].s[3]);
-    out.velocity.push_back(xyz(velocity[i]));
-    out.inv_mass.push_back(velocity[i].s[3]);
-    out.omega.push_back(xyz(omega[i]));
-    out.inv_inertia.push_back(omega[i].s[3]);
-    const cl_float4& q = rotation[i];
-    out.rotation.emplace_back(q.s[0], q.s[1], q.s[2], q.s[3]);
-  }
   return out;
 }
 
@@ -255,11 +189,6 @@ CellLists cell_lists(const Particles& particles, const StepParams& p) {
 }
 
 // ---- narrow phase ----
-
-double hertz_stiffness(double reduced_radius, const StepParams& p) {
-  double e_star = p.young / (2.0 * (1.0 - p.poisson * p.poisson));
-  return (4.0 / 3.0) * e_star * std::sqrt(reduced_radius);
-}
 
 double sphere_geom(const Vec3& x, double r, const StaticGeom& g, Vec3* normal) {
   const Vec3& c = g.centre;

@@ -12,33 +12,19 @@
 
 #include "kernels/common.h"
 #include "kernels/dem_types.h"
+#include "solvers/contact_rows.hpp"
 #include "solvers/dem_settings.hpp"
 #include "solvers/particles.hpp"
 
 namespace talus::reference {
 
-// the step parameters of kernels/dem_types.h TlStepParams, in double
-struct StepParams {
-  Vec3 gravity = Vec3::Zero();
-  Vec3 grid_origin = Vec3::Zero();
-  double cell_size = 0.0;
-  int grid_nx = 1, grid_ny = 1, grid_nz = 1;
-  double dt = 0.0;
-  double young = 0.0;
-  double poisson = 0.0;
-  double friction = 0.0;
-  double rolling = 0.0;
-  double damping_tau = 0.0;
-  double margin_rel = 0.0;
-  double overlap_floor_rel = 0.0;
-  double speculative = 0.0;  // extra contact distance 2 h v_max [m]
-  double cohesion = 0.0;     // a touching particle pair's tensile force per R*^2 [N/m^2]
-  double ground_rolling = 0.0;  // rolling resistance against static geometry
-  int particles = 0;
-  int geoms = 0;
+// the double layouts and conversions production shares with the reference (solvers/contact_rows)
+using Row = ContactRow;
+using talus::from_device;
+using talus::hertz_stiffness;
+using talus::particles_from_device;
+using talus::StepParams;
 
-  int cells() const { return grid_nx * grid_ny * grid_nz; }
-};
 
 // a contact as the narrow phase writes it (kernels/dem_types.h TlContact), in double
 struct Contact {
@@ -81,36 +67,11 @@ struct Partition {
   std::vector<int> colour_start;    // rows of colour k are [colour_start[k], colour_start[k+1])
 };
 
-// one contact's rows (kernels/dem_types.h TlRow), in double
-struct Row {
-  Vec3 normal = Vec3::Zero();
-  double rhs = 0.0;               // SPOOK right-hand side of the normal row B_n [m/s]
-  Vec3 arm_a = Vec3::Zero();
-  double inv_dn = 0.0;            // 1/D_n of the normal row (compliance included)
-  Vec3 arm_b = Vec3::Zero();
-  double sigma = 0.0;             // SPOOK compliance term Sigma_n [m/(N s)]
-  double impulse_n = 0.0;
-  Vec3 impulse_t = Vec3::Zero();
-  Vec3 impulse_r = Vec3::Zero();
-  double inv_dt = 0.0;            // friction effective mass 1/D_t
-  double friction = 0.0;          // mu
-  double rolling_limit = 0.0;     // mu_r R* [m]
-  double inv_dr = 0.0;            // rolling effective mass 1/D_r
-  double cohesion = 0.0;          // tensile impulse the contact holds, h F_c [N s]
-  int a = 0, b = 0;
-  int contact = 0;                // the contact this row was made from
-};
 
-// conversions from the device layouts (float to double is exact)
-StepParams from_device(const TlStepParams& p);
+// conversions from the device layouts (float to double is exact); those of the step parameters,
+// rows and particles are production's (solvers/contact_rows.hpp)
 StaticGeom from_device(const TlGeom& g);
 Contact from_device(const TlContact& c);
-Row from_device(const TlRow& r);
-// particles from the device's float4 arrays (position.w = radius, velocity.w = 1/m, ...)
-Particles particles_from_device(const std::vector<cl_float4>& position,
-                                const std::vector<cl_float4>& velocity,
-                                const std::vector<cl_float4>& omega,
-                                const std::vector<cl_float4>& rotation);
 
 // kernels/scan.cl: exclusive prefix sum with the total appended (n + 1 entries)
 std::vector<int> exclusive_scan(const std::vector<int>& values);
@@ -123,9 +84,6 @@ CellLists cell_lists(const Particles& particles, const StepParams& p);
 
 // kernels/dem_common.cl sphere_geom: unit normal from the sphere into g, and the gap
 double sphere_geom(const Vec3& x, double r, const StaticGeom& g, Vec3* normal);
-
-// kernels/dem_common.cl hertz_stiffness: k_n = 4/3 E* sqrt(R*)
-double hertz_stiffness(double reduced_radius, const StepParams& p);
 
 // kernels/dem_common.cl contact_priority: the bijective 32-bit mix used by the colouring
 unsigned contact_priority(unsigned c);

@@ -15,15 +15,6 @@ constexpr double kMaxGridCells = 64.0e6;
 constexpr int kToleranceCheckEvery = 10;
 }  // namespace
 
-cl_float4 to_float4(const Vec3& v, double w) {
-  cl_float4 f;
-  f.s[0] = static_cast<float>(v.x());
-  f.s[1] = static_cast<float>(v.y());
-  f.s[2] = static_cast<float>(v.z());
-  f.s[3] = static_cast<float>(w);
-  return f;
-}
-
 TlGeom to_device(const StaticGeom& g) {
   TlGeom d{};
   d.centre = to_float4(g.centre, 0.0);

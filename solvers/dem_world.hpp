@@ -11,6 +11,7 @@
 
 #include "host/device.hpp"
 #include "host/scan.hpp"
+#include "solvers/contact_rows.hpp"
 #include "solvers/contact_sweep.hpp"
 #include "solvers/dem_buffers.hpp"
 #include "solvers/dem_settings.hpp"
@@ -112,8 +113,7 @@ class DemWorld {
   cl::Kernel k_prepare_, k_gravity_, k_apply_impulses_, k_store_, k_integrate_, k_residual_;
 };
 
-// conversions between the host description and the device layouts
+// the host description of static geometry in the device layout
 TlGeom to_device(const StaticGeom& g);
-cl_float4 to_float4(const Vec3& v, double w);
 
 }  // namespace talus

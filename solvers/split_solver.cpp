@@ -37,7 +37,7 @@ void SplitSolver::step() {
   // 1. rows of both sides from the start-of-step state
   vehicle.assemble(h);
   dem_.begin_step();
-  const reference::StepParams params = reference::from_device(dem_.params());
+  const StepParams params = from_device(dem_.params());
 
   // 2. particles near the bucket: device box selection, their state, embree contacts. The
   // contact range covers what the bucket and a particle can close within the step (speculative)
@@ -81,7 +81,7 @@ void SplitSolver::step() {
   start.omega = twist_before.tail<3>();
   // the rows' impulses do not depend on the mobility: make them, take their wrench, solve, and
   // give them the effective masses of the mobility that solve yields
-  std::vector<reference::Row> rows =
+  std::vector<ContactRow> rows =
       make_bucket_rows(contacts, near, start, com, params, settings_.material, previous_, match);
   const Vec6 warm_impulse = bucket_wrench_impulse(rows);
   loader_.set_bucket_wrench(warm_impulse / h);
@@ -121,7 +121,7 @@ void SplitSolver::step() {
     // the rows' impulses back to double, their wrench into the direct solve
     const std::vector<TlRow> solved_rows = block_.rows();
     for (size_t k = 0; k < rows.size(); ++k) {
-      const reference::Row r = reference::from_device(solved_rows[k]);
+      const ContactRow r = from_device(solved_rows[k]);
       rows[k].impulse_n = r.impulse_n;
       rows[k].impulse_t = r.impulse_t;
       rows[k].impulse_r = r.impulse_r;

@@ -30,7 +30,7 @@ struct ToolWorld::Side {
   DeviceBoxSelection selection;
   BucketRowBlock block;
   // this step's rows, their contacts and candidates; last step's impulses for the warm start
-  std::vector<reference::Row> rows;
+  std::vector<ContactRow> rows;
   std::vector<int> candidates;
   std::vector<BucketImpulse> previous;
   ToolLoad load;
@@ -60,7 +60,7 @@ const ToolLoad& ToolWorld::load(size_t i) const { return sides_.at(i)->load; }
 void ToolWorld::step() {
   const double h = dem_.settings().dt;
   dem_.begin_step();
-  const reference::StepParams params = reference::from_device(dem_.params());
+  const StepParams params = from_device(dem_.params());
   const double r_max = dem_.max_radius();
 
   // each tool: candidates near it, their contacts, rows warm-started from last step's impulses
@@ -133,7 +133,7 @@ void ToolWorld::step() {
     if (!side->rows.empty()) {
       const std::vector<TlRow> solved = side->block.rows();
       for (size_t k = 0; k < side->rows.size(); ++k) {
-        const reference::Row r = reference::from_device(solved[k]);
+        const ContactRow r = from_device(solved[k]);
         side->rows[k].impulse_n = r.impulse_n;
         side->rows[k].impulse_t = r.impulse_t;
         side->rows[k].impulse_r = r.impulse_r;

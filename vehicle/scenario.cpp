@@ -4,6 +4,7 @@
 #include <cctype>
 #include <cmath>
 
+#include "host/data_files.hpp"
 #include "host/error.hpp"
 #include "vehicle/data_file.hpp"
 
@@ -54,8 +55,10 @@ Scenario load_scenario(const std::string& name_or_path) {
     path = find_data_file(lower, "scenarios");
   }
   if (path.empty()) {
-    throw InputError("scenario '" + name_or_path + "': no such file, and no data/scenarios/" + name_or_path +
-                     ".json under " + TALUS_SOURCE_DIR + " or the current directory; give a path or a shipped name");
+    std::string searched;
+    for (const auto& root : data_search_paths()) searched += (searched.empty() ? "" : ", ") + root + "/scenarios";
+    throw InputError("scenario '" + name_or_path + "': no such file, and no " + name_or_path + ".json in " + searched +
+                     "; give a path or a shipped name (TALUS_DATA_DIR points at another data/ folder)");
   }
   const DataFile f(path);
   const auto& root = f.root();
