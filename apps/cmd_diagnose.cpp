@@ -16,6 +16,7 @@
 #include "host/files.hpp"
 #include "io/plot.hpp"
 #include "sim2real/diagnose.hpp"
+#include "sim2real/report.hpp"
 
 namespace talus::app {
 
@@ -23,14 +24,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using namespace talus::sim2real;
-
-// residual cells listed per run in the printed signature
-constexpr std::size_t kSignatureCells = 6;
-// the figures' size [px], as talus run's
-constexpr int kFigureWidth = 1400, kFigureHeight = 1000;
-// a scan further than this from the simulated pile's is worth a warning [m]: about one D400
-// particle diameter
-constexpr double kScanWarning = 0.1;
 
 struct DiagnoseArgs {
   std::vector<std::string> data;
@@ -42,27 +35,6 @@ struct DiagnoseArgs {
   unsigned pile_seed = 1;
   bool quiet = false;
 };
-
-// the largest residual cells of a run, with what each moves with
-std::string signature_text(const Residuals& res, const Run& measured, const Run& simulated) {
-  std::vector<ResidualCell> cells = res.cells;
-  std::sort(cells.begin(), cells.end(), [](const auto& a, const auto& b) { return a.excess > b.excess; });
-  std::ostringstream s;
-  s << "| channel | phase | RMS residual | mean residual | noise σ | excess | moves most with (r) |\n"
-    << "|---|---|---|---|---|---|---|\n";
-  std::size_t shown = 0;
-  for (const auto& c : cells) {
-    if (shown == kSignatureCells || c.excess <= 0.0) break;
-    const auto r = residual_series(simulated, measured, c.channel);
-    const Correlate k = strongest_correlate(r, measured);
-    s << "| " << kChannelNames[c.channel] << " | " << res.phases[c.phase].name << " | " << std::setprecision(3) << c.rms
-      << " | " << c.mean << " | " << c.sigma << " | " << std::setprecision(2) << std::fixed << c.excess
-      << std::defaultfloat << " | " << k.quantity << " (" << std::setprecision(2) << k.r << ") |\n";
-    ++shown;
-  }
-  if (shown == 0) s << "| (every channel within noise) | | | | | | |\n";
-  return s.str();
-}
 
 void diagnose_command(const DiagnoseArgs& a) {
   // every run loads and checks before anything is simulated
@@ -84,40 +56,9 @@ void diagnose_command(const DiagnoseArgs& a) {
   });
 
   // the report: where the residual lay, what was found, the errors before and after
-  std::ostringstream report;
-  report << "# talus diagnose\n\n";
-  for (std::size_t i = 0; i < runs.size(); ++i) {
-    const bool cal = std::find(d.calibration.begin(), d.calibration.end(), i) != d.calibration.end();
-    const bool val = std::find(d.validation.begin(), d.validation.end(), i) != d.validation.end();
-    report << "## " << runs[i].run.label() << " (" << d.runs[i] << "; "
-           << (cal && val ? "calibration and validation" : cal ? "calibration" : "validation") << ")\n\n"
-           << "Baseline residual, largest cells (excess = ln max(MSE / (" << kNoiseAllowance
-           << " σ²), 1); run total " << std::setprecision(3) << d.residuals_before[i].excess << "):\n\n"
-           << signature_text(d.residuals_before[i], runs[i].run, d.simulated_before[i]) << "\n";
-    if (d.scan_rms_m[i] && *d.scan_rms_m[i] > kScanWarning)
-      report << "Warning: the measured pile scan lies " << *d.scan_rms_m[i] << " m (RMS) from the simulated pile's; "
-             << "the residual includes that difference.\n\n";
-  }
-  report << "## Effects\n\n";
-  if (d.found.empty()) {
-    report << (d.unexplained ? "None added: no candidate explains " + std::to_string(int(100 * kMinExplained)) +
-                                   " % of the residual. UNEXPLAINED.\n"
-                             : "None added: the baseline residual is within the noise of the data.\n");
-  } else {
-    for (const auto& f : d.found)
-      report << "- " << f.spec << " (explains " << std::setprecision(3) << 100.0 * f.explained
-             << " % of the excess of the " << f.explained_on << " runs)\n";
-    report << (d.unexplained ? "\nAn excess beyond noise remains: UNEXPLAINED in part.\n" : "\nWhat remains is within noise.\n");
-  }
-  report << "\nExcess per run: before " << std::setprecision(3) << d.excess_before << ", after " << d.excess_after
-         << " (noise alone leaves less than " << kSignificantExcess << "); " << d.simulations << " simulations in "
-         << std::setprecision(3) << d.wall_s << " s.\n\n## Error before\n\n";
-  std::vector<TableRow> before = d.error_before, after = d.error_after;
-  before.push_back(mean_row(d.error_before, "mean over runs"));
-  after.push_back(mean_row(d.error_after, "mean over runs"));
-  report << table_markdown(before, 3) << "\n## Error after\n\n" << table_markdown(after, 3);
+  const std::string report = diagnosis_report(d, runs);
   // the report on stdout, unless the JSON goes there
-  (a.json == "-" ? std::cerr : std::cout) << report.str();
+  (a.json == "-" ? std::cerr : std::cout) << report;
 
   // machine-readable results and figures
   const nlohmann::json j = diagnosis_json(d);
@@ -129,9 +70,9 @@ void diagnose_command(const DiagnoseArgs& a) {
   if (!a.out.empty()) {
     const fs::path out(a.out);
     write_json((out / "diagnosis.json").string(), j);
-    write_file_atomically(out / "report.md", report.str());
-    write_table_csv(out / "errors-before.csv", before);
-    write_table_csv(out / "errors-after.csv", after);
+    write_file_atomically(out / "report.md", report);
+    write_table_csv(out / "errors-before.csv", error_table(d.error_before));
+    write_table_csv(out / "errors-after.csv", error_table(d.error_after));
     for (std::size_t i = 0; i < runs.size(); ++i) {
       const std::string name = std::to_string(i) + "-" + runs[i].run.label() + "-channels.png";
       channel_figure({d.simulated_before[i], d.simulated_after[i]}, &runs[i].run)

@@ -38,8 +38,6 @@ namespace {
 
 // the side-view image size [px] (2:1, the shape of a pile seen from the side)
 constexpr int kImageWidth = 1600, kImageHeight = 800;
-// the figures' size [px]
-constexpr int kFigureWidth = 1400, kFigureHeight = 1000;
 // simulated time between progress notes, which count the load in the bucket [s]
 constexpr double kProgressNoteInterval = 0.5;
 

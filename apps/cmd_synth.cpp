@@ -21,6 +21,7 @@
 #include "host/error.hpp"
 #include "host/files.hpp"
 #include "sim2real/measured.hpp"
+#include "sim2real/synthetic.hpp"
 #include "vehicle/data_file.hpp"
 #include "vehicle/scenario.hpp"
 
@@ -37,89 +38,6 @@ struct SynthOptions {
   unsigned noise_seed = 1;
   double vary_inputs = 0.0;  // the operator's variation between repetitions (0: the scenario's inputs)
 };
-
-// how far a repetition's commands may shift in time at --vary-inputs 1 [s]: an operator repeats a
-// cycle to within a fraction of a second (a guess; the paper publishes one run per test)
-constexpr double kTimingShiftPerVariation = 1.0;
-
-// one repetition of the scenario by an operator who varies: each target-speed series scaled by
-// 1 + v u and its inner breakpoints shifted by v u' kTimingShiftPerVariation (u, u' uniform in
-// [-1, 1], drawn per series), kept inside (0, duration) and in order
-vehicle::Scenario varied_inputs(vehicle::Scenario sc, double v, unsigned seed) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  for (vehicle::PiecewiseLinear* series : {&sc.drive, &sc.lift, &sc.tilt}) {
-    auto points = series->points();
-    const double scale = 1.0 + v * u(rng);
-    double shift = v * u(rng) * kTimingShiftPerVariation;
-    if (points.size() > 2) {
-      // the inner points move together; the first and last stay
-      const double first = points[1].first, last = points[points.size() - 2].first;
-      const double lo = -0.5 * std::max(0.0, first - points.front().first);
-      const double hi = 0.5 * std::max(0.0, std::min(sc.duration, points.back().first) - last);
-      shift = std::clamp(shift, lo, hi);
-    }
-    for (size_t i = 0; i < points.size(); ++i) {
-      points[i].second *= scale;
-      if (i > 0 && i + 1 < points.size()) points[i].first += shift;
-    }
-    *series = vehicle::PiecewiseLinear(points);
-  }
-  return sc;
-}
-
-// the sensor noise of `--noise default`, one standard deviation per channel in its SI unit:
-// load-cell and pressure-derived forces about 1 % of their range, a wheel-revolution speed
-// sensor a few cm/s, draw-wire extensions a millimetre, potentiometer angles a fifth of a degree,
-// laser positions a couple of centimetres, power (computed from forces and speeds) about 1 kW, a
-// percent of the engine's (orders of magnitude of the paper's instrumentation, Table 1; no
-// per-sensor data is published)
-const std::map<std::string, double>& default_noise() {
-  static const std::map<std::string, double> sigma = {
-      {"f_lift", 5e3},    {"f_tilt", 3e3},      {"f_traction", 2e3}, {"v_drive", 0.02},
-      {"d_lift", 1e-3},   {"d_tilt", 1e-3},     {"boom_deg", 0.2},   {"bucket_deg", 0.2},
-      {"pitch_deg", 0.1}, {"x_vehicle", 0.02},  {"bucket_tip_x", 0.02}, {"bucket_tip_z", 0.02},
-      {"power", 1e3}};
-  return sigma;
-}
-
-// "none", "default", or channel=sigma pairs separated by commas ("default,f_lift=1e4" adds to
-// the defaults); InputError naming the bad part
-std::map<std::string, double> parse_noise(const std::string& spec) {
-  std::map<std::string, double> sigma;
-  std::stringstream in(spec);
-  std::string part;
-  while (std::getline(in, part, ',')) {
-    if (part == "none") continue;
-    if (part == "default") {
-      for (const auto& [k, v] : default_noise()) sigma[k] = v;
-      continue;
-    }
-    const auto eq = part.find('=');
-    const std::string channel = part.substr(0, eq);
-    bool known = false;
-    for (size_t c = 1; c < sim2real::kChannelCount; ++c) known = known || channel == sim2real::kChannelNames[c];
-    if (eq == std::string::npos || !known)
-      throw InputError("--noise: '" + part + "' is not none, default or CHANNEL=SIGMA with a channel of the "
-                       "contract (f_lift, f_tilt, f_traction, v_drive, d_lift, ...)");
-    double value = 0.0;
-    try {
-      value = std::stod(part.substr(eq + 1));
-    } catch (const std::exception&) {
-      throw InputError("--noise: '" + part + "': the standard deviation is not a number");
-    }
-    if (!(value >= 0.0) || !std::isfinite(value))
-      throw InputError("--noise: '" + part + "': the standard deviation must be a finite number >= 0");
-    sigma[channel] = value;
-  }
-  return sigma;
-}
-
-sim2real::Series2 points(const vehicle::PiecewiseLinear& f) {
-  sim2real::Series2 out;
-  for (const auto& p : f.points()) out.push_back(p);
-  return out;
-}
 
 // scan.csv of a run (x,z per line after a header); a single ground point when there is none
 sim2real::Series2 read_scan(const fs::path& file) {
@@ -139,8 +57,9 @@ sim2real::Series2 read_scan(const fs::path& file) {
 
 void synth(const SynthOptions& o) {
   // everything checked before the simulation: noise, scenario, answer key outside the data
-  const std::map<std::string, double> sigma = parse_noise(o.noise);
-  const vehicle::Scenario sc = varied_inputs(vehicle::load_scenario(o.run.scenario), o.vary_inputs, o.noise_seed ^ 0x5eedu);
+  const std::map<std::string, double> sigma = sim2real::parse_sensor_noise(o.noise, "--noise");
+  const vehicle::Scenario sc =
+      sim2real::varied_inputs(vehicle::load_scenario(o.run.scenario), o.vary_inputs, o.noise_seed ^ 0x5eedu);
   const fs::path out = fs::absolute(o.run.out).lexically_normal();
   const fs::path key = fs::absolute(o.answer_key.empty() ? out.string() + ".answer.json" : o.answer_key).lexically_normal();
   const auto rel = key.lexically_relative(out);
@@ -158,13 +77,7 @@ void synth(const SynthOptions& o) {
 
   // the channels with noise; mass and work as the sensors measured them
   sim2real::Run r = sim2real::load_run(work);
-  std::mt19937_64 rng(o.noise_seed);
-  for (size_t c = 1; c < sim2real::kChannelCount; ++c) {
-    const auto it = sigma.find(sim2real::kChannelNames[c]);
-    if (it == sigma.end() || it->second == 0.0) continue;
-    std::normal_distribution<double> noise(0.0, it->second);
-    for (double& x : r.series.columns[c]) x += noise(rng);
-  }
+  sim2real::add_sensor_noise(r.series, sigma, o.noise_seed);
   sim2real::RunSummary summary;
   summary.loaded_mass_kg = r.summary.loaded_mass_kg;
   summary.work_J = r.summary.work_J;
@@ -172,18 +85,8 @@ void synth(const SynthOptions& o) {
   summary.fidelity = "field";
   summary.dig_start_s = r.summary.dig_start_s;
   summary.dig_end_s = r.summary.dig_end_s;
-  sim2real::MeasuredMetadata meta;
-  meta.scenario = sc.name;
-  meta.machine = sc.machine;
-  meta.sample_rate_hz = 100.0;
-  meta.pile_toe_x_m = sc.pile_toe_x;
-  meta.pile_scan = read_scan(work / "scan.csv");
-  meta.drive = points(sc.drive);
-  meta.lift = points(sc.lift);
-  meta.tilt = points(sc.tilt);
-  meta.loaded_mass_kg = summary.loaded_mass_kg;
-  meta.work_J = summary.work_J;
-  const nlohmann::json simulated = nlohmann::json::parse(std::ifstream(work / sim2real::kSummaryFile));
+  const sim2real::MeasuredMetadata meta = sim2real::synthetic_metadata(sc, read_scan(work / "scan.csv"), summary);
+  const nlohmann::json effects = r.summary.details.value("effects", nlohmann::json::array());
 
   // the measured run, and the answer key elsewhere
   make_output_dir(out.string());
@@ -195,7 +98,7 @@ void synth(const SynthOptions& o) {
   const nlohmann::json answer = {{"data", out.string()},
                                  {"scenario", sc.name},
                                  {"fidelity", o.run.fidelity},
-                                 {"effects", simulated.value("effects", nlohmann::json::array())},
+                                 {"effects", effects},
                                  {"effect_plugins", o.run.effect_plugins},
                                  {"noise_sigma", noise_json},
                                  {"noise_seed", o.noise_seed},

@@ -89,6 +89,10 @@ struct Figure {
 
 // ---- figures of the sim-to-real comparison --------------------------------------------------
 
+// the size of the run figures talus writes (channels, trajectory, power; talus run and talus
+// diagnose) [px]: a 1.4:1 page that holds the channel grid legibly
+inline constexpr int kFigureWidth = 1400, kFigureHeight = 1000;
+
 // channel overlays against time: drive speed, traction, lift and tilt force [kN], bucket angle,
 // lift and tilt extension; the reference (measured) run dashed black, simulated runs coloured;
 // the phases outside digging shaded grey when the reference (else the first simulated run

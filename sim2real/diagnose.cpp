@@ -141,9 +141,13 @@ std::vector<Candidate> candidate_set(const vehicle::EffectPlugins& plugins) {
         if (signature[0] != kPowerChannel) signature.push_back(kPowerChannel);
         out.push_back({name, ch, signature});
       }
-    } else if (name == "wheel_slip_sensor") {
-      // it changes the speed reading alone (and the power that follows it)
-      out.push_back({name, "", {static_cast<std::size_t>(Channel::v_drive), kPowerChannel}});
+    } else if (!effect->sensor_channels().empty()) {
+      // a sensor effect on fixed channels: those (and the power that follows them)
+      std::vector<std::size_t> signature;
+      for (const Channel c : effect->sensor_channels()) signature.push_back(static_cast<std::size_t>(c));
+      if (std::find(signature.begin(), signature.end(), kPowerChannel) == signature.end())
+        signature.push_back(kPowerChannel);
+      out.push_back({name, "", signature});
     } else {
       out.push_back({name, "", {}, effect->soil_only()});
     }
@@ -169,105 +173,164 @@ TableRow mean_row(const std::vector<TableRow>& rows, const std::string& name) {
   return m;
 }
 
-Diagnosis diagnose(const std::vector<MeasuredRun>& runs, const DiagnoseOptions& options, Device* device,
-                   const std::function<void(const std::string&)>& note) {
-  if (runs.empty()) throw InputError("diagnose: no measured runs; give one or more run folders with --data");
-  const auto start = std::chrono::steady_clock::now();
-  auto say = [&](const std::string& line) {
-    if (note) note(line);
-  };
-  Diagnosis d;
+namespace {
 
-  // the replays, their noise, and the calibration / validation split
-  std::vector<std::unique_ptr<Replay>> replays;
-  std::vector<std::vector<double>> sigma;
-  for (const auto& run : runs) {
-    replays.push_back(std::make_unique<Replay>(run, options.replay, device));
-    sigma.push_back(noise_sigmas(run.run.series));
-    d.runs.push_back(run.run.dir.string());
+// a model's mean excess and log-ratio per run over some runs; ordered by excess, then log-ratio
+struct Score {
+  double excess = HUGE_VAL, log_ratio = HUGE_VAL;
+  bool operator<(const Score& o) const { return excess < o.excess || (excess == o.excess && log_ratio < o.log_ratio); }
+};
+
+// a candidate's best point of the coarse scan on the calibration runs
+struct Scanned {
+  const Candidate* c = nullptr;
+  std::vector<double> x;
+  Score score;
+  int parameters = 0;
+};
+
+// The search of diagnose(), stage by stage: the replays and their noise, the baseline, then per
+// round the signature screen, the coarse scan, the fits with validation, and the decision. It
+// holds the model under test (the effects found so far) and every run's current simulation.
+class Search {
+ public:
+  Search(const std::vector<MeasuredRun>& runs, const DiagnoseOptions& options, Device* device,
+         const std::function<void(const std::string&)>& note)
+      : runs_(runs), options_(options), note_(note) {
+    // the replays, their noise, and the calibration / validation split
+    for (const auto& run : runs) {
+      replays_.push_back(std::make_unique<Replay>(run, options.replay, device));
+      sigma_.push_back(noise_sigmas(run.run.series));
+      d_.runs.push_back(run.run.dir.string());
+    }
+    const std::size_t n = runs.size();
+    const std::size_t held = options.validation_runs >= 0 ? static_cast<std::size_t>(options.validation_runs)
+                                                          : (n >= 2 ? std::max<std::size_t>(1, n / 3) : 0);
+    if (held >= n)
+      throw InputError("diagnose: --validation " + std::to_string(held) + " leaves no calibration run among " +
+                       std::to_string(n) + "; hold out fewer");
+    for (std::size_t i = 0; i < n; ++i) (i < n - held ? d_.calibration : d_.validation).push_back(i);
+    if (d_.validation.empty()) d_.validation = d_.calibration;
+    all_.resize(n);
+    for (std::size_t i = 0; i < n; ++i) all_[i] = i;
+    // soil effects show only where there are particles
+    any_pile_ = std::any_of(replays_.begin(), replays_.end(), [](const auto& r) { return r->scenario().pile; });
   }
-  const std::size_t n = runs.size();
-  std::size_t held = options.validation_runs >= 0 ? static_cast<std::size_t>(options.validation_runs)
-                                                  : (n >= 2 ? std::max<std::size_t>(1, n / 3) : 0);
-  if (held >= n) throw InputError("diagnose: --validation " + std::to_string(held) + " leaves no calibration run among " +
-                                  std::to_string(n) + "; hold out fewer");
-  for (std::size_t i = 0; i < n; ++i) (i < n - held ? d.calibration : d.validation).push_back(i);
-  if (d.validation.empty()) d.validation = d.calibration;
 
-  // the model under test: the effects found so far plus, optionally, a candidate
-  std::vector<std::string> found_specs;
-  auto simulate = [&](std::size_t i, std::unique_ptr<vehicle::Effect> extra) {
+  // the baseline: residuals and the paper's error rows; the current model is the baseline
+  void baseline() {
+    for (std::size_t i = 0; i < runs_.size(); ++i) {
+      Run r = simulate(i, nullptr);
+      r.summary.fidelity = "baseline";
+      d_.simulated_before.push_back(r);
+      d_.residuals_before.push_back(compute_residuals(r, runs_[i].run, sigma_[i]));
+      const Comparison c = compare_runs(r, runs_[i].run, CompareOptions{});
+      d_.error_before.push_back({runs_[i].run.label(), c.e, c.mean});
+      d_.scan_rms_m.push_back(replays_[i]->scan_rms_m());
+    }
+    d_.excess_before = mean_excess(d_.residuals_before, all_);
+    say("baseline: excess " + format_number(d_.excess_before) + " per run (noise alone leaves less than " +
+        format_number(kSignificantExcess) + "), mean error " + format_number(mean_row(d_.error_before, "").mean));
+    current_cal_ = mean_excess(d_.residuals_before, d_.calibration);
+    current_val_ = mean_excess(d_.residuals_before, d_.validation);
+    current_runs_ = d_.simulated_before;
+    current_residuals_ = d_.residuals_before;
+  }
+
+  // the largest excess of any run under the current model: one run beyond noise is enough to
+  // search (a mean would hide it among runs the effect does not touch)
+  double worst_run() const {
+    double worst = 0.0;
+    for (const auto& r : current_residuals_) worst = std::max(worst, r.excess);
+    return worst;
+  }
+
+  // one round: one effect more when a candidate explains enough of what is left; false when none
+  bool round(int number, const std::vector<Candidate>& candidates) {
+    DiagnosisRound dr;
+    dr.excess_before = current_val_;
+    const std::vector<const Candidate*> screened = screen(candidates, dr);
+    say("round " + std::to_string(number) + ": " + std::to_string(screened.size()) + " candidates to scan, " +
+        std::to_string(dr.screened_out.size()) + " screened out by their signature");
+    std::vector<Scanned> scanned = scan(screened);
+    // 3. fit the best few; 4. validate them with the parameter penalty
+    for (std::size_t j = 0; j < scanned.size() && j < static_cast<std::size_t>(kFitted); ++j) {
+      if (!(scanned[j].score.excess < current_cal_)) break;  // no better than the model without it
+      dr.fitted.push_back(fit(scanned[j]));
+    }
+    std::sort(dr.fitted.begin(), dr.fitted.end(), [](const auto& a, const auto& b) { return a.score < b.score; });
+    // 5. add the winner only when it explains enough of what is left
+    if (!dr.fitted.empty() && dr.fitted[0].explained >= kMinExplained) {
+      dr.added = true;
+      add(dr.fitted[0]);
+      say("round " + std::to_string(number) + ": added " + dr.fitted[0].spec);
+    } else {
+      say("round " + std::to_string(number) + ": no candidate explains " + format_number(100.0 * kMinExplained) +
+          " % of the excess left; nothing added");
+    }
+    d_.rounds.push_back(dr);
+    return dr.added;
+  }
+
+  // after: the runs with the effects found (the last round's simulations)
+  Diagnosis finish() {
+    d_.simulated_after = current_runs_;
+    d_.residuals_after = current_residuals_;
+    if (d_.found.empty()) {
+      d_.error_after = d_.error_before;
+    } else {
+      for (std::size_t i = 0; i < runs_.size(); ++i) {
+        const Comparison c = compare_runs(current_runs_[i], runs_[i].run, CompareOptions{});
+        d_.error_after.push_back({runs_[i].run.label(), c.e, c.mean});
+      }
+    }
+    d_.excess_after = mean_excess(d_.residuals_after, all_);
+    d_.unexplained = worst_run() >= kSignificantExcess;
+    return d_;
+  }
+
+ private:
+  void say(const std::string& line) const {
+    if (note_) note_(line);
+  }
+
+  // run i simulated with the effects found so far plus, optionally, a candidate
+  Run simulate(std::size_t i, std::unique_ptr<vehicle::Effect> extra) {
     vehicle::EffectSet set;
-    for (const auto& spec : found_specs) set.add(vehicle::make_effect(spec, options.plugins));
+    for (const auto& spec : found_specs_) set.add(vehicle::make_effect(spec, options_.plugins));
     if (extra) set.add(std::move(extra));
-    Run r = replays[i]->simulate(set);
-    ++d.simulations;
+    Run r = replays_[i]->simulate(set);
+    ++d_.simulations;
     return r;
-  };
+  }
+
   // the mean excess and log-ratio per run of the runs `which` with the candidate at x
-  struct Score {
-    double excess = HUGE_VAL, log_ratio = HUGE_VAL;
-    bool operator<(const Score& o) const { return excess < o.excess || (excess == o.excess && log_ratio < o.log_ratio); }
-  };
-  auto score_runs = [&](const std::vector<std::size_t>& which, const Candidate* c, const std::vector<double>& x) {
+  Score score_runs(const std::vector<std::size_t>& which, const Candidate* c, const std::vector<double>& x) {
     std::vector<double> e, l;
     for (std::size_t i : which) {
-      const Run r = simulate(i, c ? make_candidate(*c, x, options.plugins) : nullptr);
-      const Residuals res = compute_residuals(r, runs[i].run, sigma[i]);
+      const Run r = simulate(i, c ? make_candidate(*c, x, options_.plugins) : nullptr);
+      const Residuals res = compute_residuals(r, runs_[i].run, sigma_[i]);
       e.push_back(res.excess);
       l.push_back(res.log_ratio);
     }
     return Score{mean_of(e), mean_of(l)};
-  };
-
-  // the baseline: residuals and the paper's error rows
-  for (std::size_t i = 0; i < n; ++i) {
-    Run r = simulate(i, nullptr);
-    r.summary.fidelity = "baseline";
-    d.simulated_before.push_back(r);
-    d.residuals_before.push_back(compute_residuals(r, runs[i].run, sigma[i]));
-    const Comparison c = compare_runs(r, runs[i].run, CompareOptions{});
-    d.error_before.push_back({runs[i].run.label(), c.e, c.mean});
-    d.scan_rms_m.push_back(replays[i]->scan_rms_m());
   }
+
   // the mean excess of some runs' residuals
-  auto mean_excess = [](const std::vector<Residuals>& res, const std::vector<std::size_t>& which) {
+  static double mean_excess(const std::vector<Residuals>& res, const std::vector<std::size_t>& which) {
     std::vector<double> v;
     for (std::size_t i : which) v.push_back(res[i].excess);
     return mean_of(v);
-  };
-  std::vector<std::size_t> all(n);
-  for (std::size_t i = 0; i < n; ++i) all[i] = i;
-  d.excess_before = mean_excess(d.residuals_before, all);
-  say("baseline: excess " + format_number(d.excess_before) + " per run (noise alone leaves less than " +
-      format_number(kSignificantExcess) + "), mean error " + format_number(mean_row(d.error_before, "").mean));
-  // the model with the effects found so far: every run's simulation and residuals
-  double current_cal = mean_excess(d.residuals_before, d.calibration);
-  double current_val = mean_excess(d.residuals_before, d.validation);
-  std::vector<Run> current_runs = d.simulated_before;
-  std::vector<Residuals> current_residuals = d.residuals_before;
-  const bool disjoint = d.validation != d.calibration;
-  // the largest excess of any run under the current model: one run beyond noise is enough to
-  // search (a mean would hide it among runs the effect does not touch)
-  auto worst_run = [&] {
-    double worst = 0.0;
-    for (const auto& r : current_residuals) worst = std::max(worst, r.excess);
-    return worst;
-  };
+  }
 
-  // rounds: one effect more each, while an excess beyond noise is left
-  const std::vector<Candidate> candidates = candidate_set(options.plugins);
-  // soil effects show only where there are particles
-  const bool any_pile = std::any_of(replays.begin(), replays.end(), [](const auto& r) { return r->scenario().pile; });
-  for (int round = 0; round < options.max_effects && worst_run() >= kSignificantExcess; ++round) {
-    DiagnosisRound dr;
-    dr.excess_before = current_val;
-    // 1. the signature screen
+  // 1. the signature screen: candidates not yet found whose channels hold enough excess
+  std::vector<const Candidate*> screen(const std::vector<Candidate>& candidates, DiagnosisRound& dr) const {
     std::vector<const Candidate*> screened;
     for (const auto& c : candidates) {
-      const bool taken = std::any_of(d.found.begin(), d.found.end(), [&](const auto& f) { return f.candidate.label() == c.label(); });
+      const bool taken =
+          std::any_of(d_.found.begin(), d_.found.end(), [&](const auto& f) { return f.candidate.label() == c.label(); });
       if (taken) continue;
-      if (c.needs_particles && !any_pile) {
+      if (c.needs_particles && !any_pile_) {
         dr.screened_out.push_back(c.label());
         continue;
       }
@@ -275,30 +338,25 @@ Diagnosis diagnose(const std::vector<MeasuredRun>& runs, const DiagnoseOptions& 
         // it can remove no more than its channels' excess, and nothing unless the channel it acts
         // on (the first) departs from the data: power follows a reading, it does not lead it
         std::vector<double> bound, own;
-        for (std::size_t i : d.calibration) {
-          bound.push_back(current_residuals[i].excess_of(c.signature));
-          own.push_back(current_residuals[i].excess_of({c.signature.front()}));
+        for (std::size_t i : d_.calibration) {
+          bound.push_back(current_residuals_[i].excess_of(c.signature));
+          own.push_back(current_residuals_[i].excess_of({c.signature.front()}));
         }
-        if (mean_of(bound) < kMinExplained * current_cal || mean_of(own) < kSignificantExcess) {
+        if (mean_of(bound) < kMinExplained * current_cal_ || mean_of(own) < kSignificantExcess) {
           dr.screened_out.push_back(c.label());
           continue;
         }
       }
       screened.push_back(&c);
     }
-    say("round " + std::to_string(round + 1) + ": " + std::to_string(screened.size()) + " candidates to scan, " +
-        std::to_string(dr.screened_out.size()) + " screened out by their signature");
+    return screened;
+  }
 
-    // 2. the coarse scan on the calibration runs
-    struct Scanned {
-      const Candidate* c;
-      std::vector<double> x;
-      Score score;
-      int parameters;
-    };
+  // 2. the coarse scan on the calibration runs: each candidate's best grid point, best first
+  std::vector<Scanned> scan(const std::vector<const Candidate*>& screened) {
     std::vector<Scanned> scanned;
     for (const Candidate* c : screened) {
-      const int k = parameter_count(*c, options.plugins);
+      const int k = parameter_count(*c, options_.plugins);
       if (k == 0 || k > 2) {
         say("  " + c->label() + ": " + std::to_string(k) + " parameters; only effects with 1 or 2 are fitted, skipped");
         continue;
@@ -312,94 +370,105 @@ Diagnosis diagnose(const std::vector<MeasuredRun>& runs, const DiagnoseOptions& 
       }
       Scanned best{c, points[0], Score{}, k};
       for (const auto& x : points) {
-        const Score e = score_runs(d.calibration, c, x);
+        const Score e = score_runs(d_.calibration, c, x);
         if (e < best.score) best = {c, x, e, k};
       }
-      say("  scan " + c->label() + ": best excess " + format_number(best.score.excess) + " (now " + format_number(current_cal) + ")");
+      say("  scan " + c->label() + ": best excess " + format_number(best.score.excess) + " (now " +
+          format_number(current_cal_) + ")");
       scanned.push_back(best);
     }
     std::sort(scanned.begin(), scanned.end(), [](const auto& a, const auto& b) { return a.score < b.score; });
+    return scanned;
+  }
 
-    // 3. fit the best few; 4. validate them with the parameter penalty
-    for (std::size_t j = 0; j < scanned.size() && j < static_cast<std::size_t>(kFitted); ++j) {
-      Scanned& s = scanned[j];
-      if (!(s.score.excess < current_cal)) break;  // no better than the model without it
-      const int before = d.simulations;
-      // the likelihood's optimum from the best scan point, kept only if its excess is no worse
-      const double step = 0.5 / (s.parameters == 1 ? kScanPoints : kScanPointsPerAxis2);
-      std::vector<double> x = s.x;
-      minimise([&](const std::vector<double>& y) { return score_runs(d.calibration, s.c, y).log_ratio; }, x, step,
-               kFitEvaluations);
-      const Score fitted = score_runs(d.calibration, s.c, x);
-      if (fitted.excess <= s.score.excess) s.x = x;
-      FittedEffect f;
-      f.candidate = *s.c;
-      const auto effect = make_candidate(*s.c, s.x, options.plugins);
-      f.effect = effect->to_json();
-      f.spec = effect_spec(*effect);
-      f.parameters = s.parameters;
-      f.excess_calibration = std::min(fitted.excess, s.score.excess);
-      f.excess_validation = disjoint ? score_runs(d.validation, s.c, s.x).excess : f.excess_calibration;
-      // the share it explains of what the held-out runs leave; when they leave nothing beyond
-      // noise (the effect does not show in them), the share of the calibration runs', provided
-      // it keeps the held-out runs within noise
-      if (current_val >= kSignificantExcess || !disjoint) {
-        f.explained = current_val > 0.0 ? (current_val - f.excess_validation) / current_val : 0.0;
-        f.explained_on = "validation";
-      } else {
-        f.explained = f.excess_validation < kSignificantExcess && current_cal > 0.0
-                          ? (current_cal - f.excess_calibration) / current_cal
-                          : 0.0;
-        f.explained_on = "calibration";
-      }
-      // the score ranks on the runs the share is counted on; a candidate that pushes held-out runs
-      // beyond noise ranks last
-      const bool harmless = f.explained_on == "validation" || f.excess_validation < kSignificantExcess;
-      f.score = harmless ? (f.explained_on == "validation" ? f.excess_validation : f.excess_calibration) +
-                               kParameterPenalty * f.parameters
-                         : HUGE_VAL;
-      f.simulations = d.simulations - before;
-      say("  fit " + f.spec + ": excess calibration " + format_number(f.excess_calibration) + ", validation " +
-          format_number(f.excess_validation) + " (explains " + format_number(100.0 * f.explained) + " % on the " +
-          f.explained_on + " runs)");
-      dr.fitted.push_back(f);
-    }
-    std::sort(dr.fitted.begin(), dr.fitted.end(), [](const auto& a, const auto& b) { return a.score < b.score; });
-
-    // 5. add the winner only when it explains enough of what is left
-    if (!dr.fitted.empty() && dr.fitted[0].explained >= kMinExplained) {
-      dr.added = true;
-      d.found.push_back(dr.fitted[0]);
-      found_specs.push_back(dr.fitted[0].spec);
-      current_cal = dr.fitted[0].excess_calibration;
-      current_val = dr.fitted[0].excess_validation;
-      for (std::size_t i = 0; i < n; ++i) {
-        current_runs[i] = simulate(i, nullptr);
-        current_runs[i].summary.fidelity = "with-effects";
-        current_residuals[i] = compute_residuals(current_runs[i], runs[i].run, sigma[i]);
-      }
-      say("round " + std::to_string(round + 1) + ": added " + dr.fitted[0].spec);
+  // 3. and 4.: the likelihood's optimum from the best scan point (kept only if its excess is no
+  // worse), then its excess on the held-out runs, the share it explains and its penalised score
+  FittedEffect fit(Scanned& s) {
+    const int before = d_.simulations;
+    const bool disjoint = d_.validation != d_.calibration;
+    const double step = 0.5 / (s.parameters == 1 ? kScanPoints : kScanPointsPerAxis2);
+    std::vector<double> x = s.x;
+    minimise([&](const std::vector<double>& y) { return score_runs(d_.calibration, s.c, y).log_ratio; }, x, step,
+             kFitEvaluations);
+    const Score fitted = score_runs(d_.calibration, s.c, x);
+    if (fitted.excess <= s.score.excess) s.x = x;
+    FittedEffect f;
+    f.candidate = *s.c;
+    const auto effect = make_candidate(*s.c, s.x, options_.plugins);
+    f.effect = effect->to_json();
+    f.spec = effect_spec(*effect);
+    f.parameters = s.parameters;
+    f.excess_calibration = std::min(fitted.excess, s.score.excess);
+    f.excess_validation = disjoint ? score_runs(d_.validation, s.c, s.x).excess : f.excess_calibration;
+    // the share it explains of what the held-out runs leave; when they leave nothing beyond
+    // noise (the effect does not show in them), the share of the calibration runs', provided
+    // it keeps the held-out runs within noise
+    if (current_val_ >= kSignificantExcess || !disjoint) {
+      f.explained = current_val_ > 0.0 ? (current_val_ - f.excess_validation) / current_val_ : 0.0;
+      f.explained_on = "validation";
     } else {
-      say("round " + std::to_string(round + 1) + ": no candidate explains " + format_number(100.0 * kMinExplained) +
-          " % of the excess left; nothing added");
+      f.explained = f.excess_validation < kSignificantExcess && current_cal_ > 0.0
+                        ? (current_cal_ - f.excess_calibration) / current_cal_
+                        : 0.0;
+      f.explained_on = "calibration";
     }
-    d.rounds.push_back(dr);
-    if (!d.rounds.back().added) break;
+    // the score ranks on the runs the share is counted on; a candidate that pushes held-out runs
+    // beyond noise ranks last
+    const bool harmless = f.explained_on == "validation" || f.excess_validation < kSignificantExcess;
+    f.score = harmless ? (f.explained_on == "validation" ? f.excess_validation : f.excess_calibration) +
+                             kParameterPenalty * f.parameters
+                       : HUGE_VAL;
+    f.simulations = d_.simulations - before;
+    say("  fit " + f.spec + ": excess calibration " + format_number(f.excess_calibration) + ", validation " +
+        format_number(f.excess_validation) + " (explains " + format_number(100.0 * f.explained) + " % on the " +
+        f.explained_on + " runs)");
+    return f;
   }
 
-  // after: the runs with the effects found (the last round's simulations)
-  d.simulated_after = current_runs;
-  d.residuals_after = current_residuals;
-  if (d.found.empty()) {
-    d.error_after = d.error_before;
-  } else {
-    for (std::size_t i = 0; i < n; ++i) {
-      const Comparison c = compare_runs(current_runs[i], runs[i].run, CompareOptions{});
-      d.error_after.push_back({runs[i].run.label(), c.e, c.mean});
+  // the effect joins the model; every run is simulated again with it
+  void add(const FittedEffect& f) {
+    d_.found.push_back(f);
+    found_specs_.push_back(f.spec);
+    current_cal_ = f.excess_calibration;
+    current_val_ = f.excess_validation;
+    for (std::size_t i = 0; i < runs_.size(); ++i) {
+      current_runs_[i] = simulate(i, nullptr);
+      current_runs_[i].summary.fidelity = "with-effects";
+      current_residuals_[i] = compute_residuals(current_runs_[i], runs_[i].run, sigma_[i]);
     }
   }
-  d.excess_after = mean_excess(d.residuals_after, all);
-  d.unexplained = worst_run() >= kSignificantExcess;
+
+  const std::vector<MeasuredRun>& runs_;
+  const DiagnoseOptions& options_;
+  const std::function<void(const std::string&)>& note_;
+  std::vector<std::unique_ptr<Replay>> replays_;
+  std::vector<std::vector<double>> sigma_;  // every run's channel noise
+  std::vector<std::size_t> all_;            // 0 .. n-1
+  bool any_pile_ = false;
+  Diagnosis d_;
+  // the model under test and every run's simulation and residuals under it
+  std::vector<std::string> found_specs_;
+  double current_cal_ = 0.0, current_val_ = 0.0;
+  std::vector<Run> current_runs_;
+  std::vector<Residuals> current_residuals_;
+};
+
+}  // namespace
+
+Diagnosis diagnose(const std::vector<MeasuredRun>& runs, const DiagnoseOptions& options, Device* device,
+                   const std::function<void(const std::string&)>& note) {
+  if (runs.empty()) throw InputError("diagnose: no measured runs; give one or more run folders with --data");
+  const auto start = std::chrono::steady_clock::now();
+  // the replays and the baseline
+  Search search(runs, options, device, note);
+  search.baseline();
+  // rounds: one effect more each, while some run keeps an excess beyond noise
+  const std::vector<Candidate> candidates = candidate_set(options.plugins);
+  for (int round = 0; round < options.max_effects && search.worst_run() >= kSignificantExcess; ++round) {
+    if (!search.round(round + 1, candidates)) break;
+  }
+  // the model with what was found, against the data
+  Diagnosis d = search.finish();
   d.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return d;
 }

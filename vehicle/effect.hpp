@@ -127,6 +127,10 @@ class Effect {
   virtual void on_soil(SoilProperties& soil) { (void)soil; }
   // does it act only through on_soil (so a run without particles cannot show it)?
   virtual bool soil_only() const { return false; }
+  // the channels it changes when it acts only on what fixed sensors report (its signature, which
+  // the diagnosis searches first); empty when it acts on the machine or the soil, and so on every
+  // channel. An effect with a `channel` option acts on the chosen channel instead.
+  virtual std::vector<Channel> sensor_channels() const { return {}; }
 
  protected:
   // derived classes declare their parameters and options in their constructors; the index reads

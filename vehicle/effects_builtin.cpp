@@ -224,6 +224,7 @@ class WheelSlipSensor : public Effect {
   void on_sensors(const EffectContext& c, SensorSample& s) override {
     s.v_drive += value(slip_) * std::abs(s.v_drive) * s.f_traction / c.loader.traction_limit();
   }
+  std::vector<Channel> sensor_channels() const override { return {Channel::v_drive}; }
 
  private:
   int slip_ = 0;

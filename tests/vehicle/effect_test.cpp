@@ -278,6 +278,19 @@ TEST(EffectTest, WheelSlipSensorOverReadsInProportionToTraction) {
   EXPECT_GT(peak_traction, 0.5 * w->traction_limit());
   EXPECT_LT(worst, 1e-12);
   EXPECT_GT(slip.reported[k].v_drive, slip.truth[k].v_drive * 1.05);
+  // it declares the channels it changes (the diagnosis's signature), and changes no other but power
+  const auto declared = make_builtin_effect("wheel_slip_sensor")->sensor_channels();
+  ASSERT_EQ(declared, std::vector<Channel>{Channel::v_drive});
+  for (size_t k2 = 0; k2 < slip.truth.size(); ++k2)
+    for (size_t c = 0; c < kChannelCount; ++c) {
+      const auto ch = static_cast<Channel>(c);
+      if (ch == Channel::v_drive || ch == Channel::power) continue;
+      EXPECT_EQ(slip.reported[k2].*kSensorChannels[c].field, slip.truth[k2].*kSensorChannels[c].field) << kChannelNames[c];
+    }
+  // the machine effects and the soil's declare none: they act on every channel
+  for (const char* name : {"engine_power_sharing", "hydraulic_lag", "pump_flow_limit", "cylinder_friction",
+                           "tyre_rolling_resistance", "soil_cohesion"})
+    EXPECT_TRUE(make_builtin_effect(name)->sensor_channels().empty()) << name;
 }
 
 // rolling resistance: coasting (engine power cut) decelerates by c_rr g m / m_eff more, where

@@ -1,0 +1,75 @@
+#include "sim2real/report.hpp"
+
+#include <algorithm>
+#include <iomanip>
+#include <sstream>
+
+#include "sim2real/residuals.hpp"
+#include "sim2real/table.hpp"
+
+namespace talus::sim2real {
+
+std::string residual_signature(const Residuals& res, const Run& measured, const Run& simulated) {
+  std::vector<ResidualCell> cells = res.cells;
+  std::sort(cells.begin(), cells.end(), [](const auto& a, const auto& b) { return a.excess > b.excess; });
+  std::ostringstream s;
+  s << "| channel | phase | RMS residual | mean residual | noise σ | excess | moves most with (r) |\n"
+    << "|---|---|---|---|---|---|---|\n";
+  std::size_t shown = 0;
+  for (const auto& c : cells) {
+    if (shown == kSignatureCells || c.excess <= 0.0) break;
+    const auto r = residual_series(simulated, measured, c.channel);
+    const Correlate k = strongest_correlate(r, measured);
+    s << "| " << kChannelNames[c.channel] << " | " << res.phases[c.phase].name << " | " << std::setprecision(3) << c.rms
+      << " | " << c.mean << " | " << c.sigma << " | " << std::setprecision(2) << std::fixed << c.excess
+      << std::defaultfloat << " | " << k.quantity << " (" << std::setprecision(2) << k.r << ") |\n";
+    ++shown;
+  }
+  if (shown == 0) s << "| (every channel within noise) | | | | | | |\n";
+  return s.str();
+}
+
+std::vector<TableRow> error_table(const std::vector<TableRow>& rows) {
+  std::vector<TableRow> table = rows;
+  table.push_back(mean_row(rows, "mean over runs"));
+  return table;
+}
+
+std::string diagnosis_report(const Diagnosis& d, const std::vector<MeasuredRun>& runs) {
+  // per run: where the residual lay
+  std::ostringstream report;
+  report << "# talus diagnose\n\n";
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    const bool cal = std::find(d.calibration.begin(), d.calibration.end(), i) != d.calibration.end();
+    const bool val = std::find(d.validation.begin(), d.validation.end(), i) != d.validation.end();
+    report << "## " << runs[i].run.label() << " (" << d.runs[i] << "; "
+           << (cal && val ? "calibration and validation" : cal ? "calibration" : "validation") << ")\n\n"
+           << "Baseline residual, largest cells (excess = ln max(MSE / (" << kNoiseAllowance
+           << " σ²), 1); run total " << std::setprecision(3) << d.residuals_before[i].excess << "):\n\n"
+           << residual_signature(d.residuals_before[i], runs[i].run, d.simulated_before[i]) << "\n";
+    if (d.scan_rms_m[i] && *d.scan_rms_m[i] > kScanWarning)
+      report << "Warning: the measured pile scan lies " << *d.scan_rms_m[i] << " m (RMS) from the simulated pile's; "
+             << "the residual includes that difference.\n\n";
+  }
+  // what was found
+  report << "## Effects\n\n";
+  if (d.found.empty()) {
+    report << (d.unexplained ? "None added: no candidate explains " + std::to_string(int(100 * kMinExplained)) +
+                                   " % of the residual. UNEXPLAINED.\n"
+                             : "None added: the baseline residual is within the noise of the data.\n");
+  } else {
+    for (const auto& f : d.found)
+      report << "- " << f.spec << " (explains " << std::setprecision(3) << 100.0 * f.explained
+             << " % of the excess of the " << f.explained_on << " runs)\n";
+    report << (d.unexplained ? "\nAn excess beyond noise remains: UNEXPLAINED in part.\n" : "\nWhat remains is within noise.\n");
+  }
+  report << "\nExcess per run: before " << std::setprecision(3) << d.excess_before << ", after " << d.excess_after
+         << " (noise alone leaves less than " << kSignificantExcess << "); " << d.simulations << " simulations in "
+         << std::setprecision(3) << d.wall_s << " s.\n\n## Error before\n\n";
+  // the errors before and after, with their mean over the runs
+  report << table_markdown(error_table(d.error_before), 3) << "\n## Error after\n\n"
+         << table_markdown(error_table(d.error_after), 3);
+  return report.str();
+}
+
+}  // namespace talus::sim2real

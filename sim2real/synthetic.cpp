@@ -1,0 +1,115 @@
+#include "sim2real/synthetic.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <sstream>
+
+#include "host/error.hpp"
+
+namespace talus::sim2real {
+
+namespace {
+
+// the sample rate of a synthetic run's channels [Hz]: the run contract's (SPEC §2.4)
+constexpr double kContractRateHz = 100.0;
+
+Series2 points(const vehicle::PiecewiseLinear& f) {
+  Series2 out;
+  for (const auto& p : f.points()) out.push_back(p);
+  return out;
+}
+
+}  // namespace
+
+const std::map<std::string, double>& default_sensor_noise() {
+  static const std::map<std::string, double> sigma = {
+      {"f_lift", 5e3},    {"f_tilt", 3e3},     {"f_traction", 2e3},    {"v_drive", 0.02},
+      {"d_lift", 1e-3},   {"d_tilt", 1e-3},    {"boom_deg", 0.2},      {"bucket_deg", 0.2},
+      {"pitch_deg", 0.1}, {"x_vehicle", 0.02}, {"bucket_tip_x", 0.02}, {"bucket_tip_z", 0.02},
+      {"power", 1e3}};
+  return sigma;
+}
+
+std::map<std::string, double> parse_sensor_noise(const std::string& spec, const std::string& what) {
+  std::map<std::string, double> sigma;
+  std::stringstream in(spec);
+  std::string part;
+  while (std::getline(in, part, ',')) {
+    // the keywords
+    if (part == "none") continue;
+    if (part == "default") {
+      for (const auto& [k, v] : default_sensor_noise()) sigma[k] = v;
+      continue;
+    }
+    // CHANNEL=SIGMA with a channel of the contract other than t
+    const auto eq = part.find('=');
+    const std::string channel = part.substr(0, eq);
+    bool known = false;
+    for (size_t c = 1; c < kChannelCount; ++c) known = known || channel == kChannelNames[c];
+    if (eq == std::string::npos || !known)
+      throw InputError(what + ": '" + part + "' is not none, default or CHANNEL=SIGMA with a channel of the "
+                       "contract (f_lift, f_tilt, f_traction, v_drive, d_lift, ...)");
+    double value = 0.0;
+    try {
+      value = std::stod(part.substr(eq + 1));
+    } catch (const std::exception&) {
+      throw InputError(what + ": '" + part + "': the standard deviation is not a number");
+    }
+    if (!(value >= 0.0) || !std::isfinite(value))
+      throw InputError(what + ": '" + part + "': the standard deviation must be a finite number >= 0");
+    sigma[channel] = value;
+  }
+  return sigma;
+}
+
+void add_sensor_noise(TimeSeries& series, const std::map<std::string, double>& sigma, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  for (size_t c = 1; c < kChannelCount; ++c) {
+    const auto it = sigma.find(kChannelNames[c]);
+    if (it == sigma.end() || it->second == 0.0) continue;
+    std::normal_distribution<double> noise(0.0, it->second);
+    for (double& x : series.columns[c]) x += noise(rng);
+  }
+}
+
+vehicle::Scenario varied_inputs(vehicle::Scenario sc, double v, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (vehicle::PiecewiseLinear* series : {&sc.drive, &sc.lift, &sc.tilt}) {
+    auto points = series->points();
+    const double scale = 1.0 + v * u(rng);
+    double shift = v * u(rng) * kTimingShiftPerVariation;
+    if (points.size() > 2) {
+      // the inner points move together, at most halfway to the fixed first and last
+      const double first = points[1].first, last = points[points.size() - 2].first;
+      const double lo = -0.5 * std::max(0.0, first - points.front().first);
+      const double hi = 0.5 * std::max(0.0, std::min(sc.duration, points.back().first) - last);
+      shift = std::clamp(shift, lo, hi);
+    }
+    for (size_t i = 0; i < points.size(); ++i) {
+      points[i].second *= scale;
+      if (i > 0 && i + 1 < points.size()) points[i].first += shift;
+    }
+    *series = vehicle::PiecewiseLinear(points);
+  }
+  return sc;
+}
+
+MeasuredMetadata synthetic_metadata(const vehicle::Scenario& scenario, const Series2& pile_scan,
+                                    const RunSummary& summary) {
+  MeasuredMetadata meta;
+  meta.scenario = scenario.name;
+  meta.machine = scenario.machine;
+  meta.sample_rate_hz = kContractRateHz;
+  meta.pile_toe_x_m = scenario.pile_toe_x;
+  meta.pile_scan = pile_scan;
+  meta.drive = points(scenario.drive);
+  meta.lift = points(scenario.lift);
+  meta.tilt = points(scenario.tilt);
+  meta.loaded_mass_kg = summary.loaded_mass_kg;
+  meta.work_J = summary.work_J;
+  return meta;
+}
+
+}  // namespace talus::sim2real

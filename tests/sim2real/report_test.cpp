@@ -1,0 +1,62 @@
+// sim2real/report: the diagnosis in markdown, from a diagnosis put together by hand around the
+// synthetic run pair whose residuals are known (tests/sim2real/synthetic_runs.hpp)
+#include "sim2real/report.hpp"
+
+#include <gtest/gtest.h>
+
+#include "sim2real/residuals.hpp"
+#include "tests/sim2real/synthetic_runs.hpp"
+
+namespace talus::sim2real {
+namespace {
+
+// a one-run diagnosis: the measured reference, the simulated run's residual, nothing found
+Diagnosis one_run_diagnosis(const MeasuredRun& measured, const Run& simulated) {
+  Diagnosis d;
+  d.runs = {"runs/fb35"};
+  d.calibration = d.validation = {0};
+  d.residuals_before = {compute_residuals(simulated, measured.run, noise_sigmas(measured.run.series))};
+  d.simulated_before = {simulated};
+  d.error_before = {{"FB35", {0.05, 0.05, 0.0, 0.1, 0.2, -0.1, 0.1}, 0.6 / 7.0}};
+  d.error_after = d.error_before;
+  d.scan_rms_m = {0.3};
+  d.unexplained = true;
+  return d;
+}
+
+// the run's section names its roles, the largest residual cells (on noise-free data the bucket
+// tip's 3 cm in every phase leads, then the traction that is wildly off outside the dig), a scan
+// far from the simulated pile's; the effects say UNEXPLAINED; both tables end with the mean over
+// runs
+TEST(Report, NamesTheResidualTheScanWarningAndTheVerdict) {
+  MeasuredRun measured;
+  measured.run.series = test::reference_series();
+  measured.run.summary = test::reference_summary();
+  sim2real::Run simulated;
+  simulated.series = test::simulated_series();
+  simulated.summary = test::simulated_summary();
+  const Diagnosis d = one_run_diagnosis(measured, simulated);
+  const std::string report = diagnosis_report(d, {measured});
+  for (const char* part : {"# talus diagnose", "(runs/fb35; calibration and validation)", "| bucket_tip_z | dig |",
+                           "| f_traction | approach |", "Warning: the measured pile scan lies 0.3 m", "UNEXPLAINED.",
+                           "## Error before", "## Error after", "mean over runs"})
+    EXPECT_NE(report.find(part), std::string::npos) << part << "\n" << report;
+  // at most kSignatureCells rows of residual cells
+  const std::string signature = residual_signature(d.residuals_before[0], measured.run, simulated);
+  std::size_t rows = 0;
+  for (std::size_t at = signature.find("\n|"); at != std::string::npos; at = signature.find("\n|", at + 1)) ++rows;
+  EXPECT_EQ(rows, 1 + kSignatureCells);  // the separator line and the cells
+}
+
+// the error table's last row is the mean of the absolute values over the runs
+TEST(Report, ErrorTableEndsWithTheMeanRow) {
+  const std::vector<TableRow> rows = {{"a", {0.1, 0.2, 0.3, 0.4, 0.5, -0.2, 0.1}, 0.3},
+                                      {"b", {0.3, 0.2, 0.1, 0.0, 0.1, 0.2, -0.3}, 0.1}};
+  const std::vector<TableRow> table = error_table(rows);
+  ASSERT_EQ(table.size(), 3u);
+  EXPECT_EQ(table.back().name, "mean over runs");
+  EXPECT_DOUBLE_EQ(table.back().e.e_m, 0.2);
+}
+
+}  // namespace
+}  // namespace talus::sim2real

@@ -1,0 +1,83 @@
+// sim2real/synthetic: the noise model and the operator's variation of field-like data
+#include "sim2real/synthetic.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "host/error.hpp"
+#include "tests/sim2real/synthetic_runs.hpp"
+#include "vehicle/scenario.hpp"
+
+namespace talus::sim2real {
+namespace {
+
+// "default" is the documented table, a pair changes one entry, "none" adds nothing; a bad part
+// is named with where it came from
+TEST(Synthetic, NoiseSpecsParseAndBadPartsAreNamed) {
+  EXPECT_TRUE(parse_sensor_noise("none", "--noise").empty());
+  const auto d = parse_sensor_noise("default", "--noise");
+  EXPECT_EQ(d, default_sensor_noise());
+  EXPECT_EQ(d.size(), kChannelCount - 1);  // every channel but t
+  const auto changed = parse_sensor_noise("default,f_lift=1e4", "--noise");
+  EXPECT_DOUBLE_EQ(changed.at("f_lift"), 1e4);
+  EXPECT_DOUBLE_EQ(changed.at("f_tilt"), default_sensor_noise().at("f_tilt"));
+  for (const char* bad : {"t=1", "f_lift", "f_lift=abc", "f_lift=-1", "quiet"}) {
+    try {
+      parse_sensor_noise(bad, "metadata.json: field 'noise'");
+      ADD_FAILURE() << bad << " parsed";
+    } catch (const InputError& e) {
+      const std::string msg = e.what();
+      EXPECT_EQ(msg.rfind("metadata.json: field 'noise'", 0), 0u) << msg;
+      EXPECT_NE(msg.find(bad), std::string::npos) << msg;
+    }
+  }
+}
+
+// the noise has the asked standard deviation and zero mean on each named channel, leaves t and
+// the others alone, and the same seed draws the same noise
+TEST(Synthetic, NoiseHasItsSigmaOnItsChannelsOnly) {
+  const TimeSeries clean = test::reference_series(1000.0);  // 10 001 samples
+  TimeSeries noisy = clean;
+  add_sensor_noise(noisy, {{"f_lift", 5e3}, {"v_drive", 0.02}}, 7);
+  for (std::size_t c = 0; c < kChannelCount; ++c) {
+    double sum = 0.0, sum2 = 0.0;
+    const std::size_t n = clean.size();
+    for (std::size_t k = 0; k < n; ++k) {
+      const double e = noisy.columns[c][k] - clean.columns[c][k];
+      sum += e;
+      sum2 += e * e;
+    }
+    const double mean = sum / n, sd = std::sqrt(sum2 / n - mean * mean);
+    const double want = c == static_cast<std::size_t>(Channel::f_lift) ? 5e3
+                        : c == static_cast<std::size_t>(Channel::v_drive) ? 0.02 : 0.0;
+    // 10 001 samples: the sample sd within 3 % and the mean within 4 standard errors
+    EXPECT_NEAR(sd, want, 0.03 * want) << kChannelNames[c];
+    EXPECT_NEAR(mean, 0.0, 4.0 * want / std::sqrt(double(n))) << kChannelNames[c];
+  }
+  TimeSeries again = clean;
+  add_sensor_noise(again, {{"f_lift", 5e3}, {"v_drive", 0.02}}, 7);
+  EXPECT_EQ(again.columns, noisy.columns);
+}
+
+// no variation is the scenario itself; a variation keeps the breakpoints in order and inside the
+// run, and scales each series by at most 1 +- v
+TEST(Synthetic, VariedInputsStayOrderedAndBounded) {
+  const vehicle::Scenario sc = vehicle::load_scenario("hd27");
+  const vehicle::Scenario same = varied_inputs(sc, 0.0, 3);
+  EXPECT_EQ(same.lift.points(), sc.lift.points());
+  for (unsigned seed = 1; seed <= 20; ++seed) {
+    const vehicle::Scenario v = varied_inputs(sc, 0.3, seed);
+    for (auto [a, b] : {std::pair{&sc.drive, &v.drive}, {&sc.lift, &v.lift}, {&sc.tilt, &v.tilt}}) {
+      const auto p = a->points(), q = b->points();
+      ASSERT_EQ(p.size(), q.size());
+      EXPECT_EQ(q.front().first, p.front().first);
+      EXPECT_EQ(q.back().first, p.back().first);
+      for (std::size_t i = 1; i < q.size(); ++i) EXPECT_LE(q[i - 1].first, q[i].first) << "seed " << seed;
+      for (std::size_t i = 0; i < q.size(); ++i) EXPECT_LE(std::abs(q[i].second), 1.3 * std::abs(p[i].second) + 1e-12);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace talus::sim2real
