@@ -1,5 +1,5 @@
 // Sim-to-real error measures of Aoshima & Servin (reference/wheel-loader-sim2real-gap.tex §3.1, §6)
-// and SPEC.md §4. Everything is double precision and free of state; see docs/metrics.md for the
+// and SPEC §4. Everything is double precision and free of state; see docs/metrics.md for the
 // choices the paper leaves open (N, L_norm, which measure applies to which channel).
 #pragma once
 #include <array>

@@ -16,7 +16,7 @@ namespace talus::sim2real {
 
 // one force constant of the vehicle that all forces are divided by (paper §6 "Processing of time
 // series"): talus uses the operating weight of the WA320-7 class machine, m g with
-// m = 15 175 kg (SPEC.md §2.4) and standard gravity 9.80665 m/s², ≈ 148.8 kN
+// m = 15 175 kg (SPEC §2.4) and standard gravity 9.80665 m/s², ≈ 148.8 kN
 inline constexpr double kOperatingMassKg = 15175.0;
 inline constexpr double kStandardGravity = 9.80665;
 inline constexpr double kDefaultForceConstantN = kOperatingMassKg * kStandardGravity;

@@ -142,10 +142,8 @@ TEST(TableTest, CsvRoundTripAndMarkdown) {
 
 // ---- the paper's tables --------------------------------------------------------------------
 
-fs::path shared_reference_dir() {
-  if (const char* env = std::getenv("TALUS_SHARED_DIR")) return fs::path(env) / "reference";
-  return fs::path(TALUS_SOURCE_DIR) / ".." / "shared" / "reference";
-}
+// the paper's Tables 4 and 5 and its field tests, as published (data/paper/)
+fs::path paper_dir() { return fs::path(TALUS_SOURCE_DIR) / "data" / "paper"; }
 
 // the cells the paper's authors typed as rounded values (exactly 0.0 or 0.01) although the
 // printed mean was computed from unrounded ones; found by recomputing the mean, and explained
@@ -158,8 +156,8 @@ TEST(PaperTableTest, MeanColumnIsMeanOfAbsoluteValues) {
   std::set<std::string> excluded;
   int checked = 0;
   for (const char* name : {"paper-D-table.csv", "paper-G-table.csv"}) {
-    const fs::path file = shared_reference_dir() / name;
-    ASSERT_TRUE(fs::exists(file)) << file << " not found; set TALUS_SHARED_DIR";
+    const fs::path file = paper_dir() / name;
+    ASSERT_TRUE(fs::exists(file)) << file << " not found";
     for (const TableRow& row : read_table_csv(file)) {
       const double recomputed = paper_mean(row.e);
       if (kPlaceholders.count(row.name)) {
@@ -180,7 +178,7 @@ TEST(PaperTableTest, PlaceholderCellsAreRoundedAndExplained) {
   // the value the printed mean implies for the placeholder cell: 7·mean − Σ|other cells|
   std::map<std::string, double> mass_t;  // field-test loaded mass [t]
   {
-    std::ifstream in(shared_reference_dir() / "paper-field-tests.csv");
+    std::ifstream in(paper_dir() / "paper-field-tests.csv");
     std::string line;
     std::getline(in, line);  // test,loaded_mass_t,work_kJ,breakout_s,bucket_end_s
     while (std::getline(in, line)) {
@@ -191,7 +189,7 @@ TEST(PaperTableTest, PlaceholderCellsAreRoundedAndExplained) {
   ASSERT_EQ(mass_t.size(), 3u);
   int seen = 0;
   for (const char* name : {"paper-D-table.csv", "paper-G-table.csv"}) {
-    for (const TableRow& row : read_table_csv(shared_reference_dir() / name)) {
+    for (const TableRow& row : read_table_csv(paper_dir() / name)) {
       const auto it = kPlaceholders.find(row.name);
       const auto cells = row.e.as_array();
       if (it == kPlaceholders.end()) continue;
