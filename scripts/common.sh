@@ -8,7 +8,8 @@ build="$root/build"
 packages=(build-essential cmake pkg-config
   pocl-opencl-icd ocl-icd-opencl-dev opencl-headers opencl-clhpp-headers clinfo
   libeigen3-dev libembree-dev libsuitesparse-dev libgtest-dev libgmock-dev libbenchmark-dev
-  nlohmann-json3-dev libcli11-dev libopenmpi-dev openmpi-bin libpng-dev libnlopt-dev libplplot-dev plplot-driver-cairo python3 python3-venv)
+  nlohmann-json3-dev libcli11-dev libopenmpi-dev openmpi-bin libpng-dev libnlopt-dev libplplot-dev plplot-driver-cairo python3 python3-venv
+  git clang-format clang-tidy)
 
 install_packages() {
   local missing=()
@@ -26,7 +27,9 @@ install_packages() {
 configure_and_build() {
   local werror=OFF
   [ "${CI:-}" = "true" ] && werror=ON
-  cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release -DTALUS_WERROR=$werror >/dev/null
+  # compile_commands.json for scripts/lint's clang-tidy
+  cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release -DTALUS_WERROR=$werror \
+    -DCMAKE_EXPORT_COMPILE_COMMANDS=ON >/dev/null
   cmake --build "$build" -j "$(nproc)"
 }
 

@@ -67,7 +67,9 @@ Draw draw_effect(std::mt19937_64& rng) {
   }
   if (d.effect == "sensor_delay") {
     d.channel = delayed;
-    d.spec = d.effect + ":channel=" + delayed + ",delay=" + num(uniform(0.1, 0.5));
+    // from 0.2 s: a 0.13 s delay of f_tilt is named but cuts the mean error by only 28 % (seed
+    // 395389667), the noise's share of the error being as large as the delay's
+    d.spec = d.effect + ":channel=" + delayed + ",delay=" + num(uniform(0.2, 0.5));
   }
   return d;
 }
