@@ -14,6 +14,7 @@
 #include "vehicle/driveline.hpp"
 #include "vehicle/ground_contact.hpp"
 #include "vehicle/joints.hpp"
+#include "vehicle/machine.hpp"
 #include "vehicle/multibody.hpp"
 #include "vehicle/tyre_contact.hpp"
 
@@ -30,8 +31,11 @@ struct CylinderSpec {
 
 class WheelLoader {
  public:
-  // build from a machine data file; payload_kg is a point mass at the bucket's struck-volume
-  // centroid (a loaded bucket without particles). InputError for a malformed file.
+  // build from a machine (vehicle/machine.hpp: parsed from a file or made by code); payload_kg is
+  // a point mass at the bucket's struck-volume centroid (a loaded bucket without particles).
+  // InputError naming the description's source and field for what does not fit together
+  explicit WheelLoader(const MachineDescription& machine, double payload_kg = 0.0);
+  // the same from a machine data file (parse_machine, then build)
   explicit WheelLoader(const std::string& machine_file, double payload_kg = 0.0);
 
   MultibodySystem& system() { return system_; }
