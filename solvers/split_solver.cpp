@@ -39,41 +39,72 @@ void SplitSolver::step() {
   dem_.begin_step();
   const StepParams params = from_device(dem_.params());
 
-  // 2. particles near the bucket: device box selection, their state, embree contacts. The
-  // contact range covers what the bucket and a particle can close within the step (speculative)
+  // 2. particles near the bucket and their contacts with it
+  const NearBucket n = find_near_bucket(h, com, twist_before);
+
+  // 3. the bucket rows, warm started, with the mobility of a first vehicle solve
+  Vec6 warm_impulse = Vec6::Zero();
+  std::vector<ContactRow> rows = start_bucket_rows(n, params, com, twist_before, &warm_impulse);
+
+  // 4-5. velocities: the sweeps and the outer passes
+  const Vec6 impulse = solve_coupled(rows, warm_impulse, com);
+  stats_.impulse = impulse;
+  stats_.wrench = impulse / h;
+
+  // 6. both sides move; the bucket impulses are kept for the next warm start
+  if (settings_.record_residual) stats_.particle_residual = dem_.residual();
+  previous_ = talus::bucket_impulses(rows, n.candidates);
+  std::stable_sort(
+      previous_.begin(), previous_.end(),
+      [](const BucketImpulse& a, const BucketImpulse& b) { return a.particle < b.particle; });
+  dem_.end_step();
+  vehicle.integrate();
+}
+
+SplitSolver::NearBucket SplitSolver::find_near_bucket(double h, const Vec3& com,
+                                                      const Vec6& twist_before) {
+  // the contact range covers what the bucket and a particle can close within the step
+  // (speculative)
+  NearBucket n;
   const BucketPose pose = bucket_pose(loader_);
   const double r_max = dem_.max_radius();
   const double bucket_speed = twist_before.head<3>().norm() + twist_before.tail<3>().norm() * (bucket_reach_ +
                               (pose.position - com).norm());
   const double reach = 2.0 * h * (bucket_speed + dem_.settings().max_speed);
-  std::vector<int> candidates;
-  std::vector<BucketContact> contacts;
-  Particles near;
   if (dem_.size() > 0) {
+    // device box selection, the candidates' state
     const double margin_box = dem_.settings().margin_rel + reach / std::max(r_max, 1e-12);
     const Aabb box = candidate_box(scene_.world_bounds(pose), r_max, margin_box);
     DemBuffers& b = dem_.buffers();
-    candidates = selection_.select(b.position, dem_.size(), box);
-    near = block_.gather(candidates, b.position, b.velocity, b.omega);
-    std::vector<int> local(candidates.size());
+    n.candidates = selection_.select(b.position, dem_.size(), box);
+    n.near = block_.gather(n.candidates, b.position, b.velocity, b.omega);
+    std::vector<int> local(n.candidates.size());
     for (size_t k = 0; k < local.size(); ++k) local[k] = static_cast<int>(k);
-    // each particle's own margin: the relative one plus the speculative reach in its radii
+    // Embree contacts, each particle's own margin: the relative one plus the speculative reach
+    // in its radii
     const auto t0 = std::chrono::steady_clock::now();
     double r_min = r_max;
-    for (double r : near.radius) r_min = std::min(r_min, r);
+    for (double r : n.near.radius) r_min = std::min(r_min, r);
     const double margin = dem_.settings().margin_rel + reach / std::max(r_min, 1e-12);
-    contacts = scene_.find_bucket_contacts(near, local, pose, margin);
+    n.contacts = scene_.find_bucket_contacts(n.near, local, pose, margin);
     stats_.embree_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
-  stats_.candidates = static_cast<int>(candidates.size());
-  stats_.bucket_contacts = static_cast<int>(contacts.size());
-  for (const BucketContact& c : contacts)
-    stats_.max_overlap_rel = std::max(stats_.max_overlap_rel, -c.gap / near.radius[c.particle]);
+  stats_.candidates = static_cast<int>(n.candidates.size());
+  stats_.bucket_contacts = static_cast<int>(n.contacts.size());
+  for (const BucketContact& c : n.contacts)
+    stats_.max_overlap_rel = std::max(stats_.max_overlap_rel, -c.gap / n.near.radius[c.particle]);
+  return n;
+}
 
-  // 3. warm start: match last step's impulses (by particle of the whole system), take their
-  // wrench into a first vehicle solve, and read the bucket's twist and mobility under that load
-  std::vector<BucketContact> keyed = contacts;
-  for (auto& c : keyed) c.particle = candidates[c.particle];
+std::vector<ContactRow> SplitSolver::start_bucket_rows(const NearBucket& n,
+                                                       const StepParams& params, const Vec3& com,
+                                                       const Vec6& twist_before,
+                                                       Vec6* warm_impulse) {
+  // match last step's impulses (by particle of the whole system)
+  const double h = dem_.settings().dt;
+  vehicle::MultibodySystem& vehicle = loader_.system();
+  std::vector<BucketContact> keyed = n.contacts;
+  for (auto& c : keyed) c.particle = n.candidates[c.particle];
   const std::vector<int> match = dem_.settings().warm_start ? match_bucket_contacts(keyed, previous_)
                                                             : std::vector<int>();
   BucketBody start;
@@ -81,18 +112,19 @@ void SplitSolver::step() {
   start.omega = twist_before.tail<3>();
   // the rows' impulses do not depend on the mobility: make them, take their wrench, solve, and
   // give them the effective masses of the mobility that solve yields
-  std::vector<ContactRow> rows =
-      make_bucket_rows(contacts, near, start, com, params, settings_.material, previous_, match);
-  const Vec6 warm_impulse = bucket_wrench_impulse(rows);
-  loader_.set_bucket_wrench(warm_impulse / h);
+  std::vector<ContactRow> rows = make_bucket_rows(n.contacts, n.near, start, com, params,
+                                                  settings_.material, previous_, match);
+  *warm_impulse = bucket_wrench_impulse(rows);
+  loader_.set_bucket_wrench(*warm_impulse / h);
   vehicle.solve();
   start.mobility = loader_.bucket_mobility();
-  set_bucket_effective_masses(rows, contacts, near, start.mobility);
+  set_bucket_effective_masses(rows, n.contacts, n.near, start.mobility);
+  // the rows (particle indices of the whole system) and the solved bucket to the device
   std::vector<TlRow> device_rows;
   device_rows.reserve(rows.size());
   for (auto& r : rows) {
     TlRow d = to_device(r);
-    d.a = candidates[r.a];
+    d.a = n.candidates[r.a];
     device_rows.push_back(d);
   }
   block_.set_rows(device_rows);
@@ -102,8 +134,14 @@ void SplitSolver::step() {
   solved.omega = twist0.tail<3>();
   solved.mobility = start.mobility;
   block_.set_bucket(solved);
+  return rows;
+}
 
-  // 4-5. velocities: gravity, warm start, sweeps with the bucket rows, outer passes
+Vec6 SplitSolver::solve_coupled(std::vector<ContactRow>& rows, const Vec6& warm_impulse,
+                                const Vec3& com) {
+  // gravity and warm start of both kinds of rows
+  const double h = dem_.settings().dt;
+  vehicle::MultibodySystem& vehicle = loader_.system();
   dem_.apply_gravity();
   dem_.warm_start();
   if (dem_.settings().warm_start) block_.warm_start(dem_.buffers().velocity, dem_.buffers().omega);
@@ -111,6 +149,7 @@ void SplitSolver::step() {
   const int pass_sweeps = std::max(1, static_cast<int>(std::lround(settings_.pass_sweep_fraction * iterations)));
   Vec6 impulse = warm_impulse;
   for (int pass = 0; pass < settings_.max_passes; ++pass) {
+    // the pass's sweeps, particle rows and bucket rows in turn
     const int sweeps = pass == 0 ? iterations : pass_sweeps;
     for (int it = 0; it < sweeps; ++it) {
       dem_.sweep_fixed(1);
@@ -140,16 +179,7 @@ void SplitSolver::step() {
     next.mobility = loader_.bucket_mobility();
     block_.set_bucket(next);
   }
-  stats_.impulse = impulse;
-  stats_.wrench = impulse / h;
-
-  // 6. both sides move; the bucket impulses are kept for the next warm start
-  if (settings_.record_residual) stats_.particle_residual = dem_.residual();
-  previous_ = talus::bucket_impulses(rows, candidates);
-  std::stable_sort(previous_.begin(), previous_.end(),
-                   [](const BucketImpulse& a, const BucketImpulse& b) { return a.particle < b.particle; });
-  dem_.end_step();
-  vehicle.integrate();
+  return impulse;
 }
 
 }  // namespace talus

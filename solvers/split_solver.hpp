@@ -72,6 +72,26 @@ class SplitSolver {
   const std::vector<BucketImpulse>& bucket_impulses() const { return previous_; }
 
  private:
+  // the particles near the bucket at the step's start: their indices in the whole system, their
+  // state, and their contacts with the bucket mesh (indices into `near`)
+  struct NearBucket {
+    std::vector<int> candidates;
+    Particles near;
+    std::vector<BucketContact> contacts;
+  };
+
+  // the stages of step(), in order
+  // 2. device box selection, the candidates' state, Embree contacts within the speculative reach
+  NearBucket find_near_bucket(double h, const Vec3& com, const Vec6& twist_before);
+  // 3. the bucket rows warm started from last step's impulses, a first vehicle solve under their
+  // wrench, the rows' effective masses from its mobility; rows and bucket go to the device.
+  // Returns the rows (particle indices into near.near) and their warm-start impulse on the bucket
+  std::vector<ContactRow> start_bucket_rows(const NearBucket& n, const StepParams& params,
+                                            const Vec3& com, const Vec6& twist_before,
+                                            Vec6* warm_impulse);
+  // 4-5. gravity, warm start, sweeps with the bucket rows, and outer passes with the direct
+  // vehicle solve until the two sides agree on the bucket's twist; returns the rows' impulse
+  Vec6 solve_coupled(std::vector<ContactRow>& rows, const Vec6& warm_impulse, const Vec3& com);
   // the largest speed difference over the bucket's points between two twists [m/s]
   double point_speed_difference(const Vec6& a, const Vec6& b, const Vec3& com) const;
 
