@@ -25,7 +25,23 @@ WheelLoader::WheelLoader(const MachineDescription& m, double payload_kg) : paylo
   if (!(payload_kg >= 0.0))
     throw InputError("payload must be >= 0 kg (got " + std::to_string(payload_kg) + ")");
   name_ = m.name;
+  // the parts in an order that joints can take their anchors from: bodies and the loaded bucket,
+  // hinges, cylinders, then the wheels' tyres, the bucket's ground contact and the driveline
+  add_bodies(m);
+  const std::vector<std::pair<int, int>> hinge_bodies = add_hinges(m);
+  add_cylinders(m);
+  add_driveline(m, hinge_bodies);
+}
 
+int WheelLoader::body_of(const MachineDescription& m, const std::string& name,
+                         const std::string& field) const {
+  for (int i = 0; i < static_cast<int>(system_.bodies().size()); ++i) {
+    if (system_.body(i).name == name) return i;
+  }
+  fail(m, field, "names no body ('" + name + "')", "use one of the names in 'bodies'");
+}
+
+void WheelLoader::add_bodies(const MachineDescription& m) {
   // bodies in the reference pose, axes aligned with the world
   for (const BodyDescription& d : m.bodies) {
     RigidBody b;
@@ -35,15 +51,9 @@ WheelLoader::WheelLoader(const MachineDescription& m, double payload_kg) : paylo
     b.inertia = d.inertia.asDiagonal();
     system_.add_body(b);
   }
-  auto body_of = [&](const std::string& name, const std::string& field) {
-    for (int i = 0; i < static_cast<int>(system_.bodies().size()); ++i) {
-      if (system_.body(i).name == name) return i;
-    }
-    fail(m, field, "names no body ('" + name + "')", "use one of the names in 'bodies'");
-  };
 
   // bucket geometry and payload (merged into the bucket before joints take local anchors)
-  bucket_ = body_of(m.bucket.body, "bucket.body");
+  bucket_ = body_of(m, m.bucket.body, "bucket.body");
   rated_volume_ = m.bucket.rated_volume;
   try {
     mesh_ = make_bucket_mesh(m.bucket.geometry);
@@ -57,18 +67,21 @@ WheelLoader::WheelLoader(const MachineDescription& m, double payload_kg) : paylo
   // the profile frame is world-aligned at the tip in the reference pose
   profile_to_body_ = Eigen::Isometry3d::Identity();
   profile_to_body_.translation() = system_.body(bucket_).point_to_local(tip_world);
-  add_point_mass(system_.body(bucket_), payload_kg, tip_world + mesh_.volume_centroid);
+  add_point_mass(system_.body(bucket_), payload_, tip_world + mesh_.volume_centroid);
   // the body's centre of mass moved with the payload: the profile frame stays put in the world
   profile_to_body_.translation() = system_.body(bucket_).point_to_local(tip_world);
   tip_local_ = profile_to_body_.translation();
+}
 
+std::vector<std::pair<int, int>> WheelLoader::add_hinges(const MachineDescription& m) {
+  // each hinge's bodies (a, b), for the wheels' frames
   // hinges
-  std::vector<std::pair<int, int>> hinge_bodies;  // (a, b) of each hinge, for the wheels' frames
+  std::vector<std::pair<int, int>> hinge_bodies;
   for (size_t i = 0; i < m.hinges.size(); ++i) {
     const HingeDescription& d = m.hinges[i];
     const std::string where = "hinges[" + std::to_string(i) + "]";
-    const int a = body_of(d.a, where + ".a");
-    const int b = body_of(d.b, where + ".b");
+    const int a = body_of(m, d.a, where + ".a");
+    const int b = body_of(m, d.b, where + ".b");
     auto& h = system_.add_constraint(
         std::make_unique<HingeJoint>(system_.bodies(), a, b, d.point, d.axis, m.joint));
     h.name = d.name;
@@ -81,15 +94,18 @@ WheelLoader::WheelLoader(const MachineDescription& m, double payload_kg) : paylo
     joints_.push_back(&h);
     hinge_bodies.emplace_back(a, b);
   }
+  return hinge_bodies;
+}
 
+void WheelLoader::add_cylinders(const MachineDescription& m) {
   // cylinders: linear motors with force range from relief pressure, and stroke limits
   const double pressure = m.relief_pressure;
   int lifts = 0;
   for (size_t i = 0; i < m.cylinders.size(); ++i) {
     const CylinderDescription& d = m.cylinders[i];
     const std::string where = "cylinders[" + std::to_string(i) + "]";
-    const int a = body_of(d.a, where + ".a");
-    const int b = body_of(d.b, where + ".b");
+    const int a = body_of(m, d.a, where + ".a");
+    const int b = body_of(m, d.b, where + ".b");
     auto& cyl = system_.add_constraint(
         std::make_unique<CylinderJoint>(system_.bodies(), a, d.pin_a, b, d.pin_b, m.joint));
     cyl.name = d.name;
@@ -131,7 +147,10 @@ WheelLoader::WheelLoader(const MachineDescription& m, double payload_kg) : paylo
   }
   if (lifts != 2 || !tilt_)
     fail(m, "cylinders", "needs two lift and one tilt cylinder", "add the missing cylinders");
+}
 
+void WheelLoader::add_driveline(const MachineDescription& m,
+                                const std::vector<std::pair<int, int>>& hinge_bodies) {
   // driveline: gear ratio from rated speed and top speed, stall torque from the traction limit
   const TyreParameters& tp = m.tyres;
   DrivelineParameters dp;
@@ -145,7 +164,7 @@ WheelLoader::WheelLoader(const MachineDescription& m, double payload_kg) : paylo
   dp.viscous_compliance = m.motor_viscous_compliance;
   std::array<int, 4> w{}, frames{};
   for (int i = 0; i < 4; ++i) {
-    w[i] = body_of(m.driveline.wheels[i], "driveline.wheels.wheel");
+    w[i] = body_of(m, m.driveline.wheels[i], "driveline.wheels.wheel");
     // the frame a wheel turns in is the other body of its hinge
     frames[i] = kWorld;
     for (const auto& [a, b] : hinge_bodies)

@@ -91,6 +91,15 @@ class WheelLoader {
   const std::string& name() const { return name_; }
 
  private:
+  // the stages of the constructor, in order; body_of fails naming the field when no body has
+  // the name
+  int body_of(const MachineDescription& m, const std::string& name, const std::string& field) const;
+  void add_bodies(const MachineDescription& m);  // and the loaded bucket
+  std::vector<std::pair<int, int>> add_hinges(const MachineDescription& m);  // each one's (a, b)
+  void add_cylinders(const MachineDescription& m);
+  void add_driveline(const MachineDescription& m,
+                     const std::vector<std::pair<int, int>>& hinge_bodies);
+
   MultibodySystem system_;
   std::string name_;
   std::array<CylinderJoint*, 2> lift_{};
