@@ -59,15 +59,28 @@ FlankFit measure_flank_angle(const Particles& p, double bin_width, int sectors) 
   return fit;
 }
 
-HeapResult run_heap_test(Device& dev, const Material& material, const HeapOptions& o,
-                         Progress* progress) {
-  HeapResult result;
-  double d = o.diameter;
-  double spacing = 1.1 * d * 1.02;
-  double half = 0.5 * o.columns * spacing;
-  // base: fixed particles on a square grid wide enough for the run-out (rough base)
-  double column_height = o.layers * spacing;
-  double base_half = half + 1.2 * column_height;
+namespace {
+
+// the heap's layout: particle size, lattice spacing, the column's half width and height, and the
+// half width of a base wide enough for the run-out [m]
+struct HeapLayout {
+  double d = 0.0, spacing = 0.0, half = 0.0, column_height = 0.0, base_half = 0.0;
+};
+
+HeapLayout heap_layout(const HeapOptions& o) {
+  HeapLayout l;
+  l.d = o.diameter;
+  l.spacing = 1.1 * l.d * 1.02;
+  l.half = 0.5 * o.columns * l.spacing;
+  l.column_height = o.layers * l.spacing;
+  l.base_half = l.half + 1.2 * l.column_height;
+  return l;
+}
+
+// the rough base (fixed particles on a square grid) and the column (a jittered lattice of
+// D +- 0.1 D spheres inside the walls)
+Particles heap_particles(const Material& material, const HeapOptions& o, const HeapLayout& l) {
+  const double d = l.d, spacing = l.spacing, half = l.half, base_half = l.base_half;
   Particles particles;
   for (double x = -base_half; x <= base_half; x += d)
     for (double y = -base_half; y <= base_half; y += d) {
@@ -75,7 +88,6 @@ HeapResult run_heap_test(Device& dev, const Material& material, const HeapOption
       particles.inv_mass.back() = 0.0;
       particles.inv_inertia.back() = 0.0;
     }
-  // column: jittered lattice of D +- 0.1 D spheres inside the walls
   std::mt19937 rng(o.seed);
   std::uniform_real_distribution<double> size(0.9 * d, 1.1 * d);
   double jitter = 0.5 * (spacing - 1.1 * d);
@@ -86,16 +98,34 @@ HeapResult run_heap_test(Device& dev, const Material& material, const HeapOption
         Vec3 x(-half + (i + 0.5) * spacing, -half + (j + 0.5) * spacing, d + (k + 0.5) * spacing);
         particles.add(x + Vec3(offset(rng), offset(rng), offset(rng)), 0.5 * size(rng), material.density);
       }
+  return particles;
+}
+
+// the ground, and four walls at +-w in x and y when w > 0
+std::vector<StaticGeom> ground_and_walls(double w) {
+  std::vector<StaticGeom> geoms = {StaticGeom::plane(Vec3::Zero(), Vec3::UnitZ())};
+  if (w <= 0.0) return geoms;
+  geoms.push_back(StaticGeom::plane(Vec3(-w, 0, 0), Vec3::UnitX()));
+  geoms.push_back(StaticGeom::plane(Vec3(w, 0, 0), -Vec3::UnitX()));
+  geoms.push_back(StaticGeom::plane(Vec3(0, -w, 0), Vec3::UnitY()));
+  geoms.push_back(StaticGeom::plane(Vec3(0, w, 0), -Vec3::UnitY()));
+  return geoms;
+}
+
+}  // namespace
+
+HeapResult run_heap_test(Device& dev, const Material& material, const HeapOptions& o,
+                         Progress* progress) {
+  // the base and the column inside its walls
+  HeapResult result;
+  const HeapLayout l = heap_layout(o);
+  const double d = l.d, half = l.half, base_half = l.base_half;
+  const Particles particles = heap_particles(material, o, l);
   result.particles = o.columns * o.columns * o.layers;
+  Bounds bounds{Vec3(-base_half - d, -base_half - d, 0.0),
+                Vec3(base_half + d, base_half + d, l.column_height + 3 * d)};
 
-  std::vector<StaticGeom> ground = {StaticGeom::plane(Vec3::Zero(), Vec3::UnitZ())};
-  std::vector<StaticGeom> walled = ground;
-  walled.push_back(StaticGeom::plane(Vec3(-half, 0, 0), Vec3::UnitX()));
-  walled.push_back(StaticGeom::plane(Vec3(half, 0, 0), -Vec3::UnitX()));
-  walled.push_back(StaticGeom::plane(Vec3(0, -half, 0), Vec3::UnitY()));
-  walled.push_back(StaticGeom::plane(Vec3(0, half, 0), -Vec3::UnitY()));
-  Bounds bounds{Vec3(-base_half - d, -base_half - d, 0.0), Vec3(base_half + d, base_half + d, column_height + 3 * d)};
-
+  // the world, filled without friction for a dense column when asked
   DemSettings settings;
   settings.dt = o.dt;
   settings.iterations = o.iterations;
@@ -104,7 +134,7 @@ HeapResult run_heap_test(Device& dev, const Material& material, const HeapOption
     fill_material.friction = 0.0;
     fill_material.rolling = 0.0;
   }
-  DemWorld world(dev, fill_material, settings, bounds, walled);
+  DemWorld world(dev, fill_material, settings, bounds, ground_and_walls(half));
   world.set_particles(particles);
 
   // fill: settle inside the walls, then measure the bulk density away from walls and surfaces
@@ -125,23 +155,19 @@ HeapResult run_heap_test(Device& dev, const Material& material, const HeapOption
   if (o.wall_speed > 0.0) {
     int steps = static_cast<int>(std::lround(o.wall_travel / (o.wall_speed * o.dt)));
     for (int k = 1; k <= steps; ++k) {
-      double w = half + k * o.wall_speed * o.dt;
-      std::vector<StaticGeom> moving = ground;
-      moving.push_back(StaticGeom::plane(Vec3(-w, 0, 0), Vec3::UnitX()));
-      moving.push_back(StaticGeom::plane(Vec3(w, 0, 0), -Vec3::UnitX()));
-      moving.push_back(StaticGeom::plane(Vec3(0, -w, 0), Vec3::UnitY()));
-      moving.push_back(StaticGeom::plane(Vec3(0, w, 0), -Vec3::UnitY()));
-      world.set_geoms(moving, true);
+      world.set_geoms(ground_and_walls(half + k * o.wall_speed * o.dt), true);
       world.step();
       if (progress) progress->update(world.time(), "walls retreating");
     }
   }
+  const std::vector<StaticGeom> ground = ground_and_walls(0.0);
   world.set_geoms(ground);
   SettleOptions runout;
   runout.min_time = 1.0;
   runout.max_time = o.max_runout_time;
   settle(world, runout, progress);
 
+  // the heap's flank
   result.final_state = world.particles();
   result.geoms = ground;
   result.sim_time = world.time();
