@@ -144,12 +144,9 @@ void write_render(const std::string& path, const Particles& particles, const veh
   render_particles(scene, camera, kImageWidth, kImageHeight).write_png(path);
 }
 
-// a pile scenario: build the pile at the level, dig, write everything
-void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::EffectSet& effects) {
-  FidelityPreset preset = fidelity_preset(o.fidelity);
-  if (o.dt > 0.0) preset.dt = o.dt;
-  if (o.iterations > 0) preset.iterations = o.iterations;
-  const PileProfile placed = scenario_pile_profile(sc);
+// the dig's options from the flags: the pile's seed and formwork, the studies' rolling
+// resistance, the residual record and the sweep
+DiggingOptions digging_options(const RunOptions& o) {
   DiggingOptions options;
   options.pile.seed = o.seed;
   if (o.rolling >= 0.0) {
@@ -160,12 +157,116 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
   options.coupling.record_residual = o.residuals;
   if (o.form_speed >= 0.0) options.pile.form_speed = o.form_speed;
   options.sweep = parse_sweep(o.sweep, "--sweep");
+  return options;
+}
+
+// particle snapshots every `every` steps into DIR/snapshots, and their ParaView collection
+class Snapshots {
+ public:
+  Snapshots(const std::filesystem::path& dir, int every) : dir_(dir), every_(every) {
+    std::filesystem::create_directories(dir / "snapshots");
+  }
+  bool on() const { return every_ > 0; }
+  // after step k (0: the start)
+  void after_step(int k, double t, const DiggingSimulation& sim) {
+    if (!on() || k % every_ != 0) return;
+    const std::string name = "snapshots/particles_" + std::to_string(taken_.size()) + ".vtp";
+    write_file_atomically((dir_ / name).string(), particles_vtp(sim.particles()));
+    taken_.emplace_back(t, name);
+  }
+  // DIR/particles.pvd
+  void finish() const {
+    if (on()) write_file_atomically((dir_ / "particles.pvd").string(), pvd_collection(taken_));
+  }
+
+ private:
+  std::filesystem::path dir_;
+  int every_;
+  std::vector<std::pair<double, std::string>> taken_;
+};
+
+// what summary.json tells beyond the contract: the level and its study settings, timing, the
+// pile, the coupling's work, the residuals when recorded, the field values, the effects
+nlohmann::json dig_details(const RunOptions& o, const vehicle::Scenario& sc,
+                           const FidelityPreset& preset, const DiggingOptions& options,
+                           const PileBuild& pile, const PileScan& scan,
+                           const DiggingSimulation& sim, double pile_wall, double dig_wall,
+                           const Device& dev, const vehicle::EffectSet& effects) {
+  const double sim_time = sim.time();
+  nlohmann::json details = {{"particles", static_cast<int>(pile.particles.size())},
+                            {"dt_s", preset.dt},
+                            {"iterations", preset.iterations},
+                            {"rolling_resistance", options.soil.rolling},
+                            {"seed", o.seed},
+                            {"form_speed_m_s", options.pile.form_speed},
+                            {"work_total_J", sim.log().work()},
+                            {"sim_time_s", sim_time},
+                            {"wall_time_s", dig_wall},
+                            {"realtime_factor", dig_wall > 0 ? sim_time / dig_wall : 0.0},
+                            {"pile_build_wall_s", pile_wall},
+                            {"pile_bulk_density", pile.bulk_density},
+                            {"pile_toe_shift_m", pile.toe_shift},
+                            {"scan_face_angle_deg", scan.face_angle_deg},
+                            {"coupling",
+                             {{"steps_with_bucket_contacts", sim.contact_steps()},
+                              {"mean_passes", sim.mean_passes()},
+                              {"max_passes", sim.max_passes()},
+                              {"max_residual_m_s", sim.max_residual()},
+                              {"steps_at_pass_limit", sim.steps_at_pass_limit()},
+                              {"max_bucket_overlap_rel", sim.max_bucket_overlap_rel()}}},
+                            {"device", dev.description()},
+                            {"reconstructed_inputs", true},
+                            {"effects", effects.to_json()}};
+  if (!sim.step_residuals().empty()) {
+    // the particle rows' residual at the end of each step with contacts: median and 95th percentile
+    std::vector<double> r = sim.step_residuals();
+    std::sort(r.begin(), r.end());
+    auto quantile = [&](double q) {
+      return r[static_cast<size_t>(q * static_cast<double>(r.size() - 1))];
+    };
+    details["step_residual_m_s"] = {
+        {"median", quantile(0.5)}, {"p95", quantile(0.95)}, {"steps", r.size()}};
+  }
+  if (sc.field_loaded_mass_kg > 0) {
+    details["field_loaded_mass_kg"] = sc.field_loaded_mass_kg;
+    details["field_work_J"] = sc.field_work_J;
+  }
+  return details;
+}
+
+// figures from the run in memory: the channels, the bucket tip over the scanned pile, power,
+// and the rendered side view of the particles at the end
+void write_dig_figures(const std::filesystem::path& dir, const sim2real::Run& run,
+                       const PileScan& scan, const vehicle::Scenario& sc, const PileProfile& placed,
+                       const Particles& final_particles, const vehicle::WheelLoader& loader) {
+  channel_figure({run}, nullptr)
+      .write_png((dir / "channels.png").string(), kFigureWidth, kFigureHeight);
+  std::vector<std::pair<double, double>> surface;
+  for (const auto& q : scan.points) surface.emplace_back(q.x(), q.y());
+  trajectory_figure({run}, nullptr, surface)
+      .write_png((dir / "trajectory.png").string(), kFigureWidth, kFigureWidth / 2);
+  power_figure({run}, nullptr)
+      .write_png((dir / "power.png").string(), kFigureWidth, kFigureHeight / 2);
+  Bounds view;
+  view.lo = Vec3(sc.pile_toe_x - 4.0, -3.0, 0.0);
+  view.hi = Vec3(placed.rear_wall_x, 3.0, 4.0);
+  write_render((dir / "side.png").string(), final_particles, loader, view);
+}
+
+// a pile scenario: build the pile at the level, dig, write everything
+void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::EffectSet& effects) {
+  FidelityPreset preset = fidelity_preset(o.fidelity);
+  if (o.dt > 0.0) preset.dt = o.dt;
+  if (o.iterations > 0) preset.iterations = o.iterations;
+  const PileProfile placed = scenario_pile_profile(sc);
+  const DiggingOptions options = digging_options(o);
   make_output_dir(o.out);
   const std::filesystem::path dir(o.out);
   const auto start = std::chrono::steady_clock::now();
   Device dev;
-  std::cerr << "talus run: " << sc.name << " at " << preset.name << " (D " << preset.diameter * 1e3 << " mm, h "
-            << preset.dt * 1e3 << " ms, " << preset.iterations << " sweeps) on " << dev.description() << "\n";
+  std::cerr << "talus run: " << sc.name << " at " << preset.name << " (D " << preset.diameter * 1e3
+            << " mm, h " << preset.dt * 1e3 << " ms, " << preset.iterations << " sweeps) on "
+            << dev.description() << "\n";
 
   // the pile, settled, and its laser scan before loading (as the field tests measured it)
   PileBuild pile;
@@ -176,100 +277,50 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
     pile = build_scenario_pile(dev, sc, placed, fidelity_preset(o.fidelity), options, &progress);
     progress.finish(std::to_string(pile.particles.size()) + " particles");
   }
-  const double pile_wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double pile_wall =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const PileScan scan = scan_pile(pile.particles, placed, preset.diameter);
   std::string scan_csv = "x,z\n";
-  for (const auto& q : scan.points) scan_csv += std::to_string(q.x()) + "," + std::to_string(q.y()) + "\n";
+  for (const auto& q : scan.points)
+    scan_csv += std::to_string(q.x()) + "," + std::to_string(q.y()) + "\n";
   write_file_atomically((dir / "scan.csv").string(), scan_csv);
 
-  // the run, with snapshots at the interval
+  // the run, with snapshots at the interval and progress notes; the steps alone are timed for the
+  // real-time factor (snapshots and notes, which download the particles, are not)
   if (!effects.empty()) std::cerr << "talus run: effects: " << effects_note(effects) << "\n";
   DiggingSimulation sim(dev, sc, preset, pile, options, &effects);
-  std::filesystem::create_directories(dir / "snapshots");
-  std::vector<std::pair<double, std::string>> snapshots;
-  auto snapshot = [&](const Particles& p) {
-    const std::string name = "snapshots/particles_" + std::to_string(snapshots.size()) + ".vtp";
-    write_file_atomically((dir / name).string(), particles_vtp(p));
-    snapshots.emplace_back(sim.time(), name);
-  };
-  const bool snapshots_on = o.snapshot_interval > 0.0;
-  if (snapshots_on) snapshot(sim.particles());
-  const int every = snapshots_on ? std::max(1, static_cast<int>(std::lround(o.snapshot_interval / preset.dt))) : 0;
-  // the steps alone are timed for the real-time factor (snapshots and progress notes, which
-  // download the particles, are not)
+  Snapshots snapshots(
+      dir, o.snapshot_interval > 0.0
+               ? std::max(1, static_cast<int>(std::lround(o.snapshot_interval / preset.dt)))
+               : 0);
+  snapshots.after_step(0, sim.time(), sim);
   Progress progress("dig " + sc.name + " " + preset.name, sc.duration, !o.quiet);
-  const int note_every = std::max(1, static_cast<int>(std::lround(kProgressNoteInterval / preset.dt)));
+  const int note_every =
+      std::max(1, static_cast<int>(std::lround(kProgressNoteInterval / preset.dt)));
   const double dig_wall = sim.run([&](int k) {
-    if (snapshots_on && k % every == 0) snapshot(sim.particles());
+    snapshots.after_step(k, sim.time(), sim);
     if (!o.quiet && k % note_every == 0) {
       std::ostringstream note;
-      note << std::fixed << std::setprecision(0) << sim.split().stats().bucket_contacts << " bucket contacts, "
-           << sim.loaded_mass() << " kg in the bucket";
+      note << std::fixed << std::setprecision(0) << sim.split().stats().bucket_contacts
+           << " bucket contacts, " << sim.loaded_mass() << " kg in the bucket";
       progress.update(sim.time(), note.str());
     }
   });
   const Particles final_particles = sim.particles();
   sim2real::Run run = sim2real::dig_run(sc, preset.name, sim);
-  const double loaded = run.summary.loaded_mass_kg;
-  progress.finish(std::to_string(static_cast<long>(std::lround(loaded))) + " kg loaded");
+  progress.finish(std::to_string(static_cast<long>(std::lround(run.summary.loaded_mass_kg))) +
+                  " kg loaded");
 
   // outputs: snapshots' collection, time series and summary, figures
-  if (snapshots_on) write_file_atomically((dir / "particles.pvd").string(), pvd_collection(snapshots));
-  const double sim_time = sim.time();
-  const double realtime_factor = dig_wall > 0 ? sim_time / dig_wall : 0.0;
-  nlohmann::json& details = run.summary.details;
-  details = {
-      {"particles", static_cast<int>(pile.particles.size())},
-      {"dt_s", preset.dt},
-      {"iterations", preset.iterations},
-      {"rolling_resistance", options.soil.rolling},
-      {"seed", o.seed},
-      {"form_speed_m_s", options.pile.form_speed},
-      {"work_total_J", sim.log().work()},
-      {"sim_time_s", sim_time},
-      {"wall_time_s", dig_wall},
-      {"realtime_factor", realtime_factor},
-      {"pile_build_wall_s", pile_wall},
-      {"pile_bulk_density", pile.bulk_density},
-      {"pile_toe_shift_m", pile.toe_shift},
-      {"scan_face_angle_deg", scan.face_angle_deg},
-      {"coupling",
-       {{"steps_with_bucket_contacts", sim.contact_steps()},
-        {"mean_passes", sim.mean_passes()},
-        {"max_passes", sim.max_passes()},
-        {"max_residual_m_s", sim.max_residual()},
-        {"steps_at_pass_limit", sim.steps_at_pass_limit()},
-        {"max_bucket_overlap_rel", sim.max_bucket_overlap_rel()}}},
-      {"device", dev.description()},
-      {"reconstructed_inputs", true},
-      {"effects", effects.to_json()}};
-  if (!sim.step_residuals().empty()) {
-    // the particle rows' residual at the end of each step with contacts: median and 95th percentile
-    std::vector<double> r = sim.step_residuals();
-    std::sort(r.begin(), r.end());
-    auto quantile = [&](double q) { return r[static_cast<size_t>(q * static_cast<double>(r.size() - 1))]; };
-    details["step_residual_m_s"] = {{"median", quantile(0.5)}, {"p95", quantile(0.95)}, {"steps", r.size()}};
-  }
-  if (sc.field_loaded_mass_kg > 0) {
-    details["field_loaded_mass_kg"] = sc.field_loaded_mass_kg;
-    details["field_work_J"] = sc.field_work_J;
-  }
+  snapshots.finish();
+  run.summary.details =
+      dig_details(o, sc, preset, options, pile, scan, sim, pile_wall, dig_wall, dev, effects);
   run.dir = dir;
   write_run(o, run);
-
-  // figures from the run in memory: the channels, the bucket tip over the scanned pile, power,
-  // and the rendered side view
-  channel_figure({run}, nullptr).write_png((dir / "channels.png").string(), kFigureWidth, kFigureHeight);
-  std::vector<std::pair<double, double>> surface;
-  for (const auto& q : scan.points) surface.emplace_back(q.x(), q.y());
-  trajectory_figure({run}, nullptr, surface).write_png((dir / "trajectory.png").string(), kFigureWidth, kFigureWidth / 2);
-  power_figure({run}, nullptr).write_png((dir / "power.png").string(), kFigureWidth, kFigureHeight / 2);
-  Bounds view;
-  view.lo = Vec3(sc.pile_toe_x - 4.0, -3.0, 0.0);
-  view.hi = Vec3(placed.rear_wall_x, 3.0, 4.0);
-  write_render((dir / "side.png").string(), final_particles, sim.loader(), view);
-  std::cerr << "talus run: " << sc.name << " " << preset.name << ": " << loaded << " kg loaded, work in the "
-            << "digging phase " << run.summary.work_J / 1e3 << " kJ, real-time factor " << realtime_factor
+  write_dig_figures(dir, run, scan, sc, placed, final_particles, sim.loader());
+  std::cerr << "talus run: " << sc.name << " " << preset.name << ": " << run.summary.loaded_mass_kg
+            << " kg loaded, work in the digging phase " << run.summary.work_J / 1e3
+            << " kJ, real-time factor " << run.summary.details["realtime_factor"].get<double>()
             << "; results in " << o.out << "\n";
 }
 
