@@ -47,9 +47,7 @@ void add_pile_command(CLI::App& app) {
     side_view(pile.particles).write_png(opt->out + "/side.png");
     // the laser scan of the settled surface, as measured in the field before loading
     PileScan scan = scan_pile(pile.particles, profile, preset.diameter);
-    std::string scan_csv = "x,z\n";
-    for (auto& q : scan.points) scan_csv += std::to_string(q.x()) + "," + std::to_string(q.y()) + "\n";
-    write_file_atomically(opt->out + "/scan.csv", scan_csv);
+    write_file_atomically(opt->out + "/scan.csv", scan_csv(scan));
     int n = static_cast<int>(pile.particles.size());
     nlohmann::json j = {
         {"level", preset.name},

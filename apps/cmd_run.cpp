@@ -280,10 +280,7 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
   const double pile_wall =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const PileScan scan = scan_pile(pile.particles, placed, preset.diameter);
-  std::string scan_csv = "x,z\n";
-  for (const auto& q : scan.points)
-    scan_csv += std::to_string(q.x()) + "," + std::to_string(q.y()) + "\n";
-  write_file_atomically((dir / "scan.csv").string(), scan_csv);
+  write_file_atomically((dir / "scan.csv").string(), scan_csv(scan));
 
   // the run, with snapshots at the interval and progress notes; the steps alone are timed for the
   // real-time factor (snapshots and notes, which download the particles, are not)

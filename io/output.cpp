@@ -53,4 +53,11 @@ std::string particles_vtp(const Particles& p) {
   return os.str();
 }
 
+std::string scan_csv(const PileScan& scan) {
+  std::string csv = "x,z\n";
+  for (const auto& q : scan.points)
+    csv += std::to_string(q.x()) + "," + std::to_string(q.y()) + "\n";
+  return csv;
+}
+
 }  // namespace talus
