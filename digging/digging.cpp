@@ -74,12 +74,12 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
 
 double DiggingSimulation::run(const std::function<void(int)>& after_step) {
   double wall = 0.0;
-  for (int k = 1; !done(); ++k) {
+  while (!done()) {
     // one timed step, then the caller's work
     const auto start = std::chrono::steady_clock::now();
     step();
     wall += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    if (after_step) after_step(k);
+    if (after_step) after_step(steps_done_);
   }
   return wall;
 }

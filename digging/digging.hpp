@@ -61,8 +61,9 @@ class DiggingSimulation {
   // one step with the given target speeds [m/s] (a controller instead of the scenario's inputs);
   // with effects, these are the operator's targets before on_commands
   void step(double drive, double lift, double tilt);
-  // the run loop: steps with the scenario's controls to the end, calling after_step(k) after step
-  // k = 1, 2, ... (snapshots, progress: not timed); returns the wall time of the steps alone [s]
+  // the run loop: steps with the scenario's controls to the end, calling after_step(k) after the
+  // run's step k (counted from its start, steps taken by hand included; snapshots, progress: not
+  // timed); returns the wall time of the steps alone [s]
   double run(const std::function<void(int)>& after_step = {});
   double time() const { return time_; }
   int steps_total() const { return steps_total_; }

@@ -4,8 +4,11 @@
 // The PGS and Jacobi sweeps and the residual (solver.cl) and the bucket sweep (bucket.cl) call
 // these; changing friction or cohesion is an edit here and in the double twin,
 // solvers/contact_law.hpp. The callers pass the cones' radii, since the bucket's rows hold no
-// cohesion. Every function keeps the statements the sweeps had inline, so the compiler forms
-// the same products and sums and the results stay bit for bit.
+// cohesion. The functions keep the statements the particle sweeps had inline, so the PGS and
+// Jacobi sweeps stayed bit for bit; the bucket sweep had written the rolling projection as one
+// expression (which the compiler fused into a multiply-add) and the residual divided by 1/D where
+// it now multiplies by D^-1, so those two changed at float rounding when the law was written once
+// (docs/dem.md).
 
 // the normal impulse after one projected step, held at or above `lower` (-h F_c, or 0)
 float normal_impulse(float ln, float rhs, float un, float sigma, float inv_dn, float lower) {

@@ -10,10 +10,50 @@ namespace talus::vehicle {
 
 namespace {
 
-// what only the built model can check fails naming the description's source and field
+// what does not fit in a description fails naming its source (or, made by code without one, its
+// name) and the field
 [[noreturn]] void fail(const MachineDescription& m, const std::string& field,
                        const std::string& problem, const std::string& fix) {
-  throw InputError(m.source + ": field '" + field + "' " + problem + "; " + fix);
+  const std::string source = m.source.empty() ? "machine '" + m.name + "'" : m.source;
+  throw InputError(source + ": field '" + field + "' " + problem + "; " + fix);
+}
+
+// the values parse_machine checks in a file, checked again for a description made by code
+void check_values(const MachineDescription& m) {
+  if (m.joint.compliance < 0 || m.joint.damping_time < 0 || m.motor_viscous_compliance < 0)
+    fail(m, "solver", "has a negative compliance or damping time", "use values >= 0");
+  if (m.bodies.empty()) fail(m, "bodies", "is empty", "list the rigid bodies");
+  for (size_t i = 0; i < m.bodies.size(); ++i)
+    if (!(m.bodies[i].mass > 0) || !(m.bodies[i].inertia.minCoeff() > 0))
+      fail(m, "bodies[" + std::to_string(i) + "]", "has a mass or inertia <= 0",
+           "give positive values");
+  for (size_t i = 0; i < m.hinges.size(); ++i) {
+    const HingeDescription& h = m.hinges[i];
+    if (h.axis.norm() < 1e-9)
+      fail(m, "hinges[" + std::to_string(i) + "].axis", "is zero", "give a direction");
+    if (h.range && h.range->first > h.range->second)
+      fail(m, "hinges[" + std::to_string(i) + "].range",
+           "is not [lower, upper] with lower <= upper", "give two angles in rad");
+  }
+  for (size_t i = 0; i < m.cylinders.size(); ++i) {
+    const CylinderDescription& c = m.cylinders[i];
+    if (!(c.bore > c.rod) || !(c.rod > 0))
+      fail(m, "cylinders[" + std::to_string(i) + "]", "has bore <= rod or rod <= 0",
+           "give bore > rod > 0 in metres");
+  }
+  const TyreParameters& t = m.tyres;
+  if (!(t.radius > 0) || !(t.width > 0) || !(t.elastic_modulus > 0) || !(t.friction >= 0))
+    fail(m, "tyres", "has a non-positive size, modulus or a negative friction",
+         "correct the values");
+  const DrivelineDescription& d = m.driveline;
+  if (!(d.max_power > 0) || !(d.rated_motor_speed > 0) || !(d.top_speed > 0) ||
+      !(d.traction_limit > 0))
+    fail(m, "driveline", "has a value <= 0", "give positive power, speeds and traction");
+  const GroundContactParameters& g = m.bucket_ground;
+  if (!(g.stiffness > 0) || !(g.friction >= 0) || !(g.damping_time >= 0) ||
+      !(g.viscous_compliance >= 0))
+    fail(m, "bucket_ground", "has a non-positive stiffness or a negative friction or damping",
+         "correct the values");
 }
 
 }  // namespace
@@ -25,6 +65,7 @@ WheelLoader::WheelLoader(const MachineDescription& m, double payload_kg) : paylo
   if (!(payload_kg >= 0.0))
     throw InputError("payload must be >= 0 kg (got " + std::to_string(payload_kg) + ")");
   name_ = m.name;
+  check_values(m);
   // the parts in an order that joints can take their anchors from: bodies and the loaded bucket,
   // hinges, cylinders, then the wheels' tyres, the bucket's ground contact and the driveline
   add_bodies(m);

@@ -67,6 +67,14 @@ TEST(Machine, BuildErrorsNameTheSourceAndTheField) {
   short_stroke.cylinders[0].length_max = short_stroke.cylinders[0].length_min + 1e-3;
   const std::string b = input_error([&] { WheelLoader w(short_stroke); });
   EXPECT_NE(b.find("field 'cylinders[0].length_range'"), std::string::npos) << b;
+  // the values a file is checked for are checked in a description made by code too
+  MachineDescription weightless = m;
+  weightless.bodies[0].mass = 0.0;
+  weightless.source.clear();
+  const std::string d = input_error([&] { WheelLoader w(weightless); });
+  EXPECT_NE(d.find("machine '" + m.name + "': field 'bodies[0]' has a mass or inertia <= 0"),
+            std::string::npos)
+      << d;
   MachineDescription two_tilts = m;
   for (CylinderDescription& c : two_tilts.cylinders) c.role = "tilt";
   const std::string c = input_error([&] { WheelLoader w(two_tilts); });
