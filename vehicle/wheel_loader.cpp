@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <initializer_list>
 #include <limits>
 
 #include "host/error.hpp"
@@ -20,6 +21,36 @@ namespace {
 
 // the values parse_machine checks in a file, checked again for a description made by code
 void check_values(const MachineDescription& m) {
+  // every number finite (a file's are; code may hand in inf or NaN)
+  auto finite = [](std::initializer_list<double> v) {
+    return std::all_of(v.begin(), v.end(), [](double x) { return std::isfinite(x); });
+  };
+  auto all = [](const Vec3& v) { return v.allFinite(); };
+  for (size_t i = 0; i < m.bodies.size(); ++i) {
+    const BodyDescription& b = m.bodies[i];
+    if (!finite({b.mass}) || !all(b.com) || !all(b.inertia))
+      fail(m, "bodies[" + std::to_string(i) + "]", "has a value that is not finite",
+           "give finite numbers");
+  }
+  for (size_t i = 0; i < m.hinges.size(); ++i)
+    if (!all(m.hinges[i].point) || !all(m.hinges[i].axis))
+      fail(m, "hinges[" + std::to_string(i) + "]", "has a value that is not finite",
+           "give finite numbers");
+  for (size_t i = 0; i < m.cylinders.size(); ++i) {
+    const CylinderDescription& c = m.cylinders[i];
+    if (!all(c.pin_a) || !all(c.pin_b) ||
+        !finite({c.bore, c.rod, c.max_speed, c.length_min, c.length_max}))
+      fail(m, "cylinders[" + std::to_string(i) + "]", "has a value that is not finite",
+           "give finite numbers");
+  }
+  const DrivelineDescription& dl = m.driveline;
+  if (!all(m.bucket.tip) ||
+      !finite({m.bucket.rated_volume, m.relief_pressure, m.tyres.radius, m.tyres.width,
+               m.tyres.elastic_modulus, m.tyres.friction, dl.max_power, dl.rated_motor_speed,
+               dl.top_speed, dl.traction_limit, m.bucket_ground.stiffness,
+               m.bucket_ground.friction}))
+    fail(m, "bucket, hydraulics, tyres, driveline or bucket_ground",
+         "has a value that is not finite", "give finite numbers");
   if (m.joint.compliance < 0 || m.joint.damping_time < 0 || m.motor_viscous_compliance < 0)
     fail(m, "solver", "has a negative compliance or damping time", "use values >= 0");
   if (m.bodies.empty()) fail(m, "bodies", "is empty", "list the rigid bodies");

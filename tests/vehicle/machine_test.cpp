@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include "host/error.hpp"
@@ -75,6 +76,10 @@ TEST(Machine, BuildErrorsNameTheSourceAndTheField) {
   EXPECT_NE(d.find("machine '" + m.name + "': field 'bodies[0]' has a mass or inertia <= 0"),
             std::string::npos)
       << d;
+  MachineDescription infinite = m;
+  infinite.cylinders[1].bore = std::numeric_limits<double>::infinity();
+  const std::string e = input_error([&] { WheelLoader w(infinite); });
+  EXPECT_NE(e.find("field 'cylinders[1]' has a value that is not finite"), std::string::npos) << e;
   MachineDescription two_tilts = m;
   for (CylinderDescription& c : two_tilts.cylinders) c.role = "tilt";
   const std::string c = input_error([&] { WheelLoader w(two_tilts); });
