@@ -1,11 +1,14 @@
 // talus bench dem: DEM throughput per fidelity level on the default pile, and the 10k settling
 // case that LIGGGHTS and Bullet were run on (shared/peers). Medians over several steps.
+// talus bench dig: the cost of the coupled step of a scenario's dig, stage by stage
+// (digging/dig_cost.hpp).
 #include <algorithm>
 #include <chrono>
 #include <iostream>
 #include <sstream>
 
 #include "apps/commands.hpp"
+#include "digging/dig_cost.hpp"
 #include "host/device.hpp"
 #include "host/files.hpp"
 #include "terrain/pile.hpp"
@@ -109,6 +112,84 @@ nlohmann::json bench_settle10k(Device& dev, double dt, int iterations, bool quie
           {"rms_speed_m_s", rms_speed(p)}};
 }
 
+// the stages keep the order they ran in (an ordered object)
+nlohmann::ordered_json dig_cost_json(const DigCost& c, const std::string& device) {
+  nlohmann::ordered_json stages = nlohmann::ordered_json::object();
+  for (const auto& [name, ms] : c.stages) stages[name] = ms;
+  return {{"device", device},
+          {"scenario", c.scenario},
+          {"level", c.level},
+          {"particles", c.particles},
+          {"dt_s", c.dt},
+          {"iterations", c.iterations},
+          {"seconds", c.seconds},
+          {"steps", c.steps},
+          {"ms_per_step", c.ms_per_step},
+          {"profiled_ms_per_step", c.profiled_ms_per_step},
+          {"realtime_factor", c.realtime_factor},
+          {"stages", stages},
+          {"contacts", c.contacts},
+          {"bucket_contacts", c.bucket_contacts},
+          {"passes", c.passes},
+          {"loaded_mass_kg", c.loaded_mass_kg}};
+}
+
+// the cost of a scenario's coupled dig at one level
+void add_bench_dig(CLI::App& bench) {
+  struct Options {
+    std::string scenario = "hd27";
+    std::string level = "D400";
+    double seconds = 1.0;
+    std::string json;
+    unsigned seed = 1;
+    bool quiet = false;
+  };
+  auto opt = std::make_shared<Options>();
+  auto* dig = bench.add_subcommand("dig",
+                                   "cost of the coupled dig per step, stage by stage: digs SECONDS "
+                                   "from the scenario's dig_start");
+  dig->add_option("--scenario", opt->scenario,
+                  "scenario with a pile (data/scenarios/NAME.json or a path)")
+      ->capture_default_str();
+  dig->add_option("--level", opt->level, "fidelity level (D400, D200, D100, D50)")
+      ->capture_default_str();
+  dig->add_option("--seconds", opt->seconds, "simulated seconds measured from dig_start [s]")
+      ->check(finite_number())
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  dig->add_option("--seed", opt->seed, "seed of the pile's particles")->capture_default_str();
+  dig->add_option("--json", opt->json, "also write the result as JSON to this file");
+  dig->add_flag("--quiet", opt->quiet, "no progress on stderr");
+  dig->callback([opt] {
+    // inputs and the output path are checked before the pile is built
+    const vehicle::Scenario scenario = vehicle::load_scenario(opt->scenario);
+    if (!scenario.pile)
+      throw InputError(scenario.path + ": scenario '" + scenario.name +
+                       "' has no pile; talus bench dig needs one (fb35, hd27, rd21)");
+    const FidelityPreset& preset = fidelity_preset(opt->level);
+    check_dig_seconds(scenario, opt->seconds);
+    if (!opt->json.empty()) check_writable(opt->json, "--json");
+    Device dev;
+    DiggingOptions options;
+    options.pile.seed = opt->seed;
+    PileBuild pile;
+    {
+      Progress progress("pile " + preset.name, 1.5 * options.pile.max_time, !opt->quiet);
+      pile = build_scenario_pile(dev, scenario, scenario_pile_profile(scenario), preset, options,
+                                 &progress);
+      progress.finish(std::to_string(pile.particles.size()) + " particles");
+    }
+    Progress progress("bench dig " + scenario.name + " " + preset.name,
+                      scenario.dig_start + opt->seconds, !opt->quiet);
+    const DigCost cost =
+        measure_dig_cost(dev, scenario, preset, pile, options, opt->seconds, &progress);
+    progress.finish();
+    const nlohmann::ordered_json j = dig_cost_json(cost, dev.description());
+    if (!opt->json.empty()) write_file_atomically(opt->json, j.dump(2) + "\n");
+    std::cout << j.dump(2) << "\n";
+  });
+}
+
 }  // namespace
 
 void add_bench_command(CLI::App& app) {
@@ -125,6 +206,7 @@ void add_bench_command(CLI::App& app) {
   auto* bench = app.add_subcommand("bench", "throughput benchmarks");
   auto* dem = bench->add_subcommand("dem", "DEM throughput per fidelity level and the 10k settling case");
   bench->require_subcommand(1);
+  add_bench_dig(*bench);
   dem->add_option("--levels", opt->levels, "comma-separated levels (D400,D200,D100,D50)")->capture_default_str();
   dem->add_option("--json", opt->json, "write the results as JSON to this file");
   dem->add_option("--steps", opt->steps, "timed steps per level (median reported)")->check(CLI::Range(1, 1000));

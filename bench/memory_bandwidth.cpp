@@ -50,6 +50,31 @@ void DeviceTriad(benchmark::State& state) {
 }
 BENCHMARK(DeviceTriad)->Unit(benchmark::kMillisecond)->UseRealTime();
 
+// the cost of one launch of a small kernel, as the PGS sweep makes them: one per colour and
+// sweep, each over about a colour's rows (a D200 dig: ~30,000 contacts in ~20 colours, so
+// ~1,500 items). 100 launches on the in-order queue, then one wait; time per launch
+void DeviceLaunch(benchmark::State& state) {
+  talus::Device& dev = device();
+  const int items = static_cast<int>(state.range(0));
+  talus::Buffer<cl_float4> in(dev, items), out(dev, items);
+  cl_float4 zero{};
+  in.fill(zero);
+  cl::Kernel k = dev.kernel(dev.program({"bandwidth.cl"}), "bandwidth_copy");
+  talus::set_args(k, in, out, items);
+  constexpr int kLaunches = 100;
+  for (auto _ : state) {
+    for (int i = 0; i < kLaunches; ++i) talus::launch(dev, k, items, "bandwidth_copy");
+    dev.finish();
+  }
+  state.SetItemsProcessed(int64_t(state.iterations()) * kLaunches);
+}
+BENCHMARK(DeviceLaunch)
+    ->Arg(64)
+    ->Arg(1536)
+    ->Arg(16384)
+    ->Unit(benchmark::kMicrosecond)
+    ->UseRealTime();
+
 void HostMemcpy(benchmark::State& state) {
   std::vector<char> src(size_t(kItems) * 16, 1), dst(size_t(kItems) * 16);
   for (auto _ : state) {

@@ -15,6 +15,8 @@
 
 namespace talus {
 
+class StageTimes;
+
 // which device to use: substrings of the platform and device names (case-insensitive);
 // empty strings take the default, the first GPU if any, else the first CPU device
 struct DeviceChoice {
@@ -56,6 +58,12 @@ class Device {
   // waits for all enqueued work
   void finish();
 
+  // profiling of the step's stages (host/stage_times.hpp): while `times` is set (not owned, must
+  // outlive its use), every StageScope on this device drains the queue and charges its time
+  // there; nullptr (the default) turns profiling off
+  void set_stage_times(StageTimes* times) { stage_times_ = times; }
+  StageTimes* stage_times() const { return stage_times_; }
+
  private:
   cl::Context context_;
   cl::Device device_;
@@ -63,6 +71,7 @@ class Device {
   bool is_gpu_ = false;
   std::string description_;
   std::map<std::string, cl::Program> programs_;
+  StageTimes* stage_times_ = nullptr;
 };
 
 // a device array of trivially copyable T; contents are lost on resize

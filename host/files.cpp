@@ -20,6 +20,18 @@ std::string temporary_name(const std::string& path) {
   return path + ".tmp" + std::to_string(::getpid());
 }
 
+void check_writable(const std::string& path, const std::string& flag) {
+  const std::string tmp = temporary_name(path);
+  std::ofstream probe(tmp, std::ios::binary);
+  if (!probe)
+    throw InputError(flag + " " + path +
+                     ": cannot write there (does the folder exist, and may you write in it?); "
+                     "choose a writable path before the run starts");
+  probe.close();
+  std::error_code ec;
+  std::filesystem::remove(tmp, ec);
+}
+
 void move_into_place(const std::string& tmp, const std::string& path) {
   std::error_code ec;
   std::filesystem::rename(tmp, path, ec);

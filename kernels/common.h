@@ -9,6 +9,10 @@ typedef float tl_float;
 typedef int tl_int;
 typedef uint tl_uint;
 typedef ulong tl_ulong;
+// a helper of the hot sweeps, inlined into its callers: PoCL otherwise keeps solve_contact and
+// the contact law out of line and calls them once per work-item, which cost the D200 sweeps 11 %
+// (262 against 295 ms per step, talus bench dem, bench/RESULTS.md 2026-11-24 issue 13)
+#define TL_INLINE __attribute__((always_inline))
 #else
 #include <CL/cl_platform.h>
 typedef cl_float4 tl_float4;

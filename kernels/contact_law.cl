@@ -11,13 +11,14 @@
 // (docs/dem.md).
 
 // the normal impulse after one projected step, held at or above `lower` (-h F_c, or 0)
-float normal_impulse(float ln, float rhs, float un, float sigma, float inv_dn, float lower) {
+TL_INLINE float normal_impulse(float ln, float rhs, float un, float sigma, float inv_dn,
+                               float lower) {
   return fmax(lower, ln + (rhs - un - sigma * ln) * inv_dn);
 }
 
 // the friction impulse after one step against the tangential slip ut, projected on the disc of
 // radius tmax
-float3 friction_impulse(float3 lt, float3 ut, float inv_dt, float tmax) {
+TL_INLINE float3 friction_impulse(float3 lt, float3 ut, float inv_dt, float tmax) {
   float3 lt_new = lt - ut * inv_dt;
   float tm = length(lt_new);
   if (tm > tmax) lt_new *= tm > 0.0f ? tmax / tm : 0.0f;
@@ -26,7 +27,7 @@ float3 friction_impulse(float3 lt, float3 ut, float inv_dt, float tmax) {
 
 // the rolling and twisting impulse after one step against the relative spin wrel: its part
 // tangent to n projected on the disc of radius rmax, its twist about n clamped to +-rmax
-float3 rolling_impulse(float3 lr, float3 wrel, float3 n, float inv_dr, float rmax) {
+TL_INLINE float3 rolling_impulse(float3 lr, float3 wrel, float3 n, float inv_dr, float rmax) {
   float3 lr_n = dot(lr, n) * n;
   float3 lr_t = lr - lr_n;
   float3 lr_t_new = lr_t - (wrel - dot(wrel, n) * n) * inv_dr;

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <string>
 
+#include "host/stage_times.hpp"
+
 namespace talus {
 
 namespace {
@@ -360,12 +362,24 @@ void DemWorld::begin_step() {
   update_params();
   stats_ = StepStats{};
   if (particle_count_ == 0) return;
-  // contacts, colours and rows of this step
-  broad_phase();
-  narrow_phase();
-  build_adjacency();
-  colour_contacts();
-  prepare_rows();
+  // contacts, colours and rows of this step (each a stage of a profiled run)
+  {
+    StageScope stage(dev_, "broad_phase");
+    broad_phase();
+  }
+  {
+    StageScope stage(dev_, "narrow_phase");
+    narrow_phase();
+  }
+  {
+    StageScope stage(dev_, "colouring");
+    build_adjacency();
+    colour_contacts();
+  }
+  {
+    StageScope stage(dev_, "row_preparation");
+    prepare_rows();
+  }
   stats_.contacts = buffers_.n_contacts;
   stats_.colours = static_cast<int>(buffers_.colour_start.size()) - 1;
   stats_.colour_rounds = buffers_.colour_rounds;
@@ -374,6 +388,7 @@ void DemWorld::begin_step() {
 void DemWorld::end_step() {
   if (particle_count_ > 0) {
     // keep the impulses for the next warm start, move the particles
+    StageScope stage(dev_, "integration");
     store_impulses();
     integrate();
     buffers_.has_previous = true;

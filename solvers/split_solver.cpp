@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "host/error.hpp"
+#include "host/stage_times.hpp"
 
 namespace talus {
 
@@ -35,7 +36,10 @@ void SplitSolver::step() {
   const Vec6 twist_before = bucket_body.twist();
 
   // 1. rows of both sides from the start-of-step state
-  vehicle.assemble(h);
+  {
+    StageScope stage(dev_, "direct_solve");
+    vehicle.assemble(h);
+  }
   dem_.begin_step();
   const StepParams params = from_device(dem_.params());
 
@@ -52,12 +56,19 @@ void SplitSolver::step() {
   stats_.wrench = impulse / h;
 
   // 6. both sides move; the bucket impulses are kept for the next warm start
-  if (settings_.record_residual) stats_.particle_residual = dem_.residual();
-  previous_ = talus::bucket_impulses(rows, n.candidates);
-  std::stable_sort(
-      previous_.begin(), previous_.end(),
-      [](const BucketImpulse& a, const BucketImpulse& b) { return a.particle < b.particle; });
+  if (settings_.record_residual) {
+    StageScope stage(dev_, "residual");
+    stats_.particle_residual = dem_.residual();
+  }
+  {
+    StageScope stage(dev_, "bucket_row_setup");
+    previous_ = talus::bucket_impulses(rows, n.candidates);
+    std::stable_sort(
+        previous_.begin(), previous_.end(),
+        [](const BucketImpulse& a, const BucketImpulse& b) { return a.particle < b.particle; });
+  }
   dem_.end_step();
+  StageScope stage(dev_, "integration");
   vehicle.integrate();
 }
 
@@ -76,8 +87,12 @@ SplitSolver::NearBucket SplitSolver::find_near_bucket(double h, const Vec3& com,
     const double margin_box = dem_.settings().margin_rel + reach / std::max(r_max, 1e-12);
     const Aabb box = candidate_box(scene_.world_bounds(pose), r_max, margin_box);
     DemBuffers& b = dem_.buffers();
-    n.candidates = selection_.select(b.position, dem_.size(), box);
-    n.near = block_.gather(n.candidates, b.position, b.velocity, b.omega);
+    {
+      StageScope stage(dev_, "bucket_selection");
+      n.candidates = selection_.select(b.position, dem_.size(), box);
+      n.near = block_.gather(n.candidates, b.position, b.velocity, b.omega);
+    }
+    StageScope stage(dev_, "embree");
     std::vector<int> local(n.candidates.size());
     for (size_t k = 0; k < local.size(); ++k) local[k] = static_cast<int>(k);
     // Embree contacts, each particle's own margin: the relative one plus the speculative reach
@@ -101,6 +116,7 @@ std::vector<ContactRow> SplitSolver::start_bucket_rows(const NearBucket& n,
                                                        const Vec6& twist_before,
                                                        Vec6* warm_impulse) {
   // match last step's impulses (by particle of the whole system)
+  StageScope stage(dev_, "bucket_row_setup");
   const double h = dem_.settings().dt;
   vehicle::MultibodySystem& vehicle = loader_.system();
   std::vector<BucketContact> keyed = n.contacts;
@@ -116,7 +132,10 @@ std::vector<ContactRow> SplitSolver::start_bucket_rows(const NearBucket& n,
                                                   settings_.material, previous_, match);
   *warm_impulse = bucket_wrench_impulse(rows);
   loader_.set_bucket_wrench(*warm_impulse / h);
-  vehicle.solve();
+  {
+    StageScope solve(dev_, "direct_solve");
+    vehicle.solve();
+  }
   start.mobility = loader_.bucket_mobility();
   set_bucket_effective_masses(rows, n.contacts, n.near, start.mobility);
   // the rows (particle indices of the whole system) and the solved bucket to the device
@@ -127,6 +146,7 @@ std::vector<ContactRow> SplitSolver::start_bucket_rows(const NearBucket& n,
     d.a = n.candidates[r.a];
     device_rows.push_back(d);
   }
+  StageScope upload(dev_, "transfers");
   block_.set_rows(device_rows);
   BucketBody solved;
   const Vec6 twist0 = vehicle.solved_twist(loader_.bucket_body());
@@ -142,9 +162,13 @@ Vec6 SplitSolver::solve_coupled(std::vector<ContactRow>& rows, const Vec6& warm_
   // gravity and warm start of both kinds of rows
   const double h = dem_.settings().dt;
   vehicle::MultibodySystem& vehicle = loader_.system();
-  dem_.apply_gravity();
-  dem_.warm_start();
-  if (dem_.settings().warm_start) block_.warm_start(dem_.buffers().velocity, dem_.buffers().omega);
+  {
+    StageScope stage(dev_, "warm_start");
+    dem_.apply_gravity();
+    dem_.warm_start();
+    if (dem_.settings().warm_start)
+      block_.warm_start(dem_.buffers().velocity, dem_.buffers().omega);
+  }
   const int iterations = dem_.settings().iterations;
   const int pass_sweeps = std::max(1, static_cast<int>(std::lround(settings_.pass_sweep_fraction * iterations)));
   Vec6 impulse = warm_impulse;
@@ -152,12 +176,17 @@ Vec6 SplitSolver::solve_coupled(std::vector<ContactRow>& rows, const Vec6& warm_
     // the pass's sweeps, particle rows and bucket rows in turn
     const int sweeps = pass == 0 ? iterations : pass_sweeps;
     for (int it = 0; it < sweeps; ++it) {
-      dem_.sweep_fixed(1);
+      {
+        StageScope stage(dev_, "particle_sweeps");
+        dem_.sweep_fixed(1);
+      }
+      StageScope stage(dev_, "bucket_rows");
       block_.sweep(dem_.buffers().velocity, dem_.buffers().omega);
     }
     ++stats_.passes;
     if (rows.empty()) break;  // nothing touches the bucket (and the vehicle solved without load)
     // the rows' impulses back to double, their wrench into the direct solve
+    StageScope stage(dev_, "transfers");
     const std::vector<TlRow> solved_rows = block_.rows();
     for (size_t k = 0; k < rows.size(); ++k) {
       const ContactRow r = from_device(solved_rows[k]);
@@ -168,7 +197,10 @@ Vec6 SplitSolver::solve_coupled(std::vector<ContactRow>& rows, const Vec6& warm_
     impulse = bucket_wrench_impulse(rows);
     const Vec6 twist_sweeps = block_.bucket().twist();
     loader_.set_bucket_wrench(impulse / h);
-    vehicle.solve();
+    {
+      StageScope solve(dev_, "direct_solve");
+      vehicle.solve();
+    }
     const Vec6 twist_direct = vehicle.solved_twist(loader_.bucket_body());
     stats_.residual = point_speed_difference(twist_direct, twist_sweeps, com);
     if (stats_.residual < settings_.tolerance || pass + 1 == settings_.max_passes) break;

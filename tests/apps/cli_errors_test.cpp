@@ -1,31 +1,21 @@
 // The command line's contract for failures: one message on stderr naming what is wrong and
 // how to fix it, exit code 1 for a runtime failure and 2 for bad input (apps/talus.cpp).
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 
+#include "tests/apps/cli_test_util.hpp"
+
 namespace {
 
-const std::string kTalus = std::string(TALUS_BINARY_DIR) + "/talus";
+using talus::test::kTalus;
+using talus::test::Outcome;
 
-struct Outcome {
-  int code;
-  std::string err;
-};
-
-// runs the tool through the shell with `env` prefixed, capturing stderr
 Outcome run(const std::string& env, const std::string& args) {
-  auto err_path = std::filesystem::temp_directory_path() / "talus_cli_errors.txt";
-  std::string cmd = env + " " + kTalus + " " + args + " >/dev/null 2>" + err_path.string();
-  int status = std::system(cmd.c_str());
-  std::ifstream in(err_path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, ss.str()};
+  return talus::test::run_talus(env, args);
 }
 
 TEST(CliErrors, NoOpenClPlatformSaysHowToInstallPocl) {
