@@ -5,12 +5,15 @@
 //
 // A round reads the colours of earlier rounds (colour_in, -1 while uncoloured) and writes every
 // contact's colour after it (colour_out; the host swaps the two), so no work-item reads what
-// another writes in the same launch and the outcome does not depend on their order.
+// another writes in the same launch and the outcome does not depend on their order. Each round of
+// a batch counts into its own pair of status words, status[2 slot] (contacts still uncoloured)
+// and status[2 slot + 1] (contacts out of colours), which the host reads once per batch.
 
 __kernel void colour_round(__global const TlContact* contacts, int n_contacts,
                            __global const int* adj_offsets, __global const int* adjacency,
                            __global const int* colour_in, __global int* colour_out,
-                           __global int* status) {
+                           __global int* status_words, int slot) {
+  __global int* status = status_words + 2 * slot;
   int c = get_global_id(0);
   if (c >= n_contacts) return;
   int mine = colour_in[c];

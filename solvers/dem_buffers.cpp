@@ -3,14 +3,34 @@
 namespace talus {
 
 DemBuffers::DemBuffers(Device& dev)
-    : position(dev, 1), velocity(dev, 1), omega(dev, 1), rotation(dev, 1), geoms(dev, 1),
-      particle_cell(dev, 1), cell_counts(dev, 1), cell_start(dev, 1), cell_fill(dev, 1),
-      cell_particles(dev, 1), contact_counts(dev, 1),
+    : position(dev, 1),
+      velocity(dev, 1),
+      omega(dev, 1),
+      rotation(dev, 1),
+      geoms(dev, 1),
+      particle_cell(dev, 1),
+      cell_counts(dev, 1),
+      cell_start(dev, 1),
+      cell_fill(dev, 1),
+      cell_particles(dev, 1),
+      contact_counts(dev, 1),
       owner_offsets{Buffer<int>(dev, 1), Buffer<int>(dev, 1)},
-      contacts{Buffer<TlContact>(dev, 1), Buffer<TlContact>(dev, 1)}, degree(dev, 1),
-      adjacency_offsets(dev, 1), adjacency_fill(dev, 1), adjacency(dev, 1), colour(dev, 1), colour_next(dev, 1),
-      colour_status(dev, 2), colour_histogram(dev, 1), colour_offsets(dev, 1),
-      colour_start_dev(dev, TL_MAX_COLOURS + 1), order(dev, 1), row_of_contact(dev, 1), rows(dev, 1),
-      delta_lin(dev, 1), delta_ang(dev, 1), residual(dev, 1) {}
+      contacts{Buffer<TlContact>(dev, 1), Buffer<TlContact>(dev, 1)},
+      degree(dev, 1),
+      adjacency_offsets(dev, 1),
+      adjacency_fill(dev, 1),
+      adjacency(dev, 1),
+      colour(dev, 1),
+      colour_next(dev, 1),
+      colour_status(dev, 1),
+      colour_histogram(dev, 1),
+      colour_offsets(dev, 1),
+      colour_start_dev(dev, TL_MAX_COLOURS + 1),
+      order(dev, 1),
+      row_of_contact(dev, 1),
+      rows(dev, 1),
+      delta_lin(dev, 1),
+      delta_ang(dev, 1),
+      residual(dev, 1) {}
 
 }  // namespace talus

@@ -13,6 +13,10 @@ namespace {
 constexpr int kColourBlock = 256;
 // a grid larger than this many cells means the bounds are far too big for the particles
 constexpr double kMaxGridCells = 64.0e6;
+// Jones-Plassmann rounds launched between two looks at the colouring's status: each look is a
+// host round trip (a wait for the queue), which cost D400 steps as much as their sweeps; rounds
+// after the last contact is coloured change nothing, so at most this many minus one are spare
+constexpr int kColourRoundsPerCheck = 4;
 // the residual check interval when a tolerance is set (sweeps)
 constexpr int kToleranceCheckEvery = 10;
 }  // namespace
@@ -248,21 +252,29 @@ void DemWorld::colour_contacts() {
   b.colour.fill(-1);
   b.colour_next.resize(std::max(nc, 1));
   int round = 0;
-  for (int remaining = nc; remaining > 0; ++round) {
+  for (int remaining = nc; remaining > 0;) {
+    // a batch of rounds, each counting into its own status words, then one look at them all (one
+    // host wait per batch, not per round): a round after the last contact got its colour copies
+    // the colours unchanged, so the batch's spare rounds change nothing
+    b.colour_status.resize(2 * kColourRoundsPerCheck);
     b.colour_status.fill(0);
-    // this round reads the earlier rounds' colours and writes all colours into the other buffer
-    set_args(k_colour_round_, contacts, nc, b.adjacency_offsets, b.adjacency, b.colour,
-             b.colour_next, b.colour_status);
-    launch(dev_, k_colour_round_, nc, "colour_round");
-    std::swap(b.colour, b.colour_next);
-    auto status = b.colour_status.download(2);
-    if (status[1] > 0)
-      throw Error("contact colouring needs more than " + std::to_string(TL_MAX_COLOURS) +
-                  " colours: a particle touches too many others (particles far smaller than "
-                  "their neighbours?); use the Jacobi sweep for such systems");
-    if (status[0] >= remaining && round > 0)
-      throw Error("contact colouring made no progress (internal error)");
-    remaining = status[0];
+    for (int r = 0; r < kColourRoundsPerCheck; ++r) {
+      // this round reads the earlier rounds' colours and writes all colours into the other buffer
+      set_args(k_colour_round_, contacts, nc, b.adjacency_offsets, b.adjacency, b.colour,
+               b.colour_next, b.colour_status, r);
+      launch(dev_, k_colour_round_, nc, "colour_round");
+      std::swap(b.colour, b.colour_next);
+    }
+    const std::vector<int> status = b.colour_status.download(2 * kColourRoundsPerCheck);
+    for (int r = 0; r < kColourRoundsPerCheck && remaining > 0; ++r, ++round) {
+      if (status[2 * r + 1] > 0)
+        throw Error("contact colouring needs more than " + std::to_string(TL_MAX_COLOURS) +
+                    " colours: a particle touches too many others (particles far smaller than "
+                    "their neighbours?); use the Jacobi sweep for such systems");
+      if (status[2 * r] >= remaining)
+        throw Error("contact colouring made no progress (internal error)");
+      remaining = status[2 * r];
+    }
   }
   b.colour_rounds = round;
   // stable partition by colour: block histograms, one scan, block scatters

@@ -22,7 +22,7 @@ namespace talus {
 struct StepStats {
   int contacts = 0;
   int colours = 0;
-  int colour_rounds = 0;
+  int colour_rounds = 0;   // Jones-Plassmann rounds launched (whole batches: solvers/dem_world.cpp)
   int iterations = 0;      // sweeps run (fewer than settings.iterations when tolerance stopped)
   double residual = -1.0;  // RMS row residual after the sweeps [m/s]; -1 when not computed
   double sweep_seconds = 0.0;  // wall time of the sweeps (queue drained before and after)
