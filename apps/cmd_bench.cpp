@@ -11,6 +11,7 @@
 #include "digging/dig_cost.hpp"
 #include "host/device.hpp"
 #include "host/files.hpp"
+#include "io/plot.hpp"
 #include "terrain/pile.hpp"
 #include "terrain/scenes.hpp"
 #include "terrain/settle.hpp"
@@ -196,6 +197,7 @@ void add_bench_command(CLI::App& app) {
   struct Options {
     std::string levels = "D400,D200,D100";
     std::string json;
+    std::string plot;
     int steps = 5;
     bool no_settle10k = false;
     double settle_dt = 0.0;      // 0: the scene's own (terrain/scenes.cpp)
@@ -209,6 +211,9 @@ void add_bench_command(CLI::App& app) {
   add_bench_dig(*bench);
   dem->add_option("--levels", opt->levels, "comma-separated levels (D400,D200,D100,D50)")->capture_default_str();
   dem->add_option("--json", opt->json, "write the results as JSON to this file");
+  dem->add_option(
+      "--plot", opt->plot,
+      "draw contact updates per second and real-time factor against particle size (PNG)");
   dem->add_option("--steps", opt->steps, "timed steps per level (median reported)")->check(CLI::Range(1, 1000));
   dem->add_flag("--no-settle10k", opt->no_settle10k, "skip the 10k settling case");
   dem->add_option("--settle-dt", opt->settle_dt, "timestep of the 10k settling case [s] (default 4e-3)")
@@ -219,12 +224,23 @@ void add_bench_command(CLI::App& app) {
   dem->callback([opt] {
     std::vector<const FidelityPreset*> presets;
     for (auto& name : split(opt->levels, ',')) presets.push_back(&fidelity_preset(name));
+    if (!opt->json.empty()) check_writable(opt->json, "--json");
+    if (!opt->plot.empty()) check_writable(opt->plot, "--plot");
     Device dev;
     nlohmann::json results = nlohmann::json::array();
     for (auto* preset : presets) results.push_back(bench_level(dev, *preset, opt->steps, opt->quiet));
     if (!opt->no_settle10k) results.push_back(bench_settle10k(dev, opt->settle_dt, opt->settle_iterations, opt->quiet));
     nlohmann::json j = {{"device", dev.description()}, {"results", results}};
     if (!opt->json.empty()) write_json(opt->json, j);
+    if (!opt->plot.empty()) {
+      // the levels (not the 10k settling case) against their particle size
+      std::vector<ThroughputPoint> points;
+      for (size_t k = 0; k < presets.size(); ++k)
+        points.push_back({presets[k]->name, 1e3 * presets[k]->diameter,
+                          results[k].at("contact_updates_per_s").get<double>(),
+                          results[k].at("realtime_factor").get<double>()});
+      throughput_figure(points).write_png(opt->plot, kFigureWidth, kFigureHeight);
+    }
     std::cout << j.dump(2) << "\n";
   });
 }

@@ -802,6 +802,63 @@ Figure resolution_figure(const std::vector<ResolutionPoint>& points) {
   return f;
 }
 
+Figure throughput_figure(const std::vector<ThroughputPoint>& points) {
+  Figure f;
+  f.x_label = "particle diameter D [mm]";
+  f.log_x = true;
+  f.add_panel("contact updates per second [million/s]", "DEM throughput (talus bench dem)");
+  f.add_panel("real-time factor [-]");
+  Panel& updates = f.panels[0];
+  Panel& speed = f.panels[1];
+  updates.log_y = true;
+  speed.log_y = true;
+  // the levels in order of size, one marked line per measure
+  std::vector<const ThroughputPoint*> sorted;
+  sorted.reserve(points.size());
+  for (const ThroughputPoint& pt : points) sorted.push_back(&pt);
+  std::sort(sorted.begin(), sorted.end(),
+            [](const ThroughputPoint* a, const ThroughputPoint* b) { return a->d_mm < b->d_mm; });
+  Series u{{}, {}, run_colour(0), LineStyle::solid, true, ""};
+  Series r{{}, {}, run_colour(1), LineStyle::solid, true, "talus"};
+  for (const ThroughputPoint* pt : sorted) {
+    u.x.push_back(pt->d_mm);
+    u.y.push_back(1e-6 * pt->contact_updates_per_s);
+    r.x.push_back(pt->d_mm);
+    r.y.push_back(pt->realtime_factor);
+  }
+  // real time, for reference, across the measured sizes
+  if (!sorted.empty()) {
+    Series one{{sorted.front()->d_mm, sorted.back()->d_mm},
+               {1.0, 1.0},
+               Rgb{0, 0, 0},
+               LineStyle::dashed,
+               false,
+               "real time"};
+    speed.series.push_back(std::move(one));
+  }
+  // whole decades on the y axes, at least kFewDecades of them, so the axes are labelled at
+  // decades (a shorter log axis would be labelled at doublings of the smallest value: 10.37, 20.75)
+  auto decades = [](const std::vector<double>& y) -> std::optional<Range> {
+    double lo = 0.0, hi = 0.0;
+    for (double v : y)
+      if (finite_positive(v)) {
+        lo = lo > 0.0 ? std::min(lo, v) : v;
+        hi = std::max(hi, v);
+      }
+    if (!(lo > 0.0)) return std::nullopt;
+    const double top = std::ceil(std::log10(hi) + 1e-9);
+    const double bottom = std::min(std::floor(std::log10(lo)), top - kFewDecades);
+    return Range{std::pow(10.0, bottom), std::pow(10.0, top)};
+  };
+  updates.y_range = decades(u.y);
+  std::vector<double> speeds = r.y;
+  speeds.push_back(1.0);
+  speed.y_range = decades(speeds);
+  updates.series.push_back(std::move(u));
+  speed.series.push_back(std::move(r));
+  return f;
+}
+
 Rgb series_colour(std::size_t i) { return run_colour(i); }
 
 }  // namespace talus

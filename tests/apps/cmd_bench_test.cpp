@@ -35,6 +35,21 @@ TEST(CmdBench, DigWritesTheCostBreakdown) {
               0.1 * j.at("profiled_ms_per_step").get<double>());
 }
 
+// talus bench dem --plot draws the levels' throughput against particle size
+TEST(CmdBench, DemPlotsThroughputAgainstParticleSize) {
+  const auto png = std::filesystem::temp_directory_path() / "talus_bench_dem.png";
+  std::filesystem::remove(png);
+  const test::Outcome o = test::run_talus(
+      "", "bench dem --levels D400 --no-settle10k --steps 2 --quiet --plot " + png.string());
+  ASSERT_EQ(o.code, 0) << o.err;
+  EXPECT_GT(std::filesystem::file_size(png), 1000u);
+  // an unwritable plot path is refused before any pile is settled
+  const test::Outcome bad =
+      test::run_talus("", "bench dem --levels D400 --quiet --plot /nonexistent-talus-dir/t.png");
+  EXPECT_EQ(bad.code, 2) << bad.err;
+  EXPECT_NE(bad.err.find("--plot"), std::string::npos) << bad.err;
+}
+
 // bad input is refused at once (exit 2), naming what to fix: a scenario without a pile, a JSON
 // path that cannot be written, a measurement longer than the dig
 TEST(CmdBench, DigRefusesBadInputBeforeBuildingThePile) {

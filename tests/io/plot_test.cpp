@@ -400,6 +400,26 @@ TEST_F(PlotTest, ShortLogAxisIsLabelledAtEveryDoubling) {
   EXPECT_EQ(ink_under(std::sqrt(100.0 * 200.0)), 0);
 }
 
+// the throughput figure: both panels logarithmic over a logarithmic D, the levels joined in order
+// of size whatever order they were measured in, and real time drawn across the sizes for reference
+TEST_F(PlotTest, ThroughputFigureDrawsTheLevelsInOrderOfSize) {
+  const std::vector<ThroughputPoint> levels = {
+      {"D200", 200, 3.1e7, 0.037}, {"D400", 400, 1.6e7, 4.6}, {"D100", 100, 3.2e7, 0.0054}};
+  const Figure f = throughput_figure(levels);
+  ASSERT_EQ(f.panels.size(), 2u);
+  EXPECT_TRUE(f.log_x);
+  EXPECT_TRUE(f.panels[0].log_y);
+  EXPECT_TRUE(f.panels[1].log_y);
+  ASSERT_EQ(f.panels[0].series.size(), 1u);
+  EXPECT_EQ(f.panels[0].series[0].x, (std::vector<double>{100, 200, 400}));
+  EXPECT_EQ(f.panels[0].series[0].y, (std::vector<double>{32, 31, 16}));  // millions per second
+  ASSERT_EQ(f.panels[1].series.size(), 2u);
+  EXPECT_EQ(f.panels[1].series[0].y, (std::vector<double>{1.0, 1.0}));
+  EXPECT_EQ(f.panels[1].series[1].y, (std::vector<double>{0.0054, 0.037, 4.6}));
+  f.write_png(file("throughput.png"), 1000, 800);
+  EXPECT_EQ(read_png(file("throughput.png")).width, 1000);
+}
+
 // `talus plot` end to end (the tool is built next to this test)
 TEST_F(PlotTest, CommandWritesTheThreeFiguresAndRejectsBadInput) {
   const std::string talus = std::string(TALUS_BINARY_DIR) + "/talus";
