@@ -51,6 +51,7 @@ void add_cut_command(CLI::App& app) {
     const CuttingOptions c = at_level(level, opt->cut);
     check_cutting_options(c);  // bad input leaves no output folder behind
     make_output_dir(opt->out);
+    check_output_file(opt->json, "--json");
     const auto t0 = std::chrono::steady_clock::now();
     Device dev;
     Progress progress("cut " + level.name, 0.0, !opt->quiet);

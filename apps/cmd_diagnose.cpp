@@ -48,6 +48,7 @@ void diagnose_command(const DiagnoseArgs& a) {
   options.validation_runs = a.validation;
   options.plugins = vehicle::load_effect_plugins(a.plugins);
   if (!a.out.empty()) make_output_dir(a.out);
+  check_output_file(a.json, "--json");
   const bool piles = std::any_of(runs.begin(), runs.end(), [](const MeasuredRun& r) { return measured_scenario(r).pile; });
   std::unique_ptr<Device> device = piles ? std::make_unique<Device>() : nullptr;
 

@@ -325,6 +325,7 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
 
 void run_scenario(const RunOptions& o) {
   const vehicle::Scenario sc = o.scenario_data ? *o.scenario_data : vehicle::load_scenario(o.scenario);
+  check_output_file(o.json, "--json");
   const auto effects = make_run_effects(o);
   for (size_t i = 0; i < effects->set.size(); ++i) {
     if (!sc.pile && effects->set[i].soil_only())

@@ -96,6 +96,7 @@ void add_soil_command(CLI::App& app) {
   cmd->callback([opt] {
     const FidelityPreset& level = fidelity_preset(opt->level);
     make_output_dir(opt->out);
+    check_output_file(opt->json, "--json");
     const auto t0 = std::chrono::steady_clock::now();
     Device dev;
     Progress progress("soil " + opt->test + " " + level.name, 0.0, !opt->quiet);

@@ -249,6 +249,7 @@ void sweep(const SweepOptions& o) {
   std::vector<const FidelityPreset*> presets;
   for (const auto& f : o.fidelities) presets.push_back(&fidelity_preset(f));
   make_output_dir(o.out);
+  check_output_file(o.json, "--json");
   for (const auto* p : presets) make_output_dir((std::filesystem::path(o.out) / p->name).string());
 
   // --collect: merge the shards written by --shard runs

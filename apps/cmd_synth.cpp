@@ -66,6 +66,10 @@ void synth(const SynthOptions& o) {
   if (!rel.empty() && *rel.begin() != "..")
     throw InputError("--answer-key: " + key.string() + " lies inside the data folder " + out.string() +
                      "; put it elsewhere (the loop must not be able to read it)");
+  // the key's folder is made now (as the run's would be), then the key checked writable
+  std::error_code made;
+  fs::create_directories(key.parent_path(), made);
+  check_output_file(key.string(), "--answer-key");
 
   // the simulation, in a work folder next to the output
   RunOptions run = o.run;

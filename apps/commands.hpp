@@ -6,6 +6,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "host/files.hpp"
+
 namespace talus::app {
 
 // exit codes (sysexits-like): 0 success, 1 runtime failure, 2 bad usage or bad input
@@ -26,6 +28,12 @@ inline CLI::Validator finite_number() {
         return "must be a finite number, got '" + text + "'";
       },
       "FINITE");
+}
+
+// an output file given by `flag` checked writable before anything runs; empty (not asked for)
+// and "-" (standard output) pass
+inline void check_output_file(const std::string& path, const std::string& flag) {
+  if (!path.empty() && path != "-") check_writable(path, flag);
 }
 
 void add_pile_command(CLI::App& app);    // build and settle the default pile

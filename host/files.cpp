@@ -13,6 +13,8 @@ void make_output_dir(const std::string& dir) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec) throw InputError("--out " + dir + ": cannot create the folder (" + ec.message() + ")");
+  // a folder that exists may still refuse files: find out now, not after the run
+  check_writable((std::filesystem::path(dir) / ".talus-write-check").string(), "--out");
 }
 
 std::string temporary_name(const std::string& path) {

@@ -6,7 +6,8 @@
 
 namespace talus {
 
-// creates the folder (and parents); InputError naming it when impossible
+// creates the folder (and parents) and checks a file can be written in it; InputError naming it
+// when either is impossible
 void make_output_dir(const std::string& dir);
 // checks before any work that a file can be written at `path`: writes and removes an empty
 // temporary file beside it; InputError naming `flag` and the path otherwise

@@ -341,3 +341,17 @@ __kernel void integrate(__global float4* position, __global const float4* veloci
   q += half_h * dq;
   rotation[i] = q / length(q);
 }
+
+// the lowest index of a particle whose position (with its radius), velocity or angular velocity
+// is not finite, into *first_bad (the host sets it to INT_MAX first): a blow-up or a NaN from the
+// input stops the run with a message (solvers/dem_world.cpp) instead of feeding garbage to the
+// contact search, whose colouring could then spin without end
+__kernel void first_non_finite(__global const float4* position, __global const float4* velocity,
+                               __global const float4* omega, int n, __global int* first_bad) {
+  int i = get_global_id(0);
+  if (i >= n) return;
+  float4 x = position[i];
+  float4 v = velocity[i];
+  float4 w = omega[i];
+  if (!(all(isfinite(x)) && all(isfinite(v)) && all(isfinite(w)))) atomic_min(first_bad, i);
+}

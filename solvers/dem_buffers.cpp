@@ -31,6 +31,7 @@ DemBuffers::DemBuffers(Device& dev)
       rows(dev, 1),
       delta_lin(dev, 1),
       delta_ang(dev, 1),
-      residual(dev, 1) {}
+      residual(dev, 1),
+      first_non_finite(dev, 1) {}
 
 }  // namespace talus

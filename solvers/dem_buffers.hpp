@@ -40,6 +40,9 @@ struct DemBuffers {
   Buffer<TlRow> rows;
   Buffer<cl_float4> delta_lin, delta_ang;
   Buffer<float> residual;
+
+  // the lowest index of a particle with a non-finite state (INT_MAX: none), checked every step
+  Buffer<int> first_non_finite;
 };
 
 }  // namespace talus

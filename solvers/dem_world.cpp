@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <sstream>
 #include <string>
 
 #include "host/stage_times.hpp"
@@ -72,6 +74,7 @@ DemWorld::DemWorld(Device& dev, const Material& material, const DemSettings& set
   k_store_ = dev.kernel(solver, "store_impulses");
   k_integrate_ = dev.kernel(solver, "integrate");
   k_residual_ = dev.kernel(solver, "row_residual");
+  k_first_non_finite_ = dev.kernel(solver, "first_non_finite");
 
   set_geoms(geoms_);
 }
@@ -169,6 +172,30 @@ Particles DemWorld::particles() const {
     out.rotation.emplace_back(q[i].s[0], q[i].s[1], q[i].s[2], q[i].s[3]);
   }
   return out;
+}
+
+void DemWorld::check_finite() {
+  DemBuffers& b = buffers_;
+  const int n = static_cast<int>(particle_count_);
+  // the lowest bad index, by an atomic minimum (the same answer whatever the work-item order)
+  b.first_non_finite.fill(std::numeric_limits<int>::max());
+  set_args(k_first_non_finite_, b.position, b.velocity, b.omega, n, b.first_non_finite);
+  launch(dev_, k_first_non_finite_, particle_count_, "first_non_finite");
+  const int bad = b.first_non_finite.read_one(0);
+  if (bad == std::numeric_limits<int>::max()) return;
+  // what the particle holds, for the message
+  const cl_float4 x = b.position.read_one(bad), v = b.velocity.read_one(bad),
+                  w = b.omega.read_one(bad);
+  std::ostringstream m;
+  m << "particle state became non-finite at t = " << time_ << " s (step "
+    << std::lround(time_ / settings_.dt) << "): particle " << bad << " of " << n
+    << " has position (" << x.s[0] << ", " << x.s[1] << ", " << x.s[2] << "), radius " << x.s[3]
+    << ", velocity (" << v.s[0] << ", " << v.s[1] << ", " << v.s[2] << "), angular velocity ("
+    << w.s[0] << ", " << w.s[1] << ", " << w.s[2]
+    << "). Likely causes: a non-finite number in the input (a file's field or a flag), or a "
+    << "blow-up (a timestep too long for the contact stiffness, or a body pushed far faster than "
+    << "DemSettings::max_speed); the run stops here rather than go on with garbage";
+  throw Error(m.str());
 }
 
 void DemWorld::broad_phase() {
@@ -374,7 +401,12 @@ void DemWorld::begin_step() {
   update_params();
   stats_ = StepStats{};
   if (particle_count_ == 0) return;
-  // contacts, colours and rows of this step (each a stage of a profiled run)
+  // contacts, colours and rows of this step (each a stage of a profiled run), from a state
+  // checked finite
+  {
+    StageScope stage(dev_, "finite_check");
+    check_finite();
+  }
   {
     StageScope stage(dev_, "broad_phase");
     broad_phase();

@@ -63,6 +63,10 @@ class DemWorld {
   const std::vector<StaticGeom>& geoms() const { return geoms_; }
 
   // the stages of step(), in order
+  // Error naming the time, the step, the first particle and its state when a position, radius,
+  // velocity or angular velocity is not finite (checked at the start of every step, before the
+  // contact search)
+  void check_finite();
   void broad_phase();
   void narrow_phase();
   void build_adjacency();
@@ -111,6 +115,7 @@ class DemWorld {
   cl::Kernel k_adj_count_, k_adj_fill_, k_adj_sort_;
   cl::Kernel k_colour_round_, k_colour_hist_, k_colour_scatter_, k_colour_ranges_, k_identity_;
   cl::Kernel k_prepare_, k_gravity_, k_apply_impulses_, k_store_, k_integrate_, k_residual_;
+  cl::Kernel k_first_non_finite_;
 };
 
 // the host description of static geometry in the device layout

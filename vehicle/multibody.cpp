@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 #include <tuple>
 
 #include "host/error.hpp"
@@ -186,6 +187,14 @@ void MultibodySystem::solve() {
 
 void MultibodySystem::integrate() {
   if (!solved_) throw Error("multibody system: integrate() before solve()");
+  // a non-finite solve stops the run here with the time, rather than moving bodies to NaN
+  if (!velocity_after_.allFinite()) {
+    std::ostringstream m;
+    m << "machine state became non-finite at t = " << time_ << " s: the direct solve returned "
+      << "non-finite velocities. Likely causes: a non-finite or absurd input (payload, forces, "
+      << "speeds in the machine or scenario file, or a flag), or a blow-up of the coupled step";
+    throw Error(m.str());
+  }
   for (size_t i = 0; i < bodies_.size(); ++i) {
     const int c0 = column_[i];
     if (c0 < 0) continue;

@@ -2,6 +2,7 @@
 // how to fix it, exit code 1 for a runtime failure and 2 for bad input (apps/talus.cpp).
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -72,6 +73,38 @@ TEST(CliErrors, NonFiniteNumbersAreBadInputNamingTheFlag) {
     EXPECT_EQ(o.code, 2) << args << ": " << o.err;
     EXPECT_NE(o.err.find("finite number"), std::string::npos) << args << ": " << o.err;
   }
+}
+
+// every output path is checked before any simulation starts (a D200 dig would otherwise fail at
+// its end, minutes later, and lose everything): --json of run, sweep and soil, synth's answer key,
+// an --out that cannot be made; each refusal names the flag and comes within seconds
+TEST(CliErrors, UnwritableOutputsAreRefusedBeforeTheRun) {
+  const char* cases[][2] = {
+      {"--json",
+       "run --scenario hd27 --fidelity D200 --quiet --out /tmp/talus_unused_out --json "
+       "/proc/talus-no-such-folder/s.json"},
+      {"--json",
+       "soil --test shear --level D200 --out /tmp/talus_unused_out --json "
+       "/proc/talus-no-such-folder/s.json"},
+      {"--json",
+       "sweep --scenario fb35 --fidelity D400 --samples 2 --out /tmp/talus_unused_out --json "
+       "/proc/talus-no-such-folder/s.json"},
+      {"--answer-key",
+       "synth --scenario load-carry --out /tmp/talus_unused_synth --answer-key "
+       "/proc/talus-no-such-folder/k.json"},
+      {"--out", "run --scenario load-carry --out /proc/talus-no-such-folder"},
+  };
+  for (const auto& c : cases) {
+    const auto start = std::chrono::steady_clock::now();
+    const Outcome o = run("", c[1]);
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    EXPECT_EQ(o.code, 2) << c[1] << "\n" << o.err;
+    EXPECT_NE(o.err.find(c[0]), std::string::npos) << c[1] << "\n" << o.err;
+    EXPECT_LT(seconds, 10.0) << c[1];  // refused, not simulated first
+  }
+  EXPECT_FALSE(std::filesystem::exists("/tmp/talus_unused_synth"))
+      << "synth left its run without a key";
 }
 
 }  // namespace

@@ -44,8 +44,8 @@ TEST(CmdBench, DemPlotsThroughputAgainstParticleSize) {
   ASSERT_EQ(o.code, 0) << o.err;
   EXPECT_GT(std::filesystem::file_size(png), 1000u);
   // an unwritable plot path is refused before any pile is settled
-  const test::Outcome bad =
-      test::run_talus("", "bench dem --levels D400 --quiet --plot /nonexistent-talus-dir/t.png");
+  const test::Outcome bad = test::run_talus(
+      "", "bench dem --levels D400 --quiet --plot /proc/talus-no-such-folder/t.png");
   EXPECT_EQ(bad.code, 2) << bad.err;
   EXPECT_NE(bad.err.find("--plot"), std::string::npos) << bad.err;
 }
@@ -56,9 +56,10 @@ TEST(CmdBench, DigRefusesBadInputBeforeBuildingThePile) {
   test::Outcome o = test::run_talus("", "bench dig --scenario load-carry --quiet");
   EXPECT_EQ(o.code, 2) << o.err;
   EXPECT_NE(o.err.find("has no pile"), std::string::npos) << o.err;
-  o = test::run_talus("", "bench dig --level D400 --quiet --json /nonexistent-talus-dir/cost.json");
+  o = test::run_talus("",
+                      "bench dig --level D400 --quiet --json /proc/talus-no-such-folder/cost.json");
   EXPECT_EQ(o.code, 2) << o.err;
-  EXPECT_NE(o.err.find("--json /nonexistent-talus-dir/cost.json"), std::string::npos) << o.err;
+  EXPECT_NE(o.err.find("--json /proc/talus-no-such-folder/cost.json"), std::string::npos) << o.err;
   o = test::run_talus("", "bench dig --level D400 --seconds 60 --quiet");
   EXPECT_EQ(o.code, 2) << o.err;
   EXPECT_NE(o.err.find("--seconds"), std::string::npos) << o.err;

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <limits>
+#include <string>
 
 #include "solvers/dem_world.hpp"
 #include "terrain/scenes.hpp"
@@ -50,6 +52,33 @@ TEST(DemWorld, HertzImpactMatchesAnalyticOverlapAndDuration) {
               100 * (in_contact / t_contact - 1));
   EXPECT_NEAR(peak, delta_max, 0.05 * delta_max);
   EXPECT_NEAR(in_contact, t_contact, 0.05 * t_contact);
+}
+
+// a particle with a non-finite state stops the step before the contact search (which a NaN could
+// keep busy without end), naming the time, the particle and what it holds
+TEST(DemWorld, NonFiniteStateStopsTheStepNamingTheParticle) {
+  Device dev;
+  DemSettings s;
+  s.dt = 1e-3;
+  DemWorld world(dev, gravel(), s, Bounds{Vec3(-1, -1, -1), Vec3(1, 1, 1)},
+                 {StaticGeom::plane(Vec3::Zero(), Vec3::UnitZ())});
+  Particles p;
+  for (int k = 0; k < 5; ++k) p.add(Vec3(0.1 * k - 0.2, 0, 0.05), 0.02, gravel().density);
+  world.set_particles(p);
+  world.step();
+  p = world.particles();
+  p.velocity[3].z() = std::numeric_limits<double>::quiet_NaN();
+  p.velocity[4].x() = std::numeric_limits<double>::infinity();
+  world.set_particles(p);
+  try {
+    world.step();
+    FAIL() << "expected an Error";
+  } catch (const Error& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("non-finite at t = 0.001 s (step 1)"), std::string::npos) << m;
+    EXPECT_NE(m.find("particle 3 of 5"), std::string::npos) << m;  // the lowest bad index
+    EXPECT_NE(m.find("Likely causes"), std::string::npos) << m;
+  }
 }
 
 // a small bed: 6x6x8 spheres of 5 mm settling in a box

@@ -3,6 +3,10 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
+#include <string>
+
+#include "host/error.hpp"
 #include "vehicle/joints.hpp"
 
 namespace talus::vehicle {
@@ -17,6 +21,24 @@ TEST(MultibodyTest, FreeFallIsSymplecticEuler) {
   // v_n = -g n h, z_n = -g h² n(n+1)/2
   EXPECT_NEAR(s.body(i).velocity.z(), -9.81, 1e-12);
   EXPECT_NEAR(s.body(i).position.z(), -9.81 * 1e-4 * 100 * 101 / 2, 1e-10);
+}
+
+// a non-finite velocity stops the step with a message naming the time, not a body moved to NaN
+TEST(MultibodyTest, NonFiniteStateStopsWithTheTime) {
+  MultibodySystem s;
+  RigidBody b;
+  b.mass = 2.0;
+  const int i = s.add_body(b);
+  s.step(0.01);
+  s.body(i).velocity.x() = std::numeric_limits<double>::quiet_NaN();
+  try {
+    s.step(0.01);
+    FAIL() << "expected an Error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("non-finite at t = 0.01 s"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_TRUE(s.body(i).position.allFinite());
 }
 
 TEST(MultibodyTest, SpinningBodyKeepsUnitQuaternionAndAngle) {
