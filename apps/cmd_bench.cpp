@@ -156,7 +156,7 @@ void add_bench_dig(CLI::App& bench) {
       ->capture_default_str();
   dig->add_option("--seconds", opt->seconds, "simulated seconds measured from dig_start [s]")
       ->check(finite_number())
-      ->check(CLI::PositiveNumber)
+      ->check(positive_number())
       ->capture_default_str();
   dig->add_option("--seed", opt->seed, "seed of the pile's particles")->capture_default_str();
   dig->add_option("--json", opt->json, "also write the result as JSON to this file");
@@ -216,8 +216,10 @@ void add_bench_command(CLI::App& app) {
       "draw contact updates per second and real-time factor against particle size (PNG)");
   dem->add_option("--steps", opt->steps, "timed steps per level (median reported)")->check(CLI::Range(1, 1000));
   dem->add_flag("--no-settle10k", opt->no_settle10k, "skip the 10k settling case");
-  dem->add_option("--settle-dt", opt->settle_dt, "timestep of the 10k settling case [s] (default 4e-3)")
-      ->check(finite_number())->check(CLI::PositiveNumber);
+  dem->add_option("--settle-dt", opt->settle_dt,
+                  "timestep of the 10k settling case [s] (default 4e-3)")
+      ->check(finite_number())
+      ->check(positive_number());
   dem->add_option("--settle-iterations", opt->settle_iterations, "PGS sweeps of the 10k settling case (default 30)")
       ->check(CLI::Range(1, 100000));
   dem->add_flag("--quiet", opt->quiet, "no progress on stderr");

@@ -48,7 +48,8 @@ void add_metric_flags(CLI::App* cmd, MetricFlags& f) {
   cmd->add_option("--force-constant", f.force_constant_N,
                   "force constant of the vehicle that forces are divided by [N] "
                   "(default: operating weight 15175 kg * 9.80665 m/s^2)")
-      ->check(finite_number())->check(CLI::PositiveNumber);
+      ->check(finite_number())
+      ->check(positive_number());
   cmd->add_option("--force-norm", f.force_norm,
                   "force error normaliser: 'max' = max |reference| (paper default), "
                   "'constant' = one force constant")
@@ -62,7 +63,8 @@ void add_metric_flags(CLI::App* cmd, MetricFlags& f) {
   f.l_norm = cmd->add_option("--l-norm", f.l_norm_m,
                              "trajectory normaliser L_norm [m] (default: extent of the "
                              "reference bucket-tip trajectory)")
-                 ->check(finite_number())->check(CLI::PositiveNumber);
+                 ->check(finite_number())
+                 ->check(positive_number());
   cmd->add_option("--decimals", f.decimals, "decimal places of the printed table")
       ->check(CLI::Range(0, 17));
 }

@@ -31,18 +31,26 @@ void add_cut_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("cut", "quasi-static cutting of a level bed by a flat blade, against the "
                                         "fundamental earthmoving equation");
   cmd->add_option("--level", opt->level, "fidelity level whose D, timestep and sweeps the test uses")->capture_default_str();
-  cmd->add_option("--depth", opt->cut.depth, "cutting depth below the bed's mean surface [m]")->check(finite_number())
-      ->check(CLI::PositiveNumber)
+  cmd->add_option("--depth", opt->cut.depth, "cutting depth below the bed's mean surface [m]")
+      ->check(finite_number())
+      ->check(positive_number())
       ->capture_default_str();
   cmd->add_option("--out", opt->out, "output folder (summary.json, cut.csv, cut.png, particles.csv, ...)")->required();
   cmd->add_option("--json", opt->json, "also write the summary to this file ('-' for stdout)");
-  cmd->add_option("--speed", opt->cut.speed, "blade speed [m/s]")->check(finite_number())->check(CLI::PositiveNumber)->capture_default_str();
-  cmd->add_option("--travel", opt->cut.travel, "blade travel [m]")->check(finite_number())->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_option("--speed", opt->cut.speed, "blade speed [m/s]")
+      ->check(finite_number())
+      ->check(positive_number())
+      ->capture_default_str();
+  cmd->add_option("--travel", opt->cut.travel, "blade travel [m]")
+      ->check(finite_number())
+      ->check(positive_number())
+      ->capture_default_str();
   cmd->add_option("--phi", opt->cut.internal_friction_deg, "internal friction angle of the soil for the equation [deg]")->check(finite_number())
       ->check(CLI::Range(1.0, 80.0))
       ->capture_default_str();
-  cmd->add_option("--rolling", opt->material.rolling, "rolling resistance mu_r of the gravel")->check(finite_number())
-      ->check(CLI::NonNegativeNumber)
+  cmd->add_option("--rolling", opt->material.rolling, "rolling resistance mu_r of the gravel")
+      ->check(finite_number())
+      ->check(non_negative_number())
       ->capture_default_str();
   cmd->add_option("--seed", opt->cut.seed, "random seed of the bed")->capture_default_str();
   cmd->add_flag("--quiet", opt->quiet, "no progress on stderr");

@@ -97,9 +97,10 @@ void add_diagnose_command(CLI::App& app) {
   cmd->add_option("--out", a->out, "also write diagnosis.json, report.md, errors-before/after.csv and per-run "
                                    "channel figures (measured, baseline, with effects) here");
   cmd->add_option("--max-effects", a->max_effects, "effects to add at most")->capture_default_str()->check(CLI::Range(1, 5));
-  cmd->add_option("--validation", a->validation, "how many of the runs (the last ones) to hold out for validation "
-                                                 "(default: a third, at least one of two or more)")
-      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--validation", a->validation,
+                  "how many of the runs (the last ones) to hold out for validation "
+                  "(default: a third, at least one of two or more)")
+      ->check(non_negative_number());
   cmd->add_option("--effect-plugin", a->plugins, "a shared library whose effects join the candidates (repeatable)")
       ->expected(1)->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   cmd->add_option("--pile-seed", a->pile_seed, "random seed of the simulated pile's particles")->capture_default_str();

@@ -27,9 +27,15 @@ void add_pile_command(CLI::App& app) {
   cmd->add_option("--out", opt->out, "output folder (particles.csv, particles.vtp, side.png, scan.csv, summary.json)")->required();
   cmd->add_option("--profile", opt->profile, "pile profile JSON (default: data/piles/default.json)");
   cmd->add_option("--seed", opt->build.seed, "random seed of sizes and jitter");
-  cmd->add_option("--max-time", opt->build.max_time, "longest settling time [s]")->check(finite_number())->check(CLI::PositiveNumber);
-  cmd->add_option("--form-speed", opt->build.form_speed, "speed the formwork withdraws at before the pile settles, 0 = removed at once [m/s]")->check(finite_number())
-      ->check(CLI::NonNegativeNumber)->capture_default_str();
+  cmd->add_option("--max-time", opt->build.max_time, "longest settling time [s]")
+      ->check(finite_number())
+      ->check(positive_number());
+  cmd->add_option(
+         "--form-speed", opt->build.form_speed,
+         "speed the formwork withdraws at before the pile settles, 0 = removed at once [m/s]")
+      ->check(finite_number())
+      ->check(non_negative_number())
+      ->capture_default_str();
   cmd->add_flag("--quiet", opt->quiet, "no progress on stderr");
   cmd->callback([opt] {
     const FidelityPreset& preset = fidelity_preset(opt->level);

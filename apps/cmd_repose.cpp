@@ -21,18 +21,29 @@ void add_repose_command(CLI::App& app) {
   auto opt = std::make_shared<Options>();
   auto* cmd = app.add_subcommand("repose", "heap test: angle of repose and bulk density of the gravel");
   cmd->add_option("--out", opt->out, "output folder (particles.csv, particles.vtp, side.png, summary.json)")->required();
-  cmd->add_option("--diameter", opt->heap.diameter, "mean particle diameter D [m]")->check(finite_number())->check(CLI::PositiveNumber);
+  cmd->add_option("--diameter", opt->heap.diameter, "mean particle diameter D [m]")
+      ->check(finite_number())
+      ->check(positive_number());
   cmd->add_option("--columns", opt->heap.columns, "column width in particles")->check(CLI::Range(4, 200));
   cmd->add_option("--layers", opt->heap.layers, "column height in particles")->check(CLI::Range(4, 400));
   cmd->add_option("--iterations", opt->heap.iterations, "PGS sweeps per step")->check(CLI::Range(1, 100000));
-  cmd->add_option("--dt", opt->heap.dt, "timestep [s]")->check(finite_number())->check(CLI::PositiveNumber);
+  cmd->add_option("--dt", opt->heap.dt, "timestep [s]")
+      ->check(finite_number())
+      ->check(positive_number());
   cmd->add_option("--seed", opt->heap.seed, "random seed of the particle sizes and jitter");
-  cmd->add_option("--friction", opt->material.friction, "Coulomb friction (default: the gravel's 0.3)")
-      ->check(finite_number())->check(CLI::NonNegativeNumber);
-  cmd->add_option("--rolling", opt->material.rolling, "rolling resistance mu_r, torque <= mu_r R* lambda_n (default: the paper's 0.02; docs/soil.md)")
-      ->check(finite_number())->check(CLI::NonNegativeNumber);
-  cmd->add_option("--wall-speed", opt->heap.wall_speed, "speed the walls retreat at before removal, 0 = at once [m/s]")
-      ->check(finite_number())->check(CLI::NonNegativeNumber);
+  cmd->add_option("--friction", opt->material.friction,
+                  "Coulomb friction (default: the gravel's 0.3)")
+      ->check(finite_number())
+      ->check(non_negative_number());
+  cmd->add_option("--rolling", opt->material.rolling,
+                  "rolling resistance mu_r, torque <= mu_r R* lambda_n (default: the paper's 0.02; "
+                  "docs/soil.md)")
+      ->check(finite_number())
+      ->check(non_negative_number());
+  cmd->add_option("--wall-speed", opt->heap.wall_speed,
+                  "speed the walls retreat at before removal, 0 = at once [m/s]")
+      ->check(finite_number())
+      ->check(non_negative_number());
   cmd->add_flag("--quiet", opt->quiet, "no progress on stderr");
   cmd->callback([opt] {
     make_output_dir(opt->out);

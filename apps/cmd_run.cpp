@@ -351,19 +351,30 @@ void add_run_command(CLI::App& app) {
   cmd->add_option("--out", opts->out, "output folder for timeseries.csv, summary.json and, with a pile, "
                                       "scan.csv, snapshots/, particles.pvd and PNG figures")->required();
   cmd->add_option("--json", opts->json, "also write the summary to this file ('-' for stdout)");
-  cmd->add_option("--snapshot-interval", opts->snapshot_interval, "simulated seconds between particle snapshots "
-                                                                  "(.vtp); 0 for none")
-      ->capture_default_str()->check(finite_number())->check(CLI::NonNegativeNumber);
+  cmd->add_option("--snapshot-interval", opts->snapshot_interval,
+                  "simulated seconds between particle snapshots "
+                  "(.vtp); 0 for none")
+      ->capture_default_str()
+      ->check(finite_number())
+      ->check(non_negative_number());
   cmd->add_option("--sweep", opts->sweep, "particle sweeps: pgs or jacobi")->capture_default_str();
   cmd->add_option("--seed", opts->seed, "random seed of the pile's particle sizes and jitter")->capture_default_str();
   cmd->add_flag("--quiet", opts->quiet, "no progress on stderr");
-  cmd->add_option("--rolling", opts->rolling, "study: the gravel's rolling resistance mu_r instead of the paper's 0.02 "
-                  "(docs/soil.md)")->check(finite_number())->check(CLI::NonNegativeNumber);
-  cmd->add_option("--dt", opts->dt, "study: timestep [s] instead of the level's")->check(finite_number())->check(CLI::PositiveNumber);
+  cmd->add_option("--rolling", opts->rolling,
+                  "study: the gravel's rolling resistance mu_r instead of the paper's 0.02 "
+                  "(docs/soil.md)")
+      ->check(finite_number())
+      ->check(non_negative_number());
+  cmd->add_option("--dt", opts->dt, "study: timestep [s] instead of the level's")
+      ->check(finite_number())
+      ->check(positive_number());
   cmd->add_option("--iterations", opts->iterations, "study: sweeps per step instead of the level's")
       ->check(CLI::Range(1, 100000));
-  cmd->add_option("--form-speed", opts->form_speed, "study: speed the pile's formwork withdraws at before it "
-                  "settles, 0 = removed at once [m/s]")->check(finite_number())->check(CLI::NonNegativeNumber);
+  cmd->add_option("--form-speed", opts->form_speed,
+                  "study: speed the pile's formwork withdraws at before it "
+                  "settles, 0 = removed at once [m/s]")
+      ->check(finite_number())
+      ->check(non_negative_number());
   cmd->add_flag("--residuals", opts->residuals, "record the particle rows' residual at the end of every step "
                 "(summary: step_residual_m_s median and p95)");
   cmd->add_option("--effect", opts->effects,

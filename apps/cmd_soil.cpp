@@ -79,18 +79,22 @@ void add_soil_command(CLI::App& app) {
   cmd->add_option("--out", opt->out, "output folder (summary.json, particles.csv, particles.vtp, side.png)")->required();
   cmd->add_option("--json", opt->json, "also write the summary to this file ('-' for stdout)");
   cmd->add_option("--rolling", opt->material.rolling,
-                  "rolling resistance mu_r, torque <= mu_r R* lambda_n (default: the paper's 0.02; docs/soil.md)")->check(finite_number())
-      ->check(CLI::NonNegativeNumber)
+                  "rolling resistance mu_r, torque <= mu_r R* lambda_n (default: the paper's 0.02; "
+                  "docs/soil.md)")
+      ->check(finite_number())
+      ->check(non_negative_number())
       ->capture_default_str();
-  cmd->add_option("--friction", opt->material.friction, "Coulomb friction between grains")->check(finite_number())
-      ->check(CLI::NonNegativeNumber)
+  cmd->add_option("--friction", opt->material.friction, "Coulomb friction between grains")
+      ->check(finite_number())
+      ->check(non_negative_number())
       ->capture_default_str();
   cmd->add_option("--seed", opt->seed, "random seed of the particle sizes and jitter")->capture_default_str();
   cmd->add_option("--aspect", opt->aspect, "collapse: column height over length asked for")->check(finite_number())
       ->check(CLI::Range(0.1, 3.0))
       ->capture_default_str();
-  cmd->add_option("--normal-stress", opt->normal_stress, "shear: the platen's normal stress [Pa]")->check(finite_number())
-      ->check(CLI::PositiveNumber)
+  cmd->add_option("--normal-stress", opt->normal_stress, "shear: the platen's normal stress [Pa]")
+      ->check(finite_number())
+      ->check(positive_number())
       ->capture_default_str();
   cmd->add_flag("--quiet", opt->quiet, "no progress on stderr");
   cmd->callback([opt] {

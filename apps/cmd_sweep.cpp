@@ -321,9 +321,15 @@ void add_sweep_command(CLI::App& app) {
   cmd->add_option("--out", o->out, "output folder: sweep.png, summary.json, LEVEL/sweep.csv")->required();
   cmd->add_option("--shard", o->shard, "run only the samples i with i mod N = K and write LEVEL/shard-K.csv (K/N)");
   cmd->add_flag("--collect", o->collect, "merge the shards in --out into the results instead of simulating");
-  cmd->add_option("--approach", o->approach, "distance from the bucket tip to the pile at the start [m]")
-      ->capture_default_str()->check(finite_number())->check(CLI::PositiveNumber);
-  cmd->add_option("--max-time", o->max_time, "time limit of one cycle [s]")->capture_default_str()->check(finite_number())->check(CLI::PositiveNumber);
+  cmd->add_option("--approach", o->approach,
+                  "distance from the bucket tip to the pile at the start [m]")
+      ->capture_default_str()
+      ->check(finite_number())
+      ->check(positive_number());
+  cmd->add_option("--max-time", o->max_time, "time limit of one cycle [s]")
+      ->capture_default_str()
+      ->check(finite_number())
+      ->check(positive_number());
   cmd->add_option("--seed", o->seed, "random seed of the pile's particle sizes and jitter")->capture_default_str();
   cmd->add_option("--json", o->json, "also write the summary to this file ('-' for stdout)");
   cmd->add_flag("--traces", o->traces, "also write each cycle's 100 Hz time series as LEVEL/cycle-I.csv "

@@ -36,6 +36,27 @@ inline void check_output_file(const std::string& path, const std::string& flag) 
   if (!path.empty() && path != "-") check_writable(path, flag);
 }
 
+// a numeric option that must be finite and above zero (or at least zero): CLI11's own range
+// checks print their bound, DBL_MAX, as a 309-digit number
+inline CLI::Validator signed_number(bool allow_zero) {
+  return CLI::Validator(
+      [allow_zero](std::string& text) {
+        try {
+          size_t used = 0;
+          const double x = std::stod(text, &used);
+          if (used == text.size() && std::isfinite(x) && (x > 0.0 || (allow_zero && x == 0.0)))
+            return std::string();
+        } catch (const std::exception&) {
+        }
+        return std::string(allow_zero ? "must be a finite number at least 0"
+                                      : "must be a finite number above 0") +
+               ", got '" + text + "'";
+      },
+      allow_zero ? "NON-NEGATIVE" : "POSITIVE");
+}
+inline CLI::Validator positive_number() { return signed_number(false); }
+inline CLI::Validator non_negative_number() { return signed_number(true); }
+
 void add_pile_command(CLI::App& app);    // build and settle the default pile
 void add_repose_command(CLI::App& app);  // heap test: angle of repose of the gravel
 void add_bench_command(CLI::App& app);   // DEM throughput benchmarks

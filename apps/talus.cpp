@@ -1,5 +1,6 @@
 // talus: wheel-loader digging in granular terrain. Entry point of the command-line tool.
 #include <iostream>
+#include <string>
 
 #include "apps/commands.hpp"
 #include "host/error.hpp"
@@ -20,6 +21,17 @@ int main(int argc, char** argv) {
   talus::app::add_compare_command(app);
   talus::app::add_plot_command(app);
   try {
+    // a first word that names no subcommand (CLI11 would only say "A subcommand is required")
+    std::string names;
+    bool known = false;
+    for (const CLI::App* sub : app.get_subcommands({})) {
+      names += (names.empty() ? "" : ", ") + sub->get_name();
+      known = known || (argc > 1 && sub->get_name() == argv[1]);
+    }
+    if (argc > 1 && argv[1][0] != '-' && !known) {
+      throw talus::InputError(std::string("unknown subcommand '") + argv[1] +
+                              "'; the subcommands are " + names + " (talus --help describes them)");
+    }
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     // --help and --version are "errors" with exit code 0 in CLI11

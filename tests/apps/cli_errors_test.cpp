@@ -107,4 +107,21 @@ TEST(CliErrors, UnwritableOutputsAreRefusedBeforeTheRun) {
       << "synth left its run without a key";
 }
 
+// an unknown subcommand is named with the list of known ones; a range error names the flag and
+// the value in a short line (CLI11's own checks printed DBL_MAX as a 309-digit bound)
+TEST(CliErrors, UnknownSubcommandAndRangeErrorsSayWhatIsWrong) {
+  Outcome o = run("", "bogus");
+  EXPECT_EQ(o.code, 2) << o.err;
+  EXPECT_NE(o.err.find("unknown subcommand 'bogus'"), std::string::npos) << o.err;
+  EXPECT_NE(o.err.find("run"), std::string::npos) << o.err;
+  o = run("", "run --scenario hd27 --dt -1 --out /tmp/talus_unused_range");
+  EXPECT_EQ(o.code, 2) << o.err;
+  EXPECT_NE(o.err.find("--dt: must be a finite number above 0, got '-1'"), std::string::npos)
+      << o.err;
+  EXPECT_LT(o.err.size(), 200u) << o.err;
+  o = run("", "compare --sim a --ref b --l-norm 0");
+  EXPECT_EQ(o.code, 2) << o.err;
+  EXPECT_NE(o.err.find("--l-norm"), std::string::npos) << o.err;
+}
+
 }  // namespace
