@@ -55,7 +55,9 @@ TEST(Residuals, APerfectModelLeavesNoExcessAndABiasDoes) {
   const Residuals perfect = compute_residuals(model, measured, sigma);
   ASSERT_EQ(perfect.phases.size(), 3u);  // approach, dig, after
   EXPECT_EQ(perfect.cells.size(), 13u * 3u);
-  EXPECT_EQ(perfect.excess, 0.0);
+  // the noise alone may lift a cell a little over the allowance (MSE of a few dozen samples
+  // scatters: 1.62 sigma^2 in one of 39 cells was seen in CI, excess 0.08), never far
+  EXPECT_LT(perfect.excess, 0.5);
   // the log-ratio is near 0 per cell: MSE ≈ σ²
   EXPECT_NEAR(perfect.log_ratio / perfect.cells.size(), 0.0, 0.25);
 
@@ -64,9 +66,10 @@ TEST(Residuals, APerfectModelLeavesNoExcessAndABiasDoes) {
   for (double& v : biased.series[Channel::f_lift]) v += 3.0 * sigma[1];
   const Residuals wrong = compute_residuals(biased, measured, sigma);
   const double expected = std::log(10.0 / kNoiseAllowance);
-  EXPECT_NEAR(wrong.excess, 3.0 * expected, 3.0 * 0.15);
-  EXPECT_NEAR(wrong.excess_of({1}), wrong.excess, 1e-12);
-  EXPECT_EQ(wrong.excess_of({2, 3}), 0.0);
+  EXPECT_NEAR(wrong.excess_of({1}), 3.0 * expected, 3.0 * 0.15);
+  // the other channels keep exactly what the noise gave the perfect model
+  EXPECT_NEAR(wrong.excess - wrong.excess_of({1}), perfect.excess - perfect.excess_of({1}), 1e-12);
+  EXPECT_EQ(wrong.excess_of({2, 3}), perfect.excess_of({2, 3}));
   for (const auto& cell : wrong.cells) {
     if (cell.channel == 1) {
       EXPECT_NEAR(cell.mean, -3.0 * sigma[1], 0.5 * sigma[1]);
