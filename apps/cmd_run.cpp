@@ -71,6 +71,7 @@ std::string effects_note(const vehicle::EffectSet& effects) {
 // DIR/timeseries.csv and DIR/summary.json through the contract's writers, and the summary where
 // --json asks for it
 void write_run(const RunOptions& o, const sim2real::Run& run) {
+  // summary.json last: it marks the folder's run as complete (start_run_folder removed the old one)
   const std::filesystem::path dir(o.out);
   sim2real::save_timeseries(dir / sim2real::kTimeseriesFile, run.series);
   sim2real::save_summary(dir / sim2real::kSummaryFile, run.summary);
@@ -81,10 +82,22 @@ void write_run(const RunOptions& o, const sim2real::Run& run) {
   }
 }
 
+// the output folder, made and checked writable, without a previous run's summary.json: a run
+// killed while rewriting the folder then leaves no summary beside its new files, and compare,
+// table and diagnose refuse the folder instead of pairing old and new
+void start_run_folder(const std::string& out) {
+  make_output_dir(out);
+  std::error_code ec;
+  std::filesystem::remove(std::filesystem::path(out) / sim2real::kSummaryFile, ec);
+  if (ec)
+    throw InputError("--out " + out + ": cannot remove the previous run's " +
+                     sim2real::kSummaryFile + " (" + ec.message() + ")");
+}
+
 // a scenario without particles: the machine alone on flat ground
 void run_vehicle_only(const RunOptions& o, const vehicle::Scenario& sc, vehicle::EffectSet& effects) {
   const std::string machine = vehicle::machine_file(sc);
-  make_output_dir(o.out);
+  start_run_folder(o.out);
   const int steps = static_cast<int>(std::llround(sc.duration / sc.timestep));
   if (!o.quiet) {
     const vehicle::WheelLoader loader(machine, sc.payload);
@@ -260,7 +273,7 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
   if (o.iterations > 0) preset.iterations = o.iterations;
   const PileProfile placed = scenario_pile_profile(sc);
   const DiggingOptions options = digging_options(o);
-  make_output_dir(o.out);
+  start_run_folder(o.out);
   const std::filesystem::path dir(o.out);
   const auto start = std::chrono::steady_clock::now();
   Device dev;

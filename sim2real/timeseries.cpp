@@ -174,7 +174,10 @@ void save_timeseries(const fs::path& file, const TimeSeries& series) {
 
 RunSummary load_summary(const fs::path& file) {
   std::ifstream in(file);
-  if (!in) throw InputError(file.string() + ": cannot open the run summary");
+  if (!in)
+    throw InputError(file.string() +
+                     ": cannot open the run summary; summary.json is written last, so a " +
+                     "folder without it holds a run that did not finish (rerun it)");
   nlohmann::json j;
   try {
     in >> j;

@@ -40,6 +40,34 @@ TEST(VehicleRunTest, FlatLiftWritesTimeseriesAndSummary) {
   EXPECT_FALSE(std::filesystem::exists(dir / "timeseries.csv.tmp"));
 }
 
+// a run killed while it rewrites a folder leaves no summary.json (the run's completion mark,
+// written last; the old one is removed when the run starts), so compare refuses the folder rather
+// than pair the old summary with new files
+TEST(VehicleRunTest, AKilledRunLeavesNoSummaryAndCompareRefusesIt) {
+  const auto dir = std::filesystem::temp_directory_path() / "talus_run_killed";
+  std::filesystem::remove_all(dir);
+  const std::string first =
+      kTalus + " run --scenario load-carry --quiet --out " + dir.string() + " 2>/dev/null";
+  ASSERT_EQ(std::system(first.c_str()), 0) << first;
+  ASSERT_TRUE(std::filesystem::exists(dir / "summary.json"));
+  // the HD27 D200 pile takes most of a minute to settle: killed (SIGKILL) two seconds in
+  const std::string killed = "timeout -s KILL 2 " + kTalus +
+                             " run --scenario hd27 --fidelity D200 --quiet --out " + dir.string() +
+                             " 2>/dev/null";
+  const int status = std::system(killed.c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 137);  // timeout's code for a KILLed command
+  EXPECT_FALSE(std::filesystem::exists(dir / "summary.json"));
+  const auto err = std::filesystem::temp_directory_path() / "talus_run_killed.err";
+  const std::string compare = kTalus + " compare --sim " + dir.string() + " --ref " + dir.string() +
+                              " >/dev/null 2>" + err.string();
+  const int compared = std::system(compare.c_str());
+  EXPECT_EQ(WEXITSTATUS(compared), 2);
+  std::stringstream message;
+  message << std::ifstream(err).rdbuf();
+  EXPECT_NE(message.str().find("did not finish"), std::string::npos) << message.str();
+}
+
 // the main job at the coarsest level: the HD27 pile scenario at D400 end to end, with every output
 // the issue names (the physics of the run is tested in tests/digging/digging_test.cpp)
 TEST(DiggingRunTest, Hd27AtD400WritesTheRunContractSnapshotsAndFigures) {
