@@ -16,15 +16,16 @@
 
 #include "apps/commands.hpp"
 #include "apps/run.hpp"
+#include "digging/digging.hpp"
 #include "host/error.hpp"
 #include "host/files.hpp"
 #include "host/progress.hpp"
+#include "host/version.hpp"
 #include "io/output.hpp"
 #include "io/plot.hpp"
 #include "io/render.hpp"
 #include "sim2real/replay.hpp"
 #include "sim2real/timeseries.hpp"
-#include "digging/digging.hpp"
 #include "vehicle/data_file.hpp"
 #include "vehicle/effect.hpp"
 #include "vehicle/effect_plugin.hpp"
@@ -70,7 +71,12 @@ std::string effects_note(const vehicle::EffectSet& effects) {
 
 // DIR/timeseries.csv and DIR/summary.json through the contract's writers, and the summary where
 // --json asks for it
-void write_run(const RunOptions& o, const sim2real::Run& run) {
+void write_run(const RunOptions& o, const sim2real::Run& finished) {
+  // which talus made it, and how
+  sim2real::Run run = finished;
+  run.summary.details["talus_version"] = talus_version();
+  run.summary.details["git_commit"] = git_commit();
+  run.summary.details["command_line"] = o.command_line;
   // summary.json last: it marks the folder's run as complete (start_run_folder removed the old one)
   const std::filesystem::path dir(o.out);
   sim2real::save_timeseries(dir / sim2real::kTimeseriesFile, run.series);
@@ -352,9 +358,9 @@ void run_scenario(const RunOptions& o) {
   }
 }
 
-
-void add_run_command(CLI::App& app) {
+void add_run_command(CLI::App& app, const std::string& command_line) {
   auto opts = std::make_shared<RunOptions>();
+  opts->command_line = command_line;
   auto* cmd = app.add_subcommand("run", "replay a scenario's feedforward inputs on the wheel loader (digging in "
                                         "a particle pile for fb35, hd27, rd21)");
   cmd->add_option("--scenario", opts->scenario, "scenario name (data/scenarios/NAME.json: fb35, hd27, rd21, "

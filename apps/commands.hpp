@@ -60,7 +60,22 @@ inline CLI::Validator non_negative_number() { return signed_number(true); }
 void add_pile_command(CLI::App& app);    // build and settle the default pile
 void add_repose_command(CLI::App& app);  // heap test: angle of repose of the gravel
 void add_bench_command(CLI::App& app);   // DEM throughput benchmarks
-void add_run_command(CLI::App& app);     // vehicle scenarios
+// the command line as typed, each argument quoted when it holds a space or a quote (for
+// summaries that record how they were made)
+inline std::string command_line(int argc, char** argv) {
+  std::string line;
+  for (int i = 0; i < argc; ++i) {
+    const std::string arg = argv[i];
+    const bool quote = arg.empty() || arg.find_first_of(" \t'\"") != std::string::npos;
+    std::string escaped;
+    for (char c : arg) escaped += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    line += (i > 0 ? " " : "") + (quote ? "'" + escaped + "'" : arg);
+  }
+  return line;
+}
+
+// vehicle scenarios; `command_line` is recorded in every summary.json the command writes
+void add_run_command(CLI::App& app, const std::string& command_line);
 void add_compare_command(CLI::App& app); // sim-to-real error rows and tables (compare, table)
 void add_synth_command(CLI::App& app);   // field-like data with effects and noise (sim-to-real loop)
 void add_diagnose_command(CLI::App& app);  // the sim-to-real loop: residual -> missing effect

@@ -14,6 +14,7 @@ struct RunOptions {
   std::string fidelity = "D400";
   std::string out;
   std::string json;
+  std::string command_line;  // as typed, recorded in summary.json with the version and commit
   std::string sweep = "pgs";
   double snapshot_interval = 1.0;  // s; 0: no snapshots
   unsigned seed = 1;

@@ -4,17 +4,19 @@
 
 #include "apps/commands.hpp"
 #include "host/error.hpp"
+#include "host/version.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"talus: nonsmooth DEM and multibody simulation of a wheel loader digging in gravel"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", "talus 0.1.0");
+  app.set_version_flag("--version", std::string("talus ") + talus::talus_version() + " (" +
+                                        talus::git_commit() + ")");
   talus::app::add_pile_command(app);
   talus::app::add_repose_command(app);
   talus::app::add_soil_command(app);
   talus::app::add_cut_command(app);
   talus::app::add_bench_command(app);
-  talus::app::add_run_command(app);
+  talus::app::add_run_command(app, talus::app::command_line(argc, argv));
   talus::app::add_sweep_command(app);
   talus::app::add_synth_command(app);
   talus::app::add_diagnose_command(app);

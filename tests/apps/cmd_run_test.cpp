@@ -35,6 +35,11 @@ TEST(VehicleRunTest, FlatLiftWritesTimeseriesAndSummary) {
     EXPECT_TRUE(summary.contains(key)) << key;
   }
   EXPECT_DOUBLE_EQ(summary["sim_time_s"].get<double>(), 14.0);
+  // which talus made it and how: version, commit, the command line as typed
+  EXPECT_FALSE(summary.at("talus_version").get<std::string>().empty());
+  EXPECT_FALSE(summary.at("git_commit").get<std::string>().empty());
+  EXPECT_NE(summary.at("command_line").get<std::string>().find("run --scenario flat-lift --out"),
+            std::string::npos);
   // lifting 3.5 t and the 2.6 t boom and bucket by metres: work in the hundreds of kJ
   EXPECT_GT(summary["work_J"].get<double>(), 1e5);
   EXPECT_FALSE(std::filesystem::exists(dir / "timeseries.csv.tmp"));
