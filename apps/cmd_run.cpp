@@ -351,9 +351,25 @@ void run_scenario(const RunOptions& o) {
       throw InputError("--effect " + effects->set[i].name() + ": acts on the soil's particles, and scenario '" + sc.name +
                        "' has none; use it with a pile scenario (fb35, hd27, rd21)");
   }
+  // the level and the sweep are checked for every scenario, though only a pile uses them
+  fidelity_preset(o.fidelity);
+  parse_sweep(o.sweep, "--sweep");
   if (sc.pile) {
     run_digging(o, sc, effects->set);
   } else {
+    // a payload the machine cannot hold on its wheels even with its boom low (its shortest
+    // reach) is refused: 1e12 kg ran to exit 0 with the machine at 90 degrees of pitch. (The
+    // library builds such a machine for test rigs that hold its frame)
+    const vehicle::WheelLoader loaded(vehicle::machine_file(sc), sc.payload);
+    const double tipping = loaded.static_tipping_load();
+    if (sc.payload > tipping) {
+      std::ostringstream msg;
+      msg << sc.path << ": field 'payload': " << sc.payload
+          << " kg is above the static tipping load of " << loaded.name() << " with its boom low ("
+          << std::lround(tipping)
+          << " kg): it would tip forward onto its bucket; give a payload below that";
+      throw InputError(msg.str());
+    }
     run_vehicle_only(o, sc, effects->set);
   }
 }

@@ -10,6 +10,14 @@
 
 namespace talus::vehicle {
 
+namespace {
+// the longest scenario [s]: an hour of simulated time, far beyond a loading cycle (10-30 s) or the
+// reliability soak (600 s), and short enough that no step count can overflow
+constexpr double kMaxDuration = 3600.0;
+// the shortest [s]: two samples of the 100 Hz sensors
+constexpr double kMinDuration = 0.02;
+}  // namespace
+
 PiecewiseLinear::PiecewiseLinear(std::vector<std::pair<double, double>> points) : points_(std::move(points)) {}
 
 double PiecewiseLinear::operator()(double t) const {
@@ -72,6 +80,12 @@ Scenario load_scenario(const std::string& name_or_path) {
   s.duration = f.plain_number(root, "", "duration");
   s.payload = root.contains("payload") ? f.plain_number(root, "", "payload") : 0.0;
   if (!(s.duration > 0)) f.fail("duration", "is not > 0", "give the simulated time in s");
+  if (s.duration > kMaxDuration)
+    f.fail("duration", "is above " + std::to_string(static_cast<int>(kMaxDuration)) + " s",
+           "give at most an hour of simulated time (a loading cycle lasts 10-30 s)");
+  // the sensors sample every 10 ms: a run shorter than two samples has nothing to compare
+  if (s.duration < kMinDuration)
+    f.fail("duration", "is below 0.02 s (two sensor samples)", "give the simulated time in s");
   if (!(s.payload >= 0)) f.fail("payload", "is negative", "give the payload in kg (0 for an empty bucket)");
   if (s.pile) {
     // the pile, its placement and the digging phase; the timestep comes from the fidelity level.

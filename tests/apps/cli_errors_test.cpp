@@ -124,4 +124,24 @@ TEST(CliErrors, UnknownSubcommandAndRangeErrorsSayWhatIsWrong) {
   EXPECT_NE(o.err.find("--l-norm"), std::string::npos) << o.err;
 }
 
+// a vehicle-only scenario: its flags are checked though it uses no particles (--fidelity D37 and
+// --sweep bogus were ignored), and a payload the machine cannot hold is refused naming the file
+// and field (1e12 kg ran to exit 0 with the machine at 90 degrees of pitch)
+TEST(CliErrors, VehicleScenarioFlagsAndPayloadAreChecked) {
+  Outcome o = run("", "run --scenario load-carry --fidelity D37 --out /tmp/talus_unused_vehicle");
+  EXPECT_EQ(o.code, 2) << o.err;
+  EXPECT_NE(o.err.find("D37"), std::string::npos) << o.err;
+  o = run("", "run --scenario load-carry --sweep bogus --out /tmp/talus_unused_vehicle");
+  EXPECT_EQ(o.code, 2) << o.err;
+  EXPECT_NE(o.err.find("--sweep"), std::string::npos) << o.err;
+  const auto path = (std::filesystem::temp_directory_path() / "talus_heavy_scenario.json").string();
+  std::ofstream(path)
+      << R"({"name": "heavy", "machine": "wa320", "duration": 1, "timestep": 0.005, "payload": 1e12,
+                           "drive": [[0, 0]], "lift": [[0, 0]], "tilt": [[0, 0]]})";
+  o = run("", "run --scenario " + path + " --out /tmp/talus_unused_vehicle");
+  EXPECT_EQ(o.code, 2) << o.err;
+  EXPECT_NE(o.err.find(path + ": field 'payload'"), std::string::npos) << o.err;
+  EXPECT_NE(o.err.find("static tipping load"), std::string::npos) << o.err;
+}
+
 }  // namespace

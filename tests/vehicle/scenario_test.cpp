@@ -48,5 +48,27 @@ TEST(ScenarioTest, MalformedScenarioNamesFileAndField) {
   EXPECT_THROW(load_scenario("no-such-scenario"), InputError);
 }
 
+// a duration outside [0.02 s, 3600 s] is refused naming the field: 1e9 s overflowed the step
+// count (one sample, a negative real-time factor, exit 0), and a run shorter than two sensor
+// samples wrote a series nothing could compare
+TEST(ScenarioTest, DurationOutsideItsRangeNamesTheField) {
+  const auto path =
+      (std::filesystem::temp_directory_path() / "talus_duration_scenario.json").string();
+  for (const char* duration : {"1e9", "3601", "0.001"}) {
+    std::ofstream(path) << R"({"name": "x", "machine": "wa320", "timestep": 0.005, "duration": )"
+                        << duration
+                        << R"(, "drive": [[0, 0]], "lift": [[0, 0]], "tilt": [[0, 0]]})";
+    try {
+      load_scenario(path);
+      FAIL() << duration << ": no error";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("field 'duration'"), std::string::npos) << e.what();
+    }
+  }
+  std::ofstream(path) << R"({"name": "x", "machine": "wa320", "timestep": 0.005, "duration": 600,
+                           "drive": [[0, 0]], "lift": [[0, 0]], "tilt": [[0, 0]]})";
+  EXPECT_NO_THROW(load_scenario(path));  // the soak's ten minutes
+}
+
 }  // namespace
 }  // namespace talus::vehicle

@@ -5,7 +5,9 @@
 
 #include <cmath>
 #include <iostream>
+#include <string>
 
+#include "host/error.hpp"
 #include "vehicle/data_file.hpp"
 #include "vehicle/sensors.hpp"
 
