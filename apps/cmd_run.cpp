@@ -305,10 +305,13 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
   // real-time factor (snapshots and notes, which download the particles, are not)
   if (!effects.empty()) std::cerr << "talus run: effects: " << effects_note(effects) << "\n";
   DiggingSimulation sim(dev, sc, preset, pile, options, &effects);
-  Snapshots snapshots(
-      dir, o.snapshot_interval > 0.0
-               ? std::max(1, static_cast<int>(std::lround(o.snapshot_interval / preset.dt)))
-               : 0);
+  // steps between snapshots, at most one more than the run has (an interval beyond the run, 1e308
+  // meaning "never", overflowed the step count and took a snapshot every step)
+  const double snapshot_steps =
+      std::min(o.snapshot_interval / preset.dt, static_cast<double>(sim.steps_total()) + 1.0);
+  Snapshots snapshots(dir, o.snapshot_interval > 0.0
+                               ? std::max(1, static_cast<int>(std::lround(snapshot_steps)))
+                               : 0);
   snapshots.after_step(0, sim.time(), sim);
   Progress progress("dig " + sc.name + " " + preset.name, sc.duration, !o.quiet);
   const int note_every =

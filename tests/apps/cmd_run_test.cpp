@@ -73,6 +73,19 @@ TEST(VehicleRunTest, AKilledRunLeavesNoSummaryAndCompareRefusesIt) {
   EXPECT_NE(message.str().find("did not finish"), std::string::npos) << message.str();
 }
 
+// an interval beyond the run (1e308, "never") takes the start's snapshot only; it overflowed the
+// step count and took one every step
+TEST(DiggingRunTest, ASnapshotIntervalBeyondTheRunTakesOnlyTheStart) {
+  const auto dir = std::filesystem::temp_directory_path() / "talus_run_snapshots_never";
+  std::filesystem::remove_all(dir);
+  const std::string cmd =
+      kTalus + " run --scenario hd27 --fidelity D400 --snapshot-interval 1e308 --quiet --out " +
+      dir.string() + " 2>/dev/null";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  EXPECT_TRUE(std::filesystem::exists(dir / "snapshots" / "particles_0.vtp"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "snapshots" / "particles_1.vtp"));
+}
+
 // the main job at the coarsest level: the HD27 pile scenario at D400 end to end, with every output
 // the issue names (the physics of the run is tested in tests/digging/digging_test.cpp)
 TEST(DiggingRunTest, Hd27AtD400WritesTheRunContractSnapshotsAndFigures) {
