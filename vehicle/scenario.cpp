@@ -10,14 +10,6 @@
 
 namespace talus::vehicle {
 
-namespace {
-// the longest scenario [s]: an hour of simulated time, far beyond a loading cycle (10-30 s) or the
-// reliability soak (600 s), and short enough that no step count can overflow
-constexpr double kMaxDuration = 3600.0;
-// the shortest [s]: two samples of the 100 Hz sensors
-constexpr double kMinDuration = 0.02;
-}  // namespace
-
 PiecewiseLinear::PiecewiseLinear(std::vector<std::pair<double, double>> points) : points_(std::move(points)) {}
 
 double PiecewiseLinear::operator()(double t) const {
@@ -32,6 +24,12 @@ double PiecewiseLinear::operator()(double t) const {
 }
 
 namespace {
+
+// the longest scenario [s]: an hour of simulated time, far beyond a loading cycle (10-30 s) or the
+// reliability soak (600 s), and short enough that no step count can overflow
+constexpr double kMaxDuration = 3600.0;
+// the shortest [s]: two samples of the 100 Hz sensors
+constexpr double kMinDuration = 0.02;
 
 PiecewiseLinear series(const DataFile& f, const std::string& key) {
   const auto& j = f.member(f.root(), "", key);
