@@ -69,6 +69,8 @@ void add_pile_command(CLI::App& app) {
         {"max_overlap_rel", max_overlap(pile.particles, pile.geoms) / preset.diameter},
         {"scan_points", scan.points.size()},
         {"scan_face_angle_deg", scan.face_angle_deg},
+        {"scan_rms_to_profile_m", scan.rms_to_profile_m},
+        {"scan_mean_to_profile_m", scan.mean_to_profile_m},
         {"profile", profile.name},
         {"profile_volume_m3", profile.volume()},
         {"wall_s", wall},

@@ -258,6 +258,19 @@ PileScan scan_pile(const Particles& particles, const PileProfile& profile, doubl
     sxz += q.x() * q.y();
   }
   if (n >= 3) scan.face_angle_deg = std::atan((n * sxz - sx * sz) / (n * sxx - sx * sx)) * 180.0 / M_PI;
+  // the scan against the profile it was built to, where the profile stands
+  double count = 0, sum = 0, sum_sq = 0;
+  for (auto& q : scan.points) {
+    if (q.x() < profile.points.front().x() || q.x() > profile.rear_wall_x) continue;
+    const double e = q.y() - profile.height_at(q.x());
+    count += 1;
+    sum += e;
+    sum_sq += e * e;
+  }
+  if (count > 0) {
+    scan.mean_to_profile_m = sum / count;
+    scan.rms_to_profile_m = std::sqrt(sum_sq / count);
+  }
   return scan;
 }
 

@@ -111,6 +111,11 @@ PileBuild build_pile(Device& dev, const PileProfile& profile, const FidelityPres
 struct PileScan {
   std::vector<Eigen::Vector2d> points;
   double face_angle_deg = 0.0;  // least-squares slope of the points between 20% and 80% height
+  // how the scanned surface stands against the profile it was built to, over the points between
+  // the profile's front and its rear wall: root mean square and mean of (scan - profile) height
+  // [m]; a negative mean is a pile standing lower than built (a slumped face)
+  double rms_to_profile_m = 0.0;
+  double mean_to_profile_m = 0.0;
 };
 PileScan scan_pile(const Particles& particles, const PileProfile& profile, double diameter);
 

@@ -126,6 +126,27 @@ TEST(Pile, LaserScanOfTheEmittedProfileReadsItsFace) {
   std::printf("scan: %zu points, face %.2f deg (profile 32)\n", scan.points.size(), scan.face_angle_deg);
   EXPECT_GT(scan.points.size(), 100u);
   EXPECT_NEAR(scan.face_angle_deg, 32.0, 2.0);
+  // it stands where it was built, within a grain
+  std::printf("against the profile: rms %.3f m, mean %+.3f m (D %.1f m)\n", scan.rms_to_profile_m,
+              scan.mean_to_profile_m, d);
+  EXPECT_LT(scan.rms_to_profile_m, d);
+  EXPECT_LT(std::abs(scan.mean_to_profile_m), d);
+}
+
+// a bed standing three grains lower than its profile reads three grains below it
+TEST(Pile, LaserScanOfALowerBedReadsHowMuchLowerItStands) {
+  PileProfile profile = default_pile_profile();
+  const double d = 0.1, lower = 3 * d;
+  Particles p;
+  for (double x = profile.points.front().x() + 0.5 * d; x < profile.rear_wall_x; x += d)
+    for (double y = -0.5 * profile.width + 0.5 * d; y < 0.5 * profile.width; y += d)
+      for (double z = 0.5 * d; z + 0.5 * d <= profile.height_at(x) - lower; z += d)
+        p.add(Vec3(x, y, z), 0.5 * d, 2590);
+  const PileScan scan = scan_pile(p, profile, d);
+  std::printf("against the profile: rms %.3f m, mean %+.3f m (built %.1f m lower)\n",
+              scan.rms_to_profile_m, scan.mean_to_profile_m, lower);
+  EXPECT_NEAR(scan.mean_to_profile_m, -lower, d);
+  EXPECT_NEAR(scan.rms_to_profile_m, lower, d);
 }
 
 }  // namespace
