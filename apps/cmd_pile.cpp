@@ -36,6 +36,10 @@ void add_pile_command(CLI::App& app) {
       ->check(finite_number())
       ->check(non_negative_number())
       ->capture_default_str();
+  cmd->add_option("--settle-iterations", opt->build.max_settle_iterations,
+                  "study: most sweeps per step while settling (the level's N_it is capped here)")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
   cmd->add_flag("--quiet", opt->quiet, "no progress on stderr");
   cmd->callback([opt] {
     const FidelityPreset& preset = fidelity_preset(opt->level);
@@ -63,6 +67,10 @@ void add_pile_command(CLI::App& app) {
         {"particles_vs_paper", double(n) / preset.paper_particles},
         {"bulk_density", pile.bulk_density},
         {"toe_shift_m", pile.toe_shift},
+        {"fill_time_s", pile.fill_time},
+        {"fill_at_rest", pile.fill_at_rest},
+        {"fill_rms_speed_m_s", pile.fill_rms_speed},
+        {"settle_iterations", pile.settle_iterations},
         {"settle_time_s", pile.settle_time},
         {"at_rest", pile.at_rest},
         {"rms_speed_m_s", pile.rms_speed},
@@ -71,6 +79,8 @@ void add_pile_command(CLI::App& app) {
         {"scan_face_angle_deg", scan.face_angle_deg},
         {"scan_rms_to_profile_m", scan.rms_to_profile_m},
         {"scan_mean_to_profile_m", scan.mean_to_profile_m},
+        {"soil_rms_to_profile_m", pile.soil_fit.rms_m},
+        {"soil_mean_to_profile_m", pile.soil_fit.mean_m},
         {"profile", profile.name},
         {"profile_volume_m3", profile.volume()},
         {"wall_s", wall},

@@ -274,6 +274,36 @@ PileScan scan_pile(const Particles& particles, const PileProfile& profile, doubl
   return scan;
 }
 
+ProfileFit bulk_fit_to_profile(const Particles& particles, const PileProfile& profile,
+                               double diameter) {
+  // strips of 2 D along x over the middle half of the width
+  const double strip = 2.0 * diameter;
+  const double x0 = profile.points.front().x();
+  const int n = std::max(1, static_cast<int>(std::floor((profile.rear_wall_x - x0) / strip)));
+  const double half_width = 0.25 * profile.width;
+  std::vector<double> mass(static_cast<size_t>(n), 0.0);
+  for (size_t i = 0; i < particles.size(); ++i) {
+    if (particles.inv_mass[i] <= 0.0) continue;
+    const Vec3& x = particles.position[i];
+    const int k = static_cast<int>(std::floor((x.x() - x0) / strip));
+    if (k < 0 || k >= n || std::abs(x.y()) > half_width) continue;
+    mass[static_cast<size_t>(k)] += 1.0 / particles.inv_mass[i];
+  }
+  // each strip's soil height against the profile's mean height over the strip
+  constexpr int kProfileSamples = 8;  // midpoints per strip: the profile is piecewise linear
+  double sum = 0.0, sum_sq = 0.0;
+  for (int k = 0; k < n; ++k) {
+    const double soil =
+        mass[static_cast<size_t>(k)] / (strip * 2.0 * half_width * kFieldBulkDensity);
+    double built = 0.0;
+    for (int j = 0; j < kProfileSamples; ++j)
+      built += profile.height_at(x0 + (k + (j + 0.5) / kProfileSamples) * strip) / kProfileSamples;
+    sum += soil - built;
+    sum_sq += (soil - built) * (soil - built);
+  }
+  return {std::sqrt(sum_sq / n), sum / n};
+}
+
 double profile_toe(const PileProfile& profile) {
   for (size_t k = 1; k < profile.points.size(); ++k) {
     const Vec3& p0 = profile.points[k - 1];
@@ -321,7 +351,11 @@ PileBuild build_pile(Device& dev, const PileProfile& profile, const FidelityPres
   so.min_time = 0.5 * options.min_time;
   so.max_time = 0.5 * options.max_time;
   so.rest_speed = 0.02;
-  settle(world, so, progress);
+  const SettleResult filled = settle(world, so, progress);
+  out.fill_time = filled.sim_time;
+  out.fill_at_rest = filled.at_rest;
+  out.fill_rms_speed = filled.rms_speed;
+  out.settle_iterations = settings.iterations;
   // the gravel's friction on; the formwork withdraws (along -x, away from the faces), then goes,
   // and the pile settles into its own shape
   world.set_material(material);
@@ -372,6 +406,7 @@ PileBuild build_pile(Device& dev, const PileProfile& profile, const FidelityPres
     out.bounds.hi.x() += dx;
     out.toe_shift = dx;
   }
+  out.soil_fit = bulk_fit_to_profile(out.particles, profile, preset.diameter);
   return out;
 }
 

@@ -65,16 +65,35 @@ double bulk_density(const Particles& particles, const Bounds& box, double partic
 
 namespace talus {
 
+// how much soil the pile holds against its profile, column by column: the particles' mass over
+// strips 2 D long (x) in the middle half of the width, divided by the strip's area and the field's
+// bulk density (kFieldBulkDensity), is the height the soil would stand at that density. The laser
+// reads the grains' tops, which stand about half a grain above this height at D400 (a skimming
+// cut meets the soil, not the tops); strips from the profile's front to its rear wall [m]
+struct ProfileFit {
+  double rms_m = 0.0;   // root mean square of (soil height - profile height)
+  double mean_m = 0.0;  // mean of the same: negative when the pile holds less than it was built to
+};
+ProfileFit bulk_fit_to_profile(const Particles& particles, const PileProfile& profile,
+                               double diameter);
+
 // a settled pile: emission, then settling with the preset's timestep
 struct PileBuild {
   Particles particles;
   std::vector<StaticGeom> geoms;
   Bounds bounds;
-  double settle_time = 0.0;   // simulated [s]
+  // the dense fill behind the formwork, friction off: how long it settled and whether it came to
+  // rest before the friction went on (simulated [s], RMS particle speed at its end [m/s])
+  double fill_time = 0.0;
+  bool fill_at_rest = false;
+  double fill_rms_speed = 0.0;
+  double settle_time = 0.0;  // simulated [s], with the gravel's friction, formwork gone
   bool at_rest = false;
   double rms_speed = 0.0;     // at the end [m/s]
+  int settle_iterations = 0;  // sweeps per step while filling and settling
   double bulk_density = 0.0;  // in the flat top's core [kg/m^3]
   double toe_shift = 0.0;     // how far the settled pile was moved to put its toe in place [m]
+  ProfileFit soil_fit;        // the placed pile's soil against its profile
 };
 
 struct PileBuildOptions {

@@ -133,6 +133,29 @@ TEST(Pile, LaserScanOfTheEmittedProfileReadsItsFace) {
   EXPECT_LT(std::abs(scan.mean_to_profile_m), d);
 }
 
+// the soil a bed holds, column by column, against its profile: a simple-cubic lattice cut to the
+// profile at the field's bulk density holds the profile's soil (its grains' centres stop half a
+// grain under the line, so it reads up to half a grain low); one cut three grains lower holds that
+// much less
+TEST(Pile, BulkFitCountsTheSoilUnderTheProfile) {
+  PileProfile profile = default_pile_profile();
+  const double d = 0.1;
+  // a lattice's solid fraction is pi/6: this particle density gives it the field's bulk density
+  const double density = kFieldBulkDensity / (M_PI / 6.0);
+  for (double lower : {0.0, 3 * d}) {
+    Particles p;
+    for (double x = profile.points.front().x() + 0.5 * d; x < profile.rear_wall_x; x += d)
+      for (double y = -0.5 * profile.width + 0.5 * d; y < 0.5 * profile.width; y += d)
+        for (double z = 0.5 * d; z <= profile.height_at(x) - lower; z += d)
+          p.add(Vec3(x, y, z), 0.5 * d, density);
+    const ProfileFit fit = bulk_fit_to_profile(p, profile, d);
+    std::printf("built %.1f m lower: soil against the profile rms %.3f m, mean %+.3f m\n", lower,
+                fit.rms_m, fit.mean_m);
+    EXPECT_NEAR(fit.mean_m, -lower, 0.5 * d);
+    EXPECT_LT(fit.rms_m, lower + d);
+  }
+}
+
 // a bed standing three grains lower than its profile reads three grains below it
 TEST(Pile, LaserScanOfALowerBedReadsHowMuchLowerItStands) {
   PileProfile profile = default_pile_profile();
