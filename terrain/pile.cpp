@@ -49,10 +49,12 @@ PileProfile load_pile_profile(const std::string& path) {
     return j.at(name);
   };
   PileProfile p;
+  p.path = path;
   p.name = j.value("name", path);
   p.source = j.value("source", "");
-  if (!field("width_m").is_number() || field("width_m").get<double>() <= 0.0)
-    throw InputError(path + ": field 'width_m' must be a positive number [m]");
+  if (!field("width_m").is_number() || !(field("width_m").get<double>() > 0.0) ||
+      field("width_m").get<double>() > kMaxProfileExtent)
+    throw InputError(path + ": field 'width_m' must be a positive number of at most 100 [m]");
   p.width = field("width_m").get<double>();
   const auto& pts = field("profile_xz_m");
   if (!pts.is_array() || pts.size() < 2)
@@ -66,6 +68,10 @@ PileProfile load_pile_profile(const std::string& path) {
     if (!std::isfinite(x) || !std::isfinite(z) || z < 0.0)
       throw InputError(path + ": field 'profile_xz_m[" + std::to_string(k) +
                        "]' must be finite with z >= 0");
+    if (std::abs(x) > kMaxProfileExtent || z > kMaxProfileExtent)
+      throw InputError(path + ": field 'profile_xz_m[" + std::to_string(k) +
+                       "]' lies more than 100 m from the origin; give the surface in metres (the "
+                       "field's pile: 2 m high)");
     if (!p.points.empty() && x <= p.points.back().x())
       throw InputError(path + ": field 'profile_xz_m' must have increasing x (point " +
                        std::to_string(k) + ")");
@@ -76,6 +82,13 @@ PileProfile load_pile_profile(const std::string& path) {
   p.rear_wall_x = field("rear_wall_x_m").get<double>();
   if (p.rear_wall_x < p.points.back().x() - 1e-9)
     throw InputError(path + ": field 'rear_wall_x_m' must not lie in front of the last profile point");
+  if (!std::isfinite(p.rear_wall_x) || std::abs(p.rear_wall_x) > kMaxProfileExtent)
+    throw InputError(
+        path + ": field 'rear_wall_x_m' lies more than 100 m from the origin; give it in metres");
+  if (!(p.cross_section() > 0.0))
+    throw InputError(path +
+                     ": field 'profile_xz_m' encloses no soil (every height is 0); give the "
+                     "surface's heights in metres");
   return p;
 }
 
@@ -166,6 +179,10 @@ Bounds pile_bounds(const PileProfile& profile, double diameter) {
   b.lo = Vec3(profile.points.front().x() - 2.0 * top - 4 * diameter, -0.5 * profile.width, 0.0);
   b.hi = Vec3(profile.rear_wall_x, 0.5 * profile.width, 3.5 * top + 4 * diameter);
   return b;
+}
+
+double estimated_pile_particles(const PileProfile& profile, double diameter) {
+  return kEmissionSolidFraction * profile.volume() / (M_PI / 6.0 * diameter * diameter * diameter);
 }
 
 Particles emit_pile_particles(const PileProfile& profile, double diameter, const Material& material,
@@ -333,6 +350,18 @@ double particle_toe(const Particles& particles, const PileProfile& profile, doub
 
 PileBuild build_pile(Device& dev, const PileProfile& profile, const FidelityPreset& preset,
                      const Material& material, const PileBuildOptions& options, Progress* progress) {
+  // a pile sized by mistake is refused before it is filled (kMaxPileParticles)
+  const double needed = estimated_pile_particles(profile, preset.diameter);
+  if (needed > kMaxPileParticles) {
+    const std::string where =
+        profile.path.empty() ? "pile profile '" + profile.name + "'" : profile.path;
+    throw InputError(where + ": the pile (" +
+                     std::to_string(static_cast<long long>(profile.volume())) +
+                     " m^3) needs about " + std::to_string(static_cast<long long>(needed)) +
+                     " particles at " + preset.name +
+                     ", more than talus builds (4,500,000, ten times D50's); check that "
+                     "'profile_xz_m' and 'width_m' are in metres, or use a coarser level");
+  }
   PileBuild out;
   out.geoms = pile_container(profile);
   out.bounds = pile_bounds(profile, preset.diameter);

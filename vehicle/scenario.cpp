@@ -30,6 +30,11 @@ namespace {
 constexpr double kMaxDuration = 3600.0;
 // the shortest [s]: two samples of the 100 Hz sensors
 constexpr double kMinDuration = 0.02;
+// the farthest a pile's toe may lie from the machine's start (x = 0) [m]: a loader approaches a
+// pile over a few metres, and at 100 m a run of an hour at its top speed (about 10 m/s) still
+// fits; far beyond, the device's float positions lose the millimetres a contact needs (their
+// spacing is 1e-3 m at 1e4 m from the origin)
+constexpr double kMaxPileToeX = 100.0;
 
 PiecewiseLinear series(const DataFile& f, const std::string& key) {
   const auto& j = f.member(f.root(), "", key);
@@ -91,6 +96,9 @@ Scenario load_scenario(const std::string& name_or_path) {
     if (s.payload > 0) f.fail("payload", "is set for a scenario with a pile", "remove it (the bucket fills with particles)");
     s.pile_profile = root.contains("pile_profile") ? f.text(root, "", "pile_profile") : "default";
     s.pile_toe_x = f.plain_number(root, "", "pile_toe_x");
+    if (!(s.pile_toe_x >= 0.0 && s.pile_toe_x <= kMaxPileToeX))
+      f.fail("pile_toe_x", "lies outside 0-100 m from the machine's start",
+             "give the pile's toe in m ahead of the machine (the shipped scenarios: 3.95-4.25 m)");
     s.dig_start = f.plain_number(root, "", "dig_start");
     s.dig_end = f.plain_number(root, "", "dig_end");
     if (!(s.dig_start >= 0 && s.dig_start < s.dig_end && s.dig_end <= s.duration))

@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <utility>
+#include <vector>
 
 #include "host/error.hpp"
 #include "terrain/pile.hpp"
@@ -40,6 +42,50 @@ TEST(Pile, BadProfileNamesFileAndField) {
   path = write_tmp("talus_bad_profile2.json",
                    R"({"width_m": 6, "rear_wall_x_m": 5, "profile_xz_m": [[0,0],[0,1]]})");
   EXPECT_THROW(load_pile_profile(path), InputError);  // x must increase
+}
+
+// profiles that cannot make a pile are refused naming the field: one with no soil dug "0 kg"
+// with exit 0, one 10 km high allocated until std::bad_alloc after 47 s
+TEST(Pile, ProfileWithoutSoilOrOutOfScaleNamesTheField) {
+  const std::vector<std::pair<const char*, const char*>> cases = {
+      {R"({"width_m": 6, "rear_wall_x_m": 5, "profile_xz_m": [[0,0],[3,0],[5,0]]})",
+       "'profile_xz_m'"},
+      {R"({"width_m": 6, "rear_wall_x_m": 5, "profile_xz_m": [[0,0],[3,10000],[5,10000]]})",
+       "'profile_xz_m[1]'"},
+      {R"({"width_m": 6000, "rear_wall_x_m": 5, "profile_xz_m": [[0,0],[3,2],[5,2]]})",
+       "'width_m'"},
+      {R"({"width_m": 6, "rear_wall_x_m": 1e12, "profile_xz_m": [[0,0],[3,2],[5,2]]})",
+       "'rear_wall_x_m'"}};
+  for (const auto& [text, field] : cases) {
+    const std::string path = write_tmp("talus_out_of_scale_profile.json", text);
+    try {
+      load_pile_profile(path);
+      FAIL() << text << ": no error";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+    }
+  }
+}
+
+// a pile that would need more particles than talus builds is refused before it is filled
+TEST(Pile, PileBeyondTheParticleLimitIsRefusedBeforeItIsFilled) {
+  const std::string path =
+      write_tmp("talus_huge_profile.json",
+                R"({"width_m": 60, "rear_wall_x_m": 90, "profile_xz_m": [[0,0],[30,20],[90,20]]})");
+  const PileProfile profile = load_pile_profile(path);
+  EXPECT_GT(estimated_pile_particles(profile, 0.1), kMaxPileParticles);
+  // the default pile at D50 lies within the limit (and near paper Table 3's 450,000)
+  const double d50 = estimated_pile_particles(default_pile_profile(), 0.05);
+  std::printf("default pile at D50: about %.0f particles\n", d50);
+  EXPECT_LT(d50, kMaxPileParticles);
+  Device dev;
+  try {
+    build_pile(dev, profile, fidelity_preset("D100"), gravel(), PileBuildOptions{}, nullptr);
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("metres"), std::string::npos) << e.what();
+  }
 }
 
 TEST(Pile, UnknownLevelListsTheKnownOnes) {

@@ -70,5 +70,22 @@ TEST(ScenarioTest, DurationOutsideItsRangeNamesTheField) {
   EXPECT_NO_THROW(load_scenario(path));  // the soak's ten minutes
 }
 
+// a pile's toe more than 100 m from the machine's start is refused naming the field: at 1e12 m
+// the run ended with a misleading "needs more than 64 colours" from the device's float positions
+TEST(ScenarioTest, PileToeFarAwayNamesTheField) {
+  const auto path = (std::filesystem::temp_directory_path() / "talus_toe_scenario.json").string();
+  for (const char* toe : {"1e12", "101", "-1"}) {
+    std::ofstream(path)
+        << R"({"name": "x", "machine": "wa320", "duration": 9, "pile": true, "pile_toe_x": )" << toe
+        << R"(, "dig_start": 1, "dig_end": 8, "drive": [[0, 0]], "lift": [[0, 0]], "tilt": [[0, 0]]})";
+    try {
+      load_scenario(path);
+      FAIL() << toe << ": no error";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("field 'pile_toe_x'"), std::string::npos) << e.what();
+    }
+  }
+}
+
 }  // namespace
 }  // namespace talus::vehicle
