@@ -37,7 +37,7 @@ struct SimulationOptions {
   /// a pile; "flat-lift", "load-carry" run the machine alone) or the path of a scenario file
   /// (docs/spec.md §3)
   std::string scenario = "hd27";
-  /// the particle level of a pile, paper Table 3: "D400" (about 800 particles, seconds to build),
+  /// the particle level of a pile, paper Table 3: "D400" (HD27: 765 particles, a second to build),
   /// "D200", "D100", "D50" (the finer, the slower); checked for vehicle-only scenarios too
   std::string level = "D400";
   /// the random seed of the pile's particle sizes and jitter
@@ -93,10 +93,10 @@ struct ParticleState {
 /// \brief a scenario's run, stepped by the caller.
 ///
 /// Construction loads the scenario and, when it has a pile, builds and settles the pile at the
-/// level (digging/digging.hpp: about 10 s at D400 on two CPU cores, minutes at D200) and lets the
-/// machine settle on its tyres; time() is then 0. Errors: talus::InputError (a talus::Error) for
-/// bad options or data files, naming the option or the file and field and how to fix it;
-/// talus::Error for a failure of the simulation (an OpenCL error, a non-finite state).
+/// level (digging/digging.hpp: about a second at D400 on two CPU cores, longer at finer levels) and
+/// lets the machine settle on its tyres; time() is then 0. Errors: talus::InputError (a
+/// talus::Error) for bad options or data files, naming the option or the file and field and how to
+/// fix it; talus::Error for a failure of the simulation (an OpenCL error, a non-finite state).
 ///
 /// Not in this version: saving and restoring a state, model extensions (`talus run --effect`),
 /// Python bindings (docs/embedding.md, "Not yet").
