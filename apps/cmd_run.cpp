@@ -367,19 +367,8 @@ void run_scenario(const RunOptions& o) {
   if (sc.pile) {
     run_digging(o, sc, effects->set);
   } else {
-    // a payload the machine cannot hold on its wheels even with its boom low (its shortest
-    // reach) is refused: 1e12 kg ran to exit 0 with the machine at 90 degrees of pitch. (The
-    // library builds such a machine for test rigs that hold its frame)
-    const vehicle::WheelLoader loaded(vehicle::machine_file(sc), sc.payload);
-    const double tipping = loaded.static_tipping_load();
-    if (sc.payload > tipping) {
-      std::ostringstream msg;
-      msg << sc.path << ": field 'payload': " << sc.payload
-          << " kg is above the static tipping load of " << loaded.name() << " with its boom low ("
-          << std::lround(tipping)
-          << " kg): it would tip forward onto its bucket; give a payload below that";
-      throw InputError(msg.str());
-    }
+    // a payload the machine cannot hold on its wheels even with its boom low is refused
+    vehicle::check_payload_holds(sc, vehicle::WheelLoader(vehicle::machine_file(sc), sc.payload));
     run_vehicle_only(o, sc, effects->set);
   }
 }

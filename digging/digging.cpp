@@ -70,7 +70,7 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
   split_ = std::make_unique<SplitSolver>(dev, *dem_, *loader_, options.coupling);
   steps_total_ = static_cast<int>(std::lround(scenario.duration / h));
   // the effects start with the settled machine at t = 0
-  vehicle::start_with_effects(*loader_, effects_, log_);
+  sensors_ = vehicle::start_with_effects(*loader_, effects_, log_);
 }
 
 double DiggingSimulation::run(const std::function<void(int)>& after_step) {
@@ -98,7 +98,8 @@ void DiggingSimulation::step(double drive, double lift, double tilt) {
   StageScope stage(dev_, "other");
   const double h = preset_.dt;
   const double t_end = (steps_done_ + 1) * h;
-  vehicle::step_with_effects(*loader_, effects_, time_, h, t_end, {drive, lift, tilt}, [&] { split_->step(); }, &log_);
+  sensors_ = vehicle::step_with_effects(
+      *loader_, effects_, time_, h, t_end, {drive, lift, tilt}, [&] { split_->step(); }, &log_);
   ++steps_done_;
   time_ = t_end;
   // coupling bookkeeping

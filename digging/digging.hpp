@@ -73,6 +73,9 @@ class DiggingSimulation {
   const DemWorld& dem() const { return *dem_; }
   const SplitSolver& split() const { return *split_; }
   const vehicle::SensorLog& log() const { return log_; }
+  // what the sensors report now, after the last step (at time()) and through the effects: what a
+  // controller reads; the log holds only the 100 Hz instants, which a step under 10 ms may miss
+  const vehicle::SensorSample& sensors() const { return sensors_; }
   // particles now (downloaded from the device)
   Particles particles() const { return dem_->particles(); }
   // soil in the bucket now, by terrain/bucket_fill's rule [kg]
@@ -99,6 +102,7 @@ class DiggingSimulation {
   std::unique_ptr<DemWorld> dem_;
   std::unique_ptr<SplitSolver> split_;
   vehicle::SensorLog log_;
+  vehicle::SensorSample sensors_;
   vehicle::EffectSet no_effects_;
   vehicle::EffectSet& effects_;  // the caller's, or no_effects_
   double time_ = 0.0;

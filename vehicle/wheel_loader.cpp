@@ -4,6 +4,7 @@
 #include <cmath>
 #include <initializer_list>
 #include <limits>
+#include <sstream>
 
 #include "host/error.hpp"
 
@@ -305,6 +306,18 @@ double WheelLoader::operating_mass() const {
   double m = 0.0;
   for (const auto& b : system_.bodies()) m += b.mass;
   return m;
+}
+
+void check_payload_holds(const Scenario& scenario, const WheelLoader& loaded) {
+  const double tipping = loaded.static_tipping_load();
+  if (scenario.payload > tipping) {
+    std::ostringstream msg;
+    msg << scenario.path << ": field 'payload': " << scenario.payload
+        << " kg is above the static tipping load of " << loaded.name() << " with its boom low ("
+        << std::lround(tipping)
+        << " kg): it would tip forward onto its bucket; give a payload below that";
+    throw InputError(msg.str());
+  }
 }
 
 }  // namespace talus::vehicle

@@ -16,6 +16,7 @@
 #include "vehicle/joints.hpp"
 #include "vehicle/machine.hpp"
 #include "vehicle/multibody.hpp"
+#include "vehicle/scenario.hpp"
 #include "vehicle/tyre_contact.hpp"
 
 namespace talus::vehicle {
@@ -116,5 +117,11 @@ class WheelLoader {
   int bucket_ = -1, front_frame_ = -1;
   double payload_ = 0.0, top_speed_ = 0.0, traction_limit_ = 0.0, rated_volume_ = 0.0;
 };
+
+// a vehicle-only scenario's payload that `loaded` (the scenario's machine carrying it) cannot hold
+// on its wheels even with its boom low, its shortest reach: InputError naming the scenario's file
+// and field 'payload'. 1e12 kg ran to the end with the machine at 90 degrees of pitch; the library
+// itself builds such a machine for test rigs that hold its frame, so runs check, not the machine
+void check_payload_holds(const Scenario& scenario, const WheelLoader& loaded);
 
 }  // namespace talus::vehicle

@@ -33,8 +33,9 @@ LAYERS = [
     ["sim2real"],
     # presentation: particle files, images, plots, ray-traced renders
     ["io"],
-    # the `talus` command-line tool, one file per subcommand
-    ["apps"],
+    # the two front ends, which may not include each other: the `talus` command-line tool, one file per
+    # subcommand, and the embedding facade (talus/talus.hpp) for programs that run talus inside themselves
+    ["apps", "embed"],
 ]
 
 # folders of one layer that may include each other, as (including, included); none today

@@ -1,0 +1,300 @@
+#include "embed/talus.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <system_error>
+#include <utility>
+
+#include "digging/digging.hpp"
+#include "host/data_files.hpp"
+#include "host/device.hpp"
+#include "host/progress.hpp"
+#include "terrain/pile.hpp"
+#include "vehicle/effect.hpp"
+#include "vehicle/scenario.hpp"
+#include "vehicle/sensors.hpp"
+#include "vehicle/wheel_loader.hpp"
+
+namespace talus {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// the reading's field of each contract channel, in the contract's order (kSensorChannels): the
+// header spells the fields for users, and tests/embed holds them to the contract's names
+constexpr std::array<double SensorReading::*, vehicle::kChannelCount> kReadingFields = {
+    &SensorReading::t,
+    &SensorReading::f_lift,
+    &SensorReading::f_tilt,
+    &SensorReading::f_traction,
+    &SensorReading::v_drive,
+    &SensorReading::d_lift,
+    &SensorReading::d_tilt,
+    &SensorReading::boom_deg,
+    &SensorReading::bucket_deg,
+    &SensorReading::pitch_deg,
+    &SensorReading::x_vehicle,
+    &SensorReading::bucket_tip_x,
+    &SensorReading::bucket_tip_z,
+    &SensorReading::power};
+
+SensorReading to_reading(const vehicle::SensorSample& s) {
+  SensorReading r;
+  for (std::size_t c = 0; c < vehicle::kChannelCount; ++c)
+    r.*kReadingFields[c] = s.*vehicle::kSensorChannels[c].field;
+  return r;
+}
+
+std::string lower_case(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
+  return s;
+}
+
+// the data folders in the facade's order: $TALUS_DATA_DIR (the person running decides), the
+// program's data_dir (the installed package's by default), then ./data and beside the program
+std::vector<std::string> data_roots(const std::string& data_dir) {
+  std::vector<std::string> roots = data_search_paths();
+  if (!data_dir.empty()) {
+    const bool from_env = std::getenv("TALUS_DATA_DIR") != nullptr;
+    roots.insert(roots.begin() + (from_env ? 1 : 0), data_dir);
+  }
+  return roots;
+}
+
+// name_or_path when it is a file, else data/<subdir>/<name>.json (the name in any case) in the
+// first root that has it; empty when none has
+std::string resolve(const std::string& name_or_path, const std::string& subdir,
+                    const std::vector<std::string>& roots) {
+  std::error_code ec;
+  if (fs::is_regular_file(name_or_path, ec)) return name_or_path;
+  for (const std::string& name : {name_or_path, lower_case(name_or_path)}) {
+    for (const std::string& root : roots) {
+      const fs::path p = fs::path(root) / subdir / (name + ".json");
+      if (fs::is_regular_file(p, ec)) return p.string();
+    }
+  }
+  return {};
+}
+
+// the shipped scenarios' names in the first root that has scenarios, for an error message
+std::string known_scenarios(const std::vector<std::string>& roots) {
+  for (const std::string& root : roots) {
+    std::error_code ec;
+    std::vector<std::string> names;
+    for (const auto& entry : fs::directory_iterator(fs::path(root) / "scenarios", ec))
+      if (entry.path().extension() == ".json") names.push_back(entry.path().stem().string());
+    if (names.empty()) continue;
+    std::sort(names.begin(), names.end());
+    std::string list;
+    for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
+    return list;
+  }
+  return {};
+}
+
+// the scenario of the options, its machine and pile profile found where the options say (the
+// layers below search only $TALUS_DATA_DIR, ./data and beside the program)
+vehicle::Scenario load_options_scenario(const SimulationOptions& options) {
+  const std::vector<std::string> roots = data_roots(options.data_dir);
+  const std::string path = resolve(options.scenario, "scenarios", roots);
+  if (path.empty()) {
+    std::string searched;
+    for (const std::string& root : roots)
+      searched += (searched.empty() ? "" : ", ") + root + "/scenarios";
+    const std::string known = known_scenarios(roots);
+    throw InputError(
+        "SimulationOptions::scenario '" + options.scenario + "': no such file, and no " +
+        options.scenario + ".json in " + searched + "; give a shipped scenario's name" +
+        (known.empty() ? std::string(" or a path")
+                       : " (" + known + ") or the path of a scenario file") +
+        (known.empty() ? "; no data folder was found: set SimulationOptions::data_dir or "
+                         "TALUS_DATA_DIR to the folder holding talus's data"
+                       : ""));
+  }
+  vehicle::Scenario sc = vehicle::load_scenario(path);
+  // what the scenario names is found in the same folders; what is not is left to the layers
+  // below, whose errors name the scenario's field
+  if (const std::string machine = resolve(sc.machine, "machines", roots); !machine.empty())
+    sc.machine = machine;
+  if (sc.pile) {
+    if (const std::string pile = resolve(sc.pile_profile, "piles", roots); !pile.empty())
+      sc.pile_profile = pile;
+  }
+  return sc;
+}
+
+// the level of the options, InputError naming the option and the known levels
+FidelityPreset options_level(const SimulationOptions& options) {
+  try {
+    return fidelity_preset(options.level);
+  } catch (const InputError& e) {
+    throw InputError(std::string("SimulationOptions::level: ") + e.what() + "; give one of them");
+  }
+}
+
+}  // namespace
+
+// the run behind the facade: a dig (pile scenarios) or the machine alone on flat ground, each
+// stepped through the same loop as `talus run` (digging/digging.hpp, sim2real's replay)
+struct Simulation::Impl {
+  vehicle::Scenario scenario;
+  FidelityPreset preset;
+  // a pile: the device and the coupled dig on it
+  std::unique_ptr<Device> device;
+  std::unique_ptr<DiggingSimulation> dig;
+  // the machine alone: its own steps, the empty effect set (the identity) and the 100 Hz log
+  std::unique_ptr<vehicle::WheelLoader> loader;
+  vehicle::EffectSet no_effects;
+  vehicle::SensorLog log{100.0};
+  vehicle::SensorSample sensors;
+  double time = 0.0;
+  long steps_done = 0;
+
+  void step(const Targets& targets) {
+    if (dig) {
+      dig->step(targets.drive, targets.lift, targets.tilt);
+      return;
+    }
+    // the clock counts steps, as the run loop's does, so every run samples the same instants
+    const double h = scenario.timestep;
+    const double t_end = static_cast<double>(steps_done + 1) * h;
+    sensors = vehicle::step_with_effects(
+        *loader, no_effects, time, h, t_end, {targets.drive, targets.lift, targets.tilt},
+        [&] { loader->step(h); }, &log);
+    ++steps_done;
+    time = t_end;
+  }
+  double now() const { return dig ? dig->time() : time; }
+  const vehicle::SensorSample& reading() const { return dig ? dig->sensors() : sensors; }
+  const vehicle::SensorLog& sensor_log() const { return dig ? dig->log() : log; }
+};
+
+Simulation::Simulation(const SimulationOptions& options) : impl_(std::make_unique<Impl>()) {
+  Impl& m = *impl_;
+  m.scenario = load_options_scenario(options);
+  // the level is checked for every scenario, though only a pile uses it (as talus run does)
+  m.preset = options_level(options);
+  if (m.scenario.pile) {
+    // the pile built and settled at the level, then the machine settled in front of it
+    DiggingOptions dig_options;
+    dig_options.pile.seed = options.seed;
+    m.device = std::make_unique<Device>();
+    const PileProfile placed = scenario_pile_profile(m.scenario);
+    PileBuild pile;
+    {
+      Progress progress("pile " + m.preset.name, 1.5 * dig_options.pile.max_time, options.progress);
+      pile = build_scenario_pile(*m.device, m.scenario, placed, m.preset, dig_options, &progress);
+      progress.finish(std::to_string(pile.particles.size()) + " particles");
+    }
+    m.dig = std::make_unique<DiggingSimulation>(*m.device, m.scenario, m.preset, pile, dig_options);
+  } else {
+    // the machine alone, with a payload it can hold on its wheels
+    m.loader = std::make_unique<vehicle::WheelLoader>(vehicle::machine_file(m.scenario),
+                                                      m.scenario.payload);
+    vehicle::check_payload_holds(m.scenario, *m.loader);
+    m.sensors = vehicle::start_with_effects(*m.loader, m.no_effects, m.log);
+  }
+}
+
+Simulation::~Simulation() = default;
+Simulation::Simulation(Simulation&& other) noexcept = default;
+Simulation& Simulation::operator=(Simulation&& other) noexcept = default;
+
+void Simulation::step() { step(scenario_targets()); }
+
+void Simulation::step(const Targets& targets) { impl_->step(targets); }
+
+Targets Simulation::scenario_targets() const {
+  const double t = impl_->now();
+  const vehicle::Scenario& sc = impl_->scenario;
+  return {sc.drive(t), sc.lift(t), sc.tilt(t)};
+}
+
+double Simulation::time() const { return impl_->now(); }
+
+double Simulation::timestep() const {
+  return impl_->dig ? impl_->preset.dt : impl_->scenario.timestep;
+}
+
+double Simulation::duration() const { return impl_->scenario.duration; }
+
+bool Simulation::done() const {
+  if (impl_->dig) return impl_->dig->done();
+  // the step count the run loop takes (talus run), so done() agrees with it
+  return impl_->steps_done >= std::llround(impl_->scenario.duration / impl_->scenario.timestep);
+}
+
+SensorReading Simulation::sensors() const { return to_reading(impl_->reading()); }
+
+std::map<std::string, double> Simulation::channels() const {
+  const vehicle::SensorSample& s = impl_->reading();
+  std::map<std::string, double> values;
+  for (const vehicle::SensorChannel& c : vehicle::kSensorChannels) values[c.name] = s.*c.field;
+  return values;
+}
+
+std::vector<SensorReading> Simulation::sensor_log() const {
+  const std::vector<vehicle::SensorSample>& samples = impl_->sensor_log().samples();
+  std::vector<SensorReading> readings;
+  readings.reserve(samples.size());
+  for (const vehicle::SensorSample& s : samples) readings.push_back(to_reading(s));
+  return readings;
+}
+
+const std::vector<std::string>& Simulation::channel_names() {
+  static const std::vector<std::string> names(vehicle::kChannelNames.begin(),
+                                              vehicle::kChannelNames.end());
+  return names;
+}
+
+const std::vector<std::string>& Simulation::channel_units() {
+  static const std::vector<std::string> units = [] {
+    std::vector<std::string> u;
+    u.reserve(vehicle::kChannelCount);
+    for (const vehicle::SensorChannel& c : vehicle::kSensorChannels) u.emplace_back(c.unit);
+    return u;
+  }();
+  return units;
+}
+
+double Simulation::loaded_mass() const {
+  return impl_->dig ? impl_->dig->loaded_mass() : impl_->scenario.payload;
+}
+
+bool Simulation::has_particles() const { return impl_->dig != nullptr; }
+
+std::size_t Simulation::particle_count() const { return impl_->dig ? impl_->dig->dem().size() : 0; }
+
+ParticleState Simulation::particles() const {
+  ParticleState state;
+  if (!impl_->dig) return state;
+  const Particles p = impl_->dig->particles();
+  const std::size_t n = p.size();
+  state.position.reserve(3 * n);
+  state.velocity.reserve(3 * n);
+  state.angular_velocity.reserve(3 * n);
+  state.radius = p.radius;
+  for (std::size_t i = 0; i < n; ++i) {
+    for (int k = 0; k < 3; ++k) {
+      state.position.push_back(p.position[i][k]);
+      state.velocity.push_back(p.velocity[i][k]);
+      state.angular_velocity.push_back(p.omega[i][k]);
+    }
+  }
+  return state;
+}
+
+std::string Simulation::scenario_name() const { return impl_->scenario.name; }
+
+std::string Simulation::level() const { return impl_->dig ? impl_->preset.name : "vehicle"; }
+
+std::string Simulation::device() const {
+  return impl_->device ? impl_->device->description() : std::string();
+}
+
+}  // namespace talus

@@ -1,0 +1,166 @@
+/// \file talus.hpp
+/// \brief the embedding API of talus (issue 16): a wheel loader digging in gravel, stepped by the
+/// program that embeds it.
+///
+/// One header, plain types only (no OpenCL, Embree, CHOLMOD or Eigen in it): a Simulation is made
+/// from a scenario and a particle level, builds and settles the scenario's pile (or runs the
+/// machine alone on flat ground), and then steps one timestep at a time with the scenario's own
+/// inputs or with target speeds the caller gives. After each step the caller reads the sensor
+/// channels of the run contract (SPEC §2.4), the bucket's loaded mass and the particles.
+///
+/// Installed as `talus/talus.hpp`; CMake: `find_package(talus)` and `talus::talus`, pkg-config:
+/// `talus`. docs/embedding.md tells how to install and link it and where the data is found.
+#pragma once
+#include <cstddef>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "host/error.hpp"
+
+/// \brief the installed package's data folder, as a string literal.
+///
+/// talusConfig.cmake defines it on talus::talus from the prefix the package was found in, so a
+/// program built with find_package(talus) finds the data wherever it runs; a pkg-config build can
+/// define it from `pkg-config --variable=datadir talus`. Without it the data is searched as
+/// SimulationOptions::data_dir says.
+#ifndef TALUS_INSTALL_DATA_DIR
+#define TALUS_INSTALL_DATA_DIR ""
+#endif
+
+namespace talus {
+
+/// \brief what to simulate: a scenario and, for a scenario with a pile, its particle level.
+struct SimulationOptions {
+  /// a shipped scenario's name (data/scenarios/NAME.json in any case: "hd27", "fb35", "rd21" dig in
+  /// a pile; "flat-lift", "load-carry" run the machine alone) or the path of a scenario file
+  /// (docs/spec.md §3)
+  std::string scenario = "hd27";
+  /// the particle level of a pile, paper Table 3: "D400" (HD27: 765 particles, a second to build),
+  /// "D200", "D100", "D50" (the finer, the slower); checked for vehicle-only scenarios too
+  std::string level = "D400";
+  /// the random seed of the pile's particle sizes and jitter
+  unsigned seed = 1;
+  /// progress lines on stderr while the pile is built and settled
+  bool progress = false;
+  /// the folder holding talus's data (machines/, scenarios/, piles/). Shipped names are looked up
+  /// in $TALUS_DATA_DIR, then here, then in ./data, then beside the running program (a build tree's
+  /// data/, an installed prefix's share/talus/data); empty: not searched. Defaults to
+  /// TALUS_INSTALL_DATA_DIR
+  std::string data_dir = TALUS_INSTALL_DATA_DIR;
+};
+
+/// \brief the operator's commands for one step: target speeds, clipped to the machine's maxima.
+struct Targets {
+  double drive = 0.0;  ///< driving speed [m/s], positive forward
+  double lift = 0.0;   ///< lift cylinders' stroke speed [m/s], positive raises the boom
+  double tilt = 0.0;   ///< tilt cylinder's stroke speed [m/s], positive curls the bucket
+};
+
+/// \brief one reading of the sensor channels: the run contract's columns (SPEC §2.4, the columns
+/// of `talus run`'s timeseries.csv, in the order of Simulation::channel_names()).
+///
+/// Angles are measured in the front frame's x-z plane; strokes are pin-to-pin length minus the
+/// closed length.
+struct SensorReading {
+  double t = 0.0;           ///< time [s]
+  double f_lift = 0.0;      ///< both lift cylinders' force, summed [N], positive pushes them longer
+  double f_tilt = 0.0;      ///< tilt cylinder's force [N], positive pushes it longer
+  double f_traction = 0.0;  ///< traction on the machine [N], positive forward
+  double v_drive = 0.0;     ///< driving speed [m/s]
+  double d_lift = 0.0;      ///< lift stroke, the mean of the two cylinders [m]
+  double d_tilt = 0.0;      ///< tilt stroke [m]
+  double boom_deg = 0.0;    ///< boom angle [deg], positive up
+  double bucket_deg = 0.0;  ///< bucket angle [deg], positive curled
+  double pitch_deg = 0.0;   ///< machine pitch [deg], positive nose-up
+  double x_vehicle = 0.0;   ///< machine position along its driving line [m]
+  double bucket_tip_x = 0.0;  ///< bucket tip, world x [m] (the front axle starts at x = 0)
+  double bucket_tip_z = 0.0;  ///< bucket tip height above the ground [m]
+  double power = 0.0;  ///< f_traction v_drive + f_lift (d/dt) d_lift + f_tilt (d/dt) d_tilt [W]
+};
+
+/// \brief the particles as flat arrays: particle i's vector at [3i, 3i + 3), its radius at [i].
+struct ParticleState {
+  std::vector<double> position;          ///< x, y, z of each particle's centre [m]
+  std::vector<double> velocity;          ///< [m/s]
+  std::vector<double> angular_velocity;  ///< [rad/s]
+  std::vector<double> radius;            ///< [m]
+  /// the number of particles
+  std::size_t size() const { return radius.size(); }
+};
+
+/// \brief a scenario's run, stepped by the caller.
+///
+/// Construction loads the scenario and, when it has a pile, builds and settles the pile at the
+/// level (digging/digging.hpp: about a second at D400 on two CPU cores, longer at finer levels) and
+/// lets the machine settle on its tyres; time() is then 0. Errors: talus::InputError (a
+/// talus::Error) for bad options or data files, naming the option or the file and field and how to
+/// fix it; talus::Error for a failure of the simulation (an OpenCL error, a non-finite state).
+///
+/// Not in this version: saving and restoring a state, model extensions (`talus run --effect`),
+/// Python bindings (docs/embedding.md, "Not yet").
+class Simulation {
+ public:
+  /// loads the scenario and builds what it needs (see the class)
+  explicit Simulation(const SimulationOptions& options = {});
+  ~Simulation();
+  /// a moved-from Simulation may only be destroyed or assigned to
+  Simulation(Simulation&& other) noexcept;
+  /// a moved-from Simulation may only be destroyed or assigned to
+  Simulation& operator=(Simulation&& other) noexcept;
+  Simulation(const Simulation&) = delete;
+  Simulation& operator=(const Simulation&) = delete;
+
+  /// one timestep with the scenario's own target speeds at time()
+  void step();
+  /// one timestep with the caller's target speeds instead of the scenario's
+  void step(const Targets& targets);
+  /// the scenario's target speeds at time(): what step() uses
+  Targets scenario_targets() const;
+
+  /// simulated time since the start [s]: steps taken times timestep()
+  double time() const;
+  /// the timestep [s]: the level's for a pile (paper Table 3), the scenario file's otherwise
+  double timestep() const;
+  /// the scenario's duration [s]; stepping may go on past it, the inputs holding their last value
+  double duration() const;
+  /// whether time() has reached duration()
+  bool done() const;
+
+  /// what the sensors read now, after the last step
+  SensorReading sensors() const;
+  /// the same as name -> value, the names of channel_names()
+  std::map<std::string, double> channels() const;
+  /// the readings at 100 Hz since the start (t = 0, 0.01 s, ...), as `talus run` logs them;
+  /// instants inside a step longer than 10 ms are interpolated
+  std::vector<SensorReading> sensor_log() const;
+  /// the contract's channel names, in its column order: "t", "f_lift", ..., "power"
+  static const std::vector<std::string>& channel_names();
+  /// the channels' SI units, in the order of channel_names(): "s", "N", ...
+  static const std::vector<std::string>& channel_units();
+
+  /// the soil in the bucket now [kg] (terrain/bucket_fill's rule); a vehicle-only scenario's
+  /// payload, which its bucket carries from the start
+  double loaded_mass() const;
+
+  /// whether the scenario has particles (a pile)
+  bool has_particles() const;
+  /// the number of particles (0 without a pile)
+  std::size_t particle_count() const;
+  /// the particles now, downloaded from the device (empty arrays without a pile)
+  ParticleState particles() const;
+
+  /// the scenario's name as its file gives it ("HD27")
+  std::string scenario_name() const;
+  /// the particle level ("D400"), or "vehicle" for a scenario without a pile
+  std::string level() const;
+  /// the OpenCL device the particles run on, "platform / device (...)"; empty without a pile
+  std::string device() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace talus
