@@ -18,7 +18,7 @@
 
 namespace talus::app {
 
-void add_cut_command(CLI::App& app) {
+void add_cut_command(CLI::App& app, const std::string& command_line) {
   struct Options {
     std::string level = "D200";
     std::string out;
@@ -54,11 +54,11 @@ void add_cut_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--seed", opt->cut.seed, "random seed of the bed")->capture_default_str();
   cmd->add_flag("--quiet", opt->quiet, "no progress on stderr");
-  cmd->callback([opt] {
+  cmd->callback([opt, command_line] {
     const FidelityPreset& level = fidelity_preset(opt->level);
     const CuttingOptions c = at_level(level, opt->cut);
     check_cutting_options(c);  // bad input leaves no output folder behind
-    make_output_dir(opt->out);
+    start_output_folder(opt->out);
     check_output_file(opt->json, "--json");
     const auto t0 = std::chrono::steady_clock::now();
     Device dev;
@@ -124,6 +124,7 @@ void add_cut_command(CLI::App& app) {
                         {"device", dev.description()},
                         {"series", {{"travel_m", travel}, {"force_x_N", fx}, {"force_z_N", fz},
                                     {"surcharge_m", heap}, {"fee_force_N", fe}}}};
+    add_provenance(j, command_line);
     write_particles_and_summary(opt->out, r.final_state, j, opt->json);
   });
 }

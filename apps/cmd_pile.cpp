@@ -3,6 +3,7 @@
 #include <iostream>
 
 #include "apps/commands.hpp"
+#include "apps/outputs.hpp"
 #include "host/device.hpp"
 #include "host/files.hpp"
 #include "io/image.hpp"
@@ -12,7 +13,7 @@
 
 namespace talus::app {
 
-void add_pile_command(CLI::App& app) {
+void add_pile_command(CLI::App& app, const std::string& command_line) {
   struct Options {
     std::string level = "D200";
     std::string out;
@@ -41,10 +42,10 @@ void add_pile_command(CLI::App& app) {
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
   cmd->add_flag("--quiet", opt->quiet, "no progress on stderr");
-  cmd->callback([opt] {
+  cmd->callback([opt, command_line] {
     const FidelityPreset& preset = fidelity_preset(opt->level);
     PileProfile profile = opt->profile.empty() ? default_pile_profile() : load_pile_profile(opt->profile);
-    make_output_dir(opt->out);
+    start_output_folder(opt->out);
     auto t0 = std::chrono::steady_clock::now();
     Device dev;
     // the fill settles for half the time, then the pile for the whole (terrain/pile.cpp)
@@ -85,6 +86,7 @@ void add_pile_command(CLI::App& app) {
         {"profile_volume_m3", profile.volume()},
         {"wall_s", wall},
         {"device", dev.description()}};
+    add_provenance(j, command_line);
     write_json(opt->out + "/summary.json", j);
     std::cout << j.dump(2) << "\n";
   });

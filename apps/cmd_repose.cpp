@@ -3,6 +3,7 @@
 #include <iostream>
 
 #include "apps/commands.hpp"
+#include "apps/outputs.hpp"
 #include "host/device.hpp"
 #include "host/files.hpp"
 #include "io/image.hpp"
@@ -11,7 +12,7 @@
 
 namespace talus::app {
 
-void add_repose_command(CLI::App& app) {
+void add_repose_command(CLI::App& app, const std::string& command_line) {
   struct Options {
     std::string out;
     HeapOptions heap;
@@ -45,8 +46,8 @@ void add_repose_command(CLI::App& app) {
       ->check(finite_number())
       ->check(non_negative_number());
   cmd->add_flag("--quiet", opt->quiet, "no progress on stderr");
-  cmd->callback([opt] {
-    make_output_dir(opt->out);
+  cmd->callback([opt, command_line] {
+    start_output_folder(opt->out);
     auto t0 = std::chrono::steady_clock::now();
     Device dev;
     double wall_time = opt->heap.wall_speed > 0 ? opt->heap.wall_travel / opt->heap.wall_speed : 0.0;
@@ -71,6 +72,7 @@ void add_repose_command(CLI::App& app) {
                         {"wall_s", wall},
                         {"device", dev.description()},
                         {"anchor", {{"repose_angle_deg", 21.0}, {"bulk_density", 1727.0}}}};
+    add_provenance(j, command_line);
     write_json(opt->out + "/summary.json", j);
     std::cout << j.dump(2) << "\n";
   });

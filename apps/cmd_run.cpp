@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "apps/commands.hpp"
+#include "apps/outputs.hpp"
 #include "apps/run.hpp"
 #include "digging/digging.hpp"
 #include "host/error.hpp"
@@ -74,10 +75,9 @@ std::string effects_note(const vehicle::EffectSet& effects) {
 void write_run(const RunOptions& o, const sim2real::Run& finished) {
   // which talus made it, and how
   sim2real::Run run = finished;
-  run.summary.details["talus_version"] = talus_version();
-  run.summary.details["git_commit"] = git_commit();
-  run.summary.details["command_line"] = o.command_line;
-  // summary.json last: it marks the folder's run as complete (start_run_folder removed the old one)
+  add_provenance(run.summary.details, o.command_line);
+  // summary.json last: it marks the folder's run as complete (start_output_folder removed the old
+  // one)
   const std::filesystem::path dir(o.out);
   sim2real::save_timeseries(dir / sim2real::kTimeseriesFile, run.series);
   sim2real::save_summary(dir / sim2real::kSummaryFile, run.summary);
@@ -88,22 +88,10 @@ void write_run(const RunOptions& o, const sim2real::Run& finished) {
   }
 }
 
-// the output folder, made and checked writable, without a previous run's summary.json: a run
-// killed while rewriting the folder then leaves no summary beside its new files, and compare,
-// table and diagnose refuse the folder instead of pairing old and new
-void start_run_folder(const std::string& out) {
-  make_output_dir(out);
-  std::error_code ec;
-  std::filesystem::remove(std::filesystem::path(out) / sim2real::kSummaryFile, ec);
-  if (ec)
-    throw InputError("--out " + out + ": cannot remove the previous run's " +
-                     sim2real::kSummaryFile + " (" + ec.message() + ")");
-}
-
 // a scenario without particles: the machine alone on flat ground
 void run_vehicle_only(const RunOptions& o, const vehicle::Scenario& sc, vehicle::EffectSet& effects) {
   const std::string machine = vehicle::machine_file(sc);
-  start_run_folder(o.out);
+  start_output_folder(o.out);
   const int steps = static_cast<int>(std::llround(sc.duration / sc.timestep));
   if (!o.quiet) {
     const vehicle::WheelLoader loader(machine, sc.payload);
@@ -286,7 +274,7 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
   if (o.iterations > 0) preset.iterations = o.iterations;
   const PileProfile placed = scenario_pile_profile(sc);
   const DiggingOptions options = digging_options(o);
-  start_run_folder(o.out);
+  start_output_folder(o.out);
   const std::filesystem::path dir(o.out);
   const auto start = std::chrono::steady_clock::now();
   Device dev;

@@ -67,7 +67,7 @@ void write_shear_outputs(const std::string& dir, const ShearResult& r, double di
 
 }  // namespace
 
-void add_soil_command(CLI::App& app) {
+void add_soil_command(CLI::App& app, const std::string& command_line) {
   auto opt = std::make_shared<SoilOptions>();
   auto* cmd = app.add_subcommand("soil", "calibration tests of the gravel at a level's particle size: "
                                          "heap (repose), direct shear, planar column collapse");
@@ -97,9 +97,9 @@ void add_soil_command(CLI::App& app) {
       ->check(positive_number())
       ->capture_default_str();
   cmd->add_flag("--quiet", opt->quiet, "no progress on stderr");
-  cmd->callback([opt] {
+  cmd->callback([opt, command_line] {
     const FidelityPreset& level = fidelity_preset(opt->level);
-    make_output_dir(opt->out);
+    start_output_folder(opt->out);
     check_output_file(opt->json, "--json");
     const auto t0 = std::chrono::steady_clock::now();
     Device dev;
@@ -169,6 +169,7 @@ void add_soil_command(CLI::App& app) {
     progress.finish();
     j["wall_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     j["device"] = dev.description();
+    add_provenance(j, command_line);
     write_particles_and_summary(opt->out, final_state, j, opt->json);
   });
 }

@@ -20,11 +20,12 @@
 #include <sstream>
 
 #include "apps/commands.hpp"
+#include "apps/outputs.hpp"
+#include "digging/feedback_sweep.hpp"
 #include "host/error.hpp"
 #include "host/files.hpp"
 #include "host/progress.hpp"
 #include "io/plot.hpp"
-#include "digging/feedback_sweep.hpp"
 #include "vehicle/data_file.hpp"
 
 namespace talus::app {
@@ -37,6 +38,7 @@ constexpr int kFigureWidth = 1200, kFigureHeight = 1400;
 constexpr int kFields = 7;
 
 struct SweepOptions {
+  std::string command_line;  // as typed, recorded in summary.json with the version and commit
   std::string scenario = "fb35";
   std::vector<std::string> fidelities = {"D200"};
   int samples = 50;
@@ -229,6 +231,7 @@ void report(const SweepOptions& o, const std::vector<std::pair<std::string, std:
                                   {"performance_drop_rel", d.drop_rel}};
   }
   write_figure((std::filesystem::path(o.out) / "sweep.png").string(), levels);
+  add_provenance(summary, o.command_line);
   write_json((std::filesystem::path(o.out) / "summary.json").string(), summary);
   if (o.json == "-") std::cout << summary.dump(2) << "\n";
   else if (!o.json.empty()) write_json(o.json, summary);
@@ -248,7 +251,7 @@ void sweep(const SweepOptions& o) {
   if (o.samples < 1) throw InputError("--samples: must be at least 1");
   std::vector<const FidelityPreset*> presets;
   for (const auto& f : o.fidelities) presets.push_back(&fidelity_preset(f));
-  make_output_dir(o.out);
+  start_output_folder(o.out);
   check_output_file(o.json, "--json");
   for (const auto* p : presets) make_output_dir((std::filesystem::path(o.out) / p->name).string());
 
@@ -308,8 +311,9 @@ void sweep(const SweepOptions& o) {
 
 }  // namespace
 
-void add_sweep_command(CLI::App& app) {
+void add_sweep_command(CLI::App& app, const std::string& command_line) {
   auto o = std::make_shared<SweepOptions>();
+  o->command_line = command_line;
   auto* cmd = app.add_subcommand("sweep", "force-feedback bucket filling along the controller's search line "
                                           "(paper section 7); runs in parallel under mpirun");
   cmd->add_option("--scenario", o->scenario, "the pile's scenario (its profile): fb35, hd27, rd21 or a path")

@@ -17,6 +17,7 @@
 #include <sstream>
 
 #include "apps/commands.hpp"
+#include "apps/outputs.hpp"
 #include "apps/run.hpp"
 #include "host/error.hpp"
 #include "host/files.hpp"
@@ -70,6 +71,8 @@ void synth(const SynthOptions& o) {
   std::error_code made;
   fs::create_directories(key.parent_path(), made);
   check_output_file(key.string(), "--answer-key");
+  // the data folder without a previous summary: summary.json, written last, marks it complete
+  start_output_folder(out.string());
 
   // the simulation, in a work folder next to the output
   RunOptions run = o.run;
@@ -93,10 +96,9 @@ void synth(const SynthOptions& o) {
   const nlohmann::json effects = r.summary.details.value("effects", nlohmann::json::array());
 
   // the measured run, and the answer key elsewhere
-  make_output_dir(out.string());
   sim2real::save_timeseries(out / sim2real::kTimeseriesFile, r.series);
-  sim2real::save_summary(out / sim2real::kSummaryFile, summary);
   sim2real::save_metadata(out / sim2real::kMetadataFile, meta);
+  sim2real::save_summary(out / sim2real::kSummaryFile, summary);
   nlohmann::json noise_json = nlohmann::json::object();
   for (const auto& [k, v] : sigma) noise_json[k] = v;
   const nlohmann::json answer = {{"data", out.string()},
@@ -108,7 +110,11 @@ void synth(const SynthOptions& o) {
                                  {"noise_seed", o.noise_seed},
                                  {"vary_inputs", o.vary_inputs},
                                  {"pile_seed", o.run.seed}};
-  write_json(key.string(), answer);
+  // the provenance goes with the key, not the data: the command line names the effects the loop
+  // must find
+  nlohmann::json key_json = answer;
+  add_provenance(key_json, o.run.command_line);
+  write_json(key.string(), key_json);
   fs::remove_all(work);
   if (!o.run.quiet)
     std::cerr << "talus synth: measured run in " << out.string() << " (timeseries.csv, summary.json, metadata.json); "
@@ -117,8 +123,9 @@ void synth(const SynthOptions& o) {
 
 }  // namespace
 
-void add_synth_command(CLI::App& app) {
+void add_synth_command(CLI::App& app, const std::string& command_line) {
   auto o = std::make_shared<SynthOptions>();
+  o->run.command_line = command_line;
   auto* cmd = app.add_subcommand("synth", "field-like data from a scenario with effects and sensor noise; the "
                                           "answer key goes to a separate file");
   cmd->add_option("--scenario", o->run.scenario, "scenario name or path (fb35, hd27, rd21, flat-lift)")->required();

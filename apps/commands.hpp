@@ -57,8 +57,10 @@ inline CLI::Validator signed_number(bool allow_zero) {
 inline CLI::Validator positive_number() { return signed_number(false); }
 inline CLI::Validator non_negative_number() { return signed_number(true); }
 
-void add_pile_command(CLI::App& app);    // build and settle the default pile
-void add_repose_command(CLI::App& app);  // heap test: angle of repose of the gravel
+// commands that write a folder get the command line as typed, recorded in its summary.json
+void add_pile_command(CLI::App& app, const std::string& command_line);  // build and settle a pile
+void add_repose_command(CLI::App& app,
+                        const std::string& command_line);  // heap test: angle of repose
 void add_bench_command(CLI::App& app);   // DEM throughput benchmarks
 // the command line as typed, each argument quoted when it holds a space or a quote (for
 // summaries that record how they were made)
@@ -77,11 +79,19 @@ inline std::string command_line(int argc, char** argv) {
 // vehicle scenarios; `command_line` is recorded in every summary.json the command writes
 void add_run_command(CLI::App& app, const std::string& command_line);
 void add_compare_command(CLI::App& app); // sim-to-real error rows and tables (compare, table)
-void add_synth_command(CLI::App& app);   // field-like data with effects and noise (sim-to-real loop)
+void add_synth_command(
+    CLI::App& app,
+    const std::string& command_line);  // field-like data with effects and noise (sim-to-real loop)
 void add_diagnose_command(CLI::App& app);  // the sim-to-real loop: residual -> missing effect
-void add_sweep_command(CLI::App& app);   // force-feedback sweep along the search line (MPI)
+void add_sweep_command(
+    CLI::App& app,
+    const std::string& command_line);    // force-feedback sweep along the search line (MPI)
 void add_plot_command(CLI::App& app);    // paper-style PNG figures of runs
-void add_soil_command(CLI::App& app);    // calibration tests of the gravel: repose, shear, collapse
-void add_cut_command(CLI::App& app);     // quasi-static cutting test against the earthmoving equation
+void add_soil_command(
+    CLI::App& app,
+    const std::string& command_line);  // calibration tests of the gravel: repose, shear, collapse
+void add_cut_command(
+    CLI::App& app,
+    const std::string& command_line);  // quasi-static cutting test against the earthmoving equation
 
 }  // namespace talus::app

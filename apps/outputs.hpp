@@ -1,18 +1,43 @@
-// What every soil-test command writes last (talus soil, talus cut, talus repose): the particles at
-// the end (particles.csv with x,y,z,r,vx,vy,vz; particles.vtp for ParaView; side.png) and the
-// summary (DIR/summary.json, and with --json FILE a copy there, '-' for stdout). Each file is
-// written to a temporary name and renamed (io/output), the summary last.
+// What every command that writes a folder shares (talus run, pile, repose, soil, cut, sweep,
+// synth): the folder is started without a previous summary.json, and summary.json is written last
+// with the talus and the command line that made it, so it marks the folder as complete. A command
+// killed midway leaves a folder without a summary, which nothing can take for a finished one.
+// The soil tests write the particles at the end (particles.csv with x,y,z,r,vx,vy,vz;
+// particles.vtp for ParaView; side.png) before their summary. Each file is written to a temporary
+// name and renamed (io/output).
 #pragma once
+#include <filesystem>
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <system_error>
 
+#include "host/error.hpp"
 #include "host/files.hpp"
+#include "host/version.hpp"
 #include "io/image.hpp"
 #include "io/output.hpp"
+#include "sim2real/timeseries.hpp"
 #include "solvers/particles.hpp"
 
 namespace talus::app {
+
+// the output folder, made and checked writable, without a previous command's summary.json
+inline void start_output_folder(const std::string& out) {
+  make_output_dir(out);
+  std::error_code ec;
+  std::filesystem::remove(std::filesystem::path(out) / sim2real::kSummaryFile, ec);
+  if (ec)
+    throw InputError("--out " + out + ": cannot remove the previous " + sim2real::kSummaryFile +
+                     " (" + ec.message() + ")");
+}
+
+// which talus made a summary and how: version, git commit of the build, the command as typed
+inline void add_provenance(nlohmann::json& summary, const std::string& command_line) {
+  summary["talus_version"] = talus_version();
+  summary["git_commit"] = git_commit();
+  summary["command_line"] = command_line;
+}
 
 inline void write_particles_and_summary(const std::string& dir, const Particles& particles,
                                         const nlohmann::json& summary, const std::string& json) {

@@ -11,14 +11,15 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   app.set_version_flag("--version", std::string("talus ") + talus::talus_version() + " (" +
                                         talus::git_commit() + ")");
-  talus::app::add_pile_command(app);
-  talus::app::add_repose_command(app);
-  talus::app::add_soil_command(app);
-  talus::app::add_cut_command(app);
+  const std::string command_line = talus::app::command_line(argc, argv);
+  talus::app::add_pile_command(app, command_line);
+  talus::app::add_repose_command(app, command_line);
+  talus::app::add_soil_command(app, command_line);
+  talus::app::add_cut_command(app, command_line);
   talus::app::add_bench_command(app);
-  talus::app::add_run_command(app, talus::app::command_line(argc, argv));
-  talus::app::add_sweep_command(app);
-  talus::app::add_synth_command(app);
+  talus::app::add_run_command(app, command_line);
+  talus::app::add_sweep_command(app, command_line);
+  talus::app::add_synth_command(app, command_line);
   talus::app::add_diagnose_command(app);
   talus::app::add_compare_command(app);
   talus::app::add_plot_command(app);

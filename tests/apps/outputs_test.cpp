@@ -1,0 +1,84 @@
+// apps/outputs.hpp: every command that writes a folder starts it without a previous summary.json
+// and writes its summary last with the talus and the command line that made it (issue 15); synth
+// records them in the answer key, not in the data, whose loop must not read its effects.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "host/version.hpp"
+#include "tests/apps/cli_test_util.hpp"
+
+namespace talus {
+namespace {
+
+namespace fs = std::filesystem;
+
+nlohmann::json read_json(const fs::path& file) {
+  std::ifstream in(file);
+  return nlohmann::json::parse(in);
+}
+
+// a folder holding an old summary.json the command must not leave behind if it fails midway
+fs::path folder_with_old_summary(const std::string& name) {
+  fs::path dir = fs::temp_directory_path() / ("talus_outputs_" + name);
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::ofstream(dir / "summary.json") << R"({"stale": true})";
+  return dir;
+}
+
+void expect_provenance(const nlohmann::json& j, const std::string& words) {
+  EXPECT_EQ(j.value("talus_version", ""), talus_version());
+  EXPECT_EQ(j.value("git_commit", ""), git_commit());
+  EXPECT_NE(j.value("command_line", "").find(words), std::string::npos) << j.dump();
+  EXPECT_FALSE(j.contains("stale"));
+}
+
+// pile and soil: a finished command's summary carries its provenance
+TEST(Outputs, PileAndSoilSummariesSayWhichTalusMadeThemAndHow) {
+  const fs::path pile = folder_with_old_summary("pile");
+  ASSERT_EQ(
+      test::run_talus("", "pile --level D400 --max-time 1 --quiet --out " + pile.string()).code, 0);
+  expect_provenance(read_json(pile / "summary.json"), "pile --level D400 --max-time 1");
+  const fs::path soil = folder_with_old_summary("soil");
+  ASSERT_EQ(test::run_talus("", "soil --test collapse --level D400 --out " + soil.string()).code,
+            0);
+  expect_provenance(read_json(soil / "summary.json"), "soil --test collapse --level D400");
+}
+
+// bad input is refused before the folder is touched (the old run is kept whole); a command killed
+// after it started its folder leaves no summary, old or new, so the folder cannot pass for a
+// finished one
+TEST(Outputs, BadInputKeepsTheOldFolderAndAKilledCommandLeavesNoSummary) {
+  const fs::path dir = folder_with_old_summary("killed");
+  const auto bad = test::run_talus(
+      "", "pile --level D400 --profile /proc/nope.json --quiet --out " + dir.string());
+  EXPECT_EQ(bad.code, 2) << bad.err;
+  EXPECT_TRUE(fs::exists(dir / "summary.json"));
+  // a D200 pile settles for about 40 s here: killed after 3 s, it is midway
+  const auto killed =
+      test::run_talus("timeout -s KILL 3", "pile --level D200 --quiet --out " + dir.string());
+  EXPECT_NE(killed.code, 0);
+  EXPECT_FALSE(fs::exists(dir / "summary.json"));
+}
+
+// synth: the data's summary comes last and carries no command line (it names the effects); the
+// answer key has the provenance
+TEST(Outputs, SynthKeepsItsCommandLineInTheAnswerKey) {
+  const fs::path dir = folder_with_old_summary("synth");
+  const fs::path key = fs::temp_directory_path() / "talus_outputs_synth.key.json";
+  const auto r =
+      test::run_talus("", "synth --scenario flat-lift --effect hydraulic_lag --quiet --out " +
+                              dir.string() + " --answer-key " + key.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  const nlohmann::json data = read_json(dir / "summary.json");
+  EXPECT_FALSE(data.contains("command_line")) << data.dump();
+  EXPECT_FALSE(data.contains("stale"));
+  expect_provenance(read_json(key), "--effect hydraulic_lag");
+}
+
+}  // namespace
+}  // namespace talus
