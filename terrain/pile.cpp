@@ -50,8 +50,16 @@ PileProfile load_pile_profile(const std::string& path) {
   };
   PileProfile p;
   p.path = path;
-  p.name = j.value("name", path);
-  p.source = j.value("source", "");
+  // the optional texts: a name for messages and plots, the profile's source
+  auto text = [&](const char* name, const std::string& fallback) {
+    if (!j.contains(name)) return fallback;
+    if (!j.at(name).is_string())
+      throw InputError(path + ": field '" + name +
+                       "' must be a text in quotes; see data/piles/default.json");
+    return j.at(name).get<std::string>();
+  };
+  p.name = text("name", path);
+  p.source = text("source", "");
   if (!field("width_m").is_number() || !(field("width_m").get<double>() > 0.0) ||
       field("width_m").get<double>() > kMaxProfileExtent)
     throw InputError(path + ": field 'width_m' must be a positive number of at most 100 [m]");

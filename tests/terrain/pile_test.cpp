@@ -45,7 +45,7 @@ TEST(Pile, BadProfileNamesFileAndField) {
 }
 
 // profiles that cannot make a pile are refused naming the field: one with no soil dug "0 kg"
-// with exit 0, one 10 km high allocated until std::bad_alloc after 47 s
+// with exit 0, one 10 km high allocated until std::bad_alloc after 47 s; wrong-typed texts
 TEST(Pile, ProfileWithoutSoilOrOutOfScaleNamesTheField) {
   const std::vector<std::pair<const char*, const char*>> cases = {
       {R"({"width_m": 6, "rear_wall_x_m": 5, "profile_xz_m": [[0,0],[3,0],[5,0]]})",
@@ -55,7 +55,12 @@ TEST(Pile, ProfileWithoutSoilOrOutOfScaleNamesTheField) {
       {R"({"width_m": 6000, "rear_wall_x_m": 5, "profile_xz_m": [[0,0],[3,2],[5,2]]})",
        "'width_m'"},
       {R"({"width_m": 6, "rear_wall_x_m": 1e12, "profile_xz_m": [[0,0],[3,2],[5,2]]})",
-       "'rear_wall_x_m'"}};
+       "'rear_wall_x_m'"},
+      // wrong-typed texts gave a raw json type_error with no file name and exit 1
+      {R"({"name": 5, "width_m": 6, "rear_wall_x_m": 5, "profile_xz_m": [[0,0],[3,2],[5,2]]})",
+       "'name'"},
+      {R"({"source": [1], "width_m": 6, "rear_wall_x_m": 5, "profile_xz_m": [[0,0],[3,2],[5,2]]})",
+       "'source'"}};
   for (const auto& [text, field] : cases) {
     const std::string path = write_tmp("talus_out_of_scale_profile.json", text);
     try {
