@@ -144,6 +144,7 @@ void add_bench_dig(CLI::App& bench) {
     std::string json;
     unsigned seed = 1;
     bool quiet = false;
+    bool pile_cache = true;  // the pile through the pile cache (--no-pile-cache)
   };
   auto opt = std::make_shared<Options>();
   auto* dig = bench.add_subcommand("dig",
@@ -161,6 +162,9 @@ void add_bench_dig(CLI::App& bench) {
   dig->add_option("--seed", opt->seed, "seed of the pile's particles")->capture_default_str();
   dig->add_option("--json", opt->json, "also write the result as JSON to this file");
   dig->add_flag("--quiet", opt->quiet, "no progress on stderr");
+  dig->add_flag(
+      "!--no-pile-cache", opt->pile_cache,
+      "build the pile even when the pile cache holds it, and do not save it (docs/embedding.md)");
   dig->callback([opt] {
     // inputs and the output path are checked before the pile is built
     const vehicle::Scenario scenario = vehicle::load_scenario(opt->scenario);
@@ -173,6 +177,10 @@ void add_bench_dig(CLI::App& bench) {
     Device dev;
     DiggingOptions options;
     options.pile.seed = opt->seed;
+    options.pile_cache.enabled = opt->pile_cache;
+    options.pile_cache.note = [](const std::string& line) {
+      std::cerr << "talus bench dig: " << line << "\n";
+    };
     PileBuild pile;
     {
       Progress progress("pile " + preset.name, 1.5 * options.pile.max_time, !opt->quiet);

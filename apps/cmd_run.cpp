@@ -164,6 +164,10 @@ DiggingOptions digging_options(const RunOptions& o) {
   options.coupling.record_residual = o.residuals;
   if (o.form_speed >= 0.0) options.pile.form_speed = o.form_speed;
   options.sweep = parse_sweep(o.sweep, "--sweep");
+  options.pile_cache.enabled = o.pile_cache;
+  options.pile_cache.note = [](const std::string& line) {
+    std::cerr << "talus run: " << line << "\n";
+  };
   return options;
 }
 
@@ -211,6 +215,7 @@ nlohmann::json dig_details(const RunOptions& o, const vehicle::Scenario& sc,
                             {"wall_time_s", dig_wall},
                             {"realtime_factor", dig_wall > 0 ? sim_time / dig_wall : 0.0},
                             {"pile_build_wall_s", pile_wall},
+                            {"pile_from_cache", pile.from_cache},
                             {"pile_bulk_density", pile.bulk_density},
                             {"pile_toe_shift_m", pile.toe_shift},
                             {"pile_fill_at_rest", pile.fill_at_rest},
@@ -382,6 +387,10 @@ void add_run_command(CLI::App& app, const std::string& command_line) {
   cmd->add_option("--sweep", opts->sweep, "particle sweeps: pgs or jacobi")->capture_default_str();
   cmd->add_option("--seed", opts->seed, "random seed of the pile's particle sizes and jitter")->capture_default_str();
   cmd->add_flag("--quiet", opts->quiet, "no progress on stderr");
+  cmd->add_flag(
+      "!--no-pile-cache", opts->pile_cache,
+      "build the pile even when the pile cache holds it, and do not save it "
+      "($TALUS_CACHE_DIR, else $XDG_CACHE_HOME/talus or ~/.cache/talus; docs/embedding.md)");
   cmd->add_option("--rolling", opts->rolling,
                   "study: the gravel's rolling resistance mu_r instead of the paper's 0.02 "
                   "(docs/soil.md)")

@@ -50,6 +50,7 @@ struct SweepOptions {
   unsigned seed = 1;
   bool quiet = false;
   bool traces = false;  // each cycle's time series as LEVEL/cycle-I.csv
+  bool pile_cache = true;  // piles through the pile cache (--no-pile-cache)
   std::string json;
 };
 
@@ -139,6 +140,11 @@ std::vector<CycleResult> run_share(Device& dev, const SweepOptions& o, const Fid
                                    int count, bool verbose) {
   DiggingOptions options;
   options.pile.seed = o.seed;
+  // every rank reads the same saved pile; on a miss each builds it and saves it atomically
+  options.pile_cache.enabled = o.pile_cache;
+  options.pile_cache.note = [](const std::string& line) {
+    std::cerr << "talus sweep: " << line << "\n";
+  };
   const LevelPile lp = build_level_pile(dev, o, preset, options, verbose);
   std::vector<CycleResult> results;
   for (int i = index; i < o.samples; i += count) {
@@ -339,6 +345,9 @@ void add_sweep_command(CLI::App& app, const std::string& command_line) {
   cmd->add_flag("--traces", o->traces, "also write each cycle's 100 Hz time series as LEVEL/cycle-I.csv "
                                       "(sample I, the run contract's columns)");
   cmd->add_flag("--quiet", o->quiet, "no progress on stderr");
+  cmd->add_flag(
+      "!--no-pile-cache", o->pile_cache,
+      "build the pile even when the pile cache holds it, and do not save it (docs/embedding.md)");
   cmd->callback([o] { sweep(*o); });
 }
 

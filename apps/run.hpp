@@ -26,6 +26,8 @@ struct RunOptions {
   double dt = 0.0;
   int iterations = 0;
   bool residuals = false;
+  // settled piles read from and saved to the pile cache (terrain/pile_cache.hpp; --no-pile-cache)
+  bool pile_cache = true;
   double form_speed = -1.0;  // the pile's formwork withdrawal speed [m/s]; negative: PileBuildOptions' default
   std::vector<std::string> effects;         // NAME:key=value,...
   std::vector<std::string> effect_plugins;  // shared libraries

@@ -36,7 +36,8 @@ PileProfile scenario_pile_profile(const vehicle::Scenario& scenario) {
 PileBuild build_scenario_pile(Device& dev, const vehicle::Scenario& scenario, const PileProfile& placed,
                               const FidelityPreset& preset, const DiggingOptions& options, Progress* progress) {
   if (!scenario.pile) throw InputError(scenario.path + ": scenario '" + scenario.name + "' has no pile (\"pile\": false)");
-  PileBuild pile = build_pile(dev, placed, preset, options.soil, options.pile, progress);
+  PileBuild pile = build_pile_cached(dev, placed, preset, options.soil, options.pile,
+                                     options.pile_cache, progress);
   pile.bounds.lo.x() = std::min(pile.bounds.lo.x(), scenario.pile_toe_x - kCarryBack);
   pile.bounds.hi.z() = std::max(pile.bounds.hi.z(), kCarryHeight);
   return pile;

@@ -15,6 +15,7 @@
 #include "host/progress.hpp"
 #include "solvers/split_solver.hpp"
 #include "terrain/pile.hpp"
+#include "terrain/pile_cache.hpp"
 #include "vehicle/effect.hpp"
 #include "vehicle/scenario.hpp"
 #include "vehicle/sensors.hpp"
@@ -31,15 +32,19 @@ struct DiggingOptions {
   // the soil's contact material (the pile is built and dug with it): the paper's gravel unless a
   // study changes it (talus run --rolling); the soil_cohesion effect adds its cohesion on top
   Material soil = gravel();
+  // settled piles saved and read back by their parameters (terrain/pile_cache.hpp): off here,
+  // on in talus run, sweep, bench dig and the facade unless disabled (--no-pile-cache)
+  PileCacheOptions pile_cache;
 };
 
 // the scenario's pile profile (data/piles/NAME.json or a path; InputError naming the scenario's
 // field), moved along x so that its toe lies at the scenario's pile_toe_x
 PileProfile scenario_pile_profile(const vehicle::Scenario& scenario);
 
-// the scenario's pile at the level, built and settled on `placed` (scenario_pile_profile): particles,
-// container (ground, sides, rear wall) and the broad-phase bounds, which also cover where the
-// machine carries gravel (back to 6 m in front of the toe, up to 5 m high)
+// the scenario's pile at the level, built and settled on `placed` (scenario_pile_profile):
+// particles, container (ground, sides, rear wall) and the broad-phase bounds, which also cover
+// where the machine carries gravel (back to 6 m in front of the toe, up to 5 m high). Through the
+// pile cache when options.pile_cache.enabled (PileBuild::from_cache says whether it was read back)
 PileBuild build_scenario_pile(Device& dev, const vehicle::Scenario& scenario, const PileProfile& placed,
                               const FidelityPreset& preset, const DiggingOptions& options, Progress* progress);
 

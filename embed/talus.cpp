@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <iostream>
 #include <system_error>
 #include <utility>
 
@@ -154,6 +155,7 @@ struct Simulation::Impl {
   vehicle::SensorSample sensors;
   double time = 0.0;
   long steps_done = 0;
+  bool pile_from_cache = false;
 
   void step(const Targets& targets) {
     if (dig) {
@@ -183,6 +185,11 @@ Simulation::Simulation(const SimulationOptions& options) : impl_(std::make_uniqu
     // the pile built and settled at the level, then the machine settled in front of it
     DiggingOptions dig_options;
     dig_options.pile.seed = options.seed;
+    // the cache's lines (a hit, a miss it fills, a folder it cannot write) go to stderr
+    dig_options.pile_cache.enabled = options.pile_cache;
+    dig_options.pile_cache.note = [](const std::string& line) {
+      std::cerr << "talus: " << line << "\n";
+    };
     m.device = std::make_unique<Device>();
     const PileProfile placed = scenario_pile_profile(m.scenario);
     PileBuild pile;
@@ -191,6 +198,7 @@ Simulation::Simulation(const SimulationOptions& options) : impl_(std::make_uniqu
       pile = build_scenario_pile(*m.device, m.scenario, placed, m.preset, dig_options, &progress);
       progress.finish(std::to_string(pile.particles.size()) + " particles");
     }
+    m.pile_from_cache = pile.from_cache;
     m.dig = std::make_unique<DiggingSimulation>(*m.device, m.scenario, m.preset, pile, dig_options);
   } else {
     // the machine alone, with a payload it can hold on its wheels
@@ -261,6 +269,8 @@ const std::vector<std::string>& Simulation::channel_units() {
   }();
   return units;
 }
+
+bool Simulation::pile_from_cache() const { return impl_->pile_from_cache; }
 
 double Simulation::loaded_mass() const {
   return impl_->dig ? impl_->dig->loaded_mass() : impl_->scenario.payload;

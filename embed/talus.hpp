@@ -49,6 +49,12 @@ struct SimulationOptions {
   /// data/, an installed prefix's share/talus/data); empty: not searched. Defaults to
   /// TALUS_INSTALL_DATA_DIR
   std::string data_dir = TALUS_INSTALL_DATA_DIR;
+  /// read the settled pile from the pile cache when it holds one built from the same profile,
+  /// level, material, seed, device and talus commit, and save a pile it builds there:
+  /// $TALUS_CACHE_DIR, else $XDG_CACHE_HOME/talus, else ~/.cache/talus (docs/embedding.md, "Saved
+  /// states: settled piles"). A build with uncommitted changes ("-dirty") never uses it; a folder
+  /// that cannot be written is a line on stderr, and the pile is built all the same
+  bool pile_cache = true;
 };
 
 /// \brief the operator's commands for one step: target speeds, clipped to the machine's maxima.
@@ -143,6 +149,8 @@ class Simulation {
   /// the soil in the bucket now [kg] (terrain/bucket_fill's rule); a vehicle-only scenario's
   /// payload, which its bucket carries from the start
   double loaded_mass() const;
+  /// whether the pile was read back from the pile cache rather than built (false without a pile)
+  bool pile_from_cache() const;
 
   /// whether the scenario has particles (a pile)
   bool has_particles() const;

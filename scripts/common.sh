@@ -36,3 +36,5 @@ configure_and_build() {
 # poCL's compiled-kernel cache lives in the build folder, so runs after the first skip LLVM
 export POCL_CACHE_DIR="$build/pocl-cache"
 mkdir -p "$POCL_CACHE_DIR"
+# talus's settled piles too (terrain/pile_cache.hpp), so the demo's second run skips the settling
+export TALUS_CACHE_DIR="$build/talus-cache"

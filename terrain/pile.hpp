@@ -110,6 +110,10 @@ struct PileBuild {
   double bulk_density = 0.0;  // in the flat top's core [kg/m^3]
   double toe_shift = 0.0;     // how far the settled pile was moved to put its toe in place [m]
   ProfileFit soil_fit;        // the placed pile's soil against its profile
+  // how this pile was had, not part of it (terrain/pile_cache.hpp neither writes nor compares
+  // these): read back from the cache, and the cache file it was read from or saved to
+  bool from_cache = false;
+  std::string cache_file;
 };
 
 struct PileBuildOptions {

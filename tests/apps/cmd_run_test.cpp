@@ -101,8 +101,9 @@ TEST(DiggingRunTest, Hd27AtD400WritesTheRunContractSnapshotsAndFigures) {
   while (std::getline(csv, line)) ++rows;
   EXPECT_EQ(rows, 901);
   const auto summary = nlohmann::json::parse(std::ifstream(dir / "summary.json"));
-  for (const char* key : {"scenario", "fidelity", "particles", "loaded_mass_kg", "work_J", "sim_time_s",
-                          "wall_time_s", "realtime_factor", "dig_start_s", "dig_end_s"}) {
+  for (const char* key :
+       {"scenario", "fidelity", "particles", "loaded_mass_kg", "work_J", "sim_time_s",
+        "wall_time_s", "realtime_factor", "dig_start_s", "dig_end_s", "pile_from_cache"}) {
     EXPECT_TRUE(summary.contains(key)) << key;
   }
   EXPECT_EQ(summary["scenario"], "HD27");
