@@ -3,9 +3,14 @@
 #include <algorithm>
 #include <cctype>
 #include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <sstream>
+#include <string>
+#include <system_error>
 
 #include "host/embedded.hpp"
+#include "host/error.hpp"
 
 namespace talus {
 
@@ -25,6 +30,26 @@ constexpr const char* kInstallHint =
     "pocl-opencl-icd ocl-icd-libopencl1` runs talus on the CPU; for a GPU install the vendor's "
     "OpenCL driver (e.g. nvidia-opencl-icd). `clinfo -l` lists what is installed.";
 
+// PoCL keeps its compiled kernels in POCL_CACHE_DIR; a folder it cannot write makes it report no
+// platform or a failed kernel build, neither naming the folder, so talus checks it first
+void check_pocl_cache_dir() {
+  const char* dir = std::getenv("POCL_CACHE_DIR");
+  if (dir == nullptr || *dir == '\0') return;
+  const std::string hint =
+      std::string("POCL_CACHE_DIR=") + dir + ": PoCL cannot keep its compiled kernels there (";
+  const std::string fix =
+      "); point POCL_CACHE_DIR at a writable folder (scripts and ctest use build/pocl-cache) or "
+      "unset it";
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (!std::filesystem::is_directory(dir, ec))
+    throw InputError(hint + "not a folder, and none can be made" + fix);
+  const std::filesystem::path probe = std::filesystem::path(dir) / ".talus-write-check";
+  const bool writable = static_cast<bool>(std::ofstream(probe));
+  std::filesystem::remove(probe, ec);
+  if (!writable) throw InputError(hint + "the folder is not writable" + fix);
+}
+
 }  // namespace
 
 DeviceChoice device_choice_from_env() {
@@ -39,6 +64,7 @@ DeviceChoice device_choice_from_env() {
 }
 
 Device::Device(const DeviceChoice& choice) {
+  check_pocl_cache_dir();
   std::vector<cl::Platform> platforms;
   try {
     cl::Platform::get(&platforms);

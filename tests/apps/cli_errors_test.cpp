@@ -144,4 +144,18 @@ TEST(CliErrors, VehicleScenarioFlagsAndPayloadAreChecked) {
   EXPECT_NE(o.err.find("static tipping load"), std::string::npos) << o.err;
 }
 
+// a POCL_CACHE_DIR PoCL cannot write is named (it read "no OpenCL platform found" or a failed
+// kernel build, exit 1)
+TEST(CliErrors, AnUnwritablePoclCacheIsNamed) {
+  const std::string file =
+      (std::filesystem::temp_directory_path() / "talus_pocl_cache_file").string();
+  std::ofstream(file) << "not a folder";
+  for (const std::string& dir : {std::string("/proc/nope"), file}) {
+    const Outcome o =
+        run("POCL_CACHE_DIR=" + dir, "pile --level D400 --quiet --out /tmp/talus_unused_pocl");
+    EXPECT_EQ(o.code, 2) << o.err;
+    EXPECT_NE(o.err.find("POCL_CACHE_DIR=" + dir), std::string::npos) << o.err;
+  }
+}
+
 }  // namespace
