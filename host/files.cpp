@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <array>
 #include <filesystem>
 #include <fstream>
 
@@ -18,8 +19,12 @@ void make_output_dir(const std::string& dir) {
 }
 
 std::string temporary_name(const std::string& path) {
-  // unique per process, so two runs writing the same file cannot mix their halves
-  return path + ".tmp" + std::to_string(::getpid());
+  // unique per process and machine, so two runs writing the same file cannot mix their halves,
+  // not even MPI ranks on two machines sharing a folder (the pile cache)
+  std::array<char, 256> host{};
+  if (::gethostname(host.data(), host.size() - 1) != 0) host[0] = '\0';
+  return path + ".tmp" + std::to_string(::getpid()) +
+         (host[0] ? std::string(".") + host.data() : std::string());
 }
 
 void check_writable(const std::string& path, const std::string& flag) {

@@ -12,7 +12,7 @@ void make_output_dir(const std::string& dir);
 // checks before any work that a file can be written at `path`: writes and removes an empty
 // temporary file beside it; InputError naming `flag` and the path otherwise
 void check_writable(const std::string& path, const std::string& flag);
-// a temporary name next to `path`, unique to this process
+// a temporary name next to `path`, unique to this process on this machine
 std::string temporary_name(const std::string& path);
 // renames the finished temporary file `tmp` to `path`; on failure removes it and throws Error
 // naming `path` (writers that stream their own format, like PNG, end with this)

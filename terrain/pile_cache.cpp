@@ -1,7 +1,5 @@
 #include "terrain/pile_cache.hpp"
 
-#include <unistd.h>
-
 #include <array>
 #include <cstdlib>
 #include <cstring>
@@ -296,24 +294,7 @@ PileBuild parse_pile(const std::string& bytes, const std::string& where, std::st
 }
 
 void write_pile(const std::string& path, const PileBuild& pile, const std::string& key) {
-  // the temporary name carries the host as well as the process, so ranks on two machines
-  // sharing the folder never write the same temporary file
-  std::array<char, 256> host{};
-  if (::gethostname(host.data(), host.size() - 1) != 0) host[0] = '\0';
-  const std::string tmp = temporary_name(path) + "." + host.data();
-  {
-    std::ofstream out(tmp, std::ios::binary);
-    if (!out) throw Error(tmp + ": cannot write (check the folder exists and is writable)");
-    const std::string bytes = serialise_pile(pile, key);
-    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-    out.close();
-    if (!out) {
-      std::error_code ec;
-      std::filesystem::remove(tmp, ec);
-      throw Error(tmp + ": write failed (disk full?)");
-    }
-  }
-  move_into_place(tmp, path);
+  write_file_atomically(path, serialise_pile(pile, key));
 }
 
 PileBuild read_pile(const std::string& path, std::string* key) {

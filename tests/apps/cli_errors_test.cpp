@@ -119,6 +119,9 @@ TEST(CliErrors, UnknownSubcommandAndRangeErrorsSayWhatIsWrong) {
   EXPECT_NE(o.err.find("--dt: must be a finite number above 0, got '-1'"), std::string::npos)
       << o.err;
   EXPECT_LT(o.err.size(), 200u) << o.err;
+  o = run("", "pile --settle-iterations 0 --out /tmp/talus_unused_range");
+  EXPECT_EQ(o.code, 2) << o.err;
+  EXPECT_NE(o.err.find("--settle-iterations"), std::string::npos) << o.err;
   o = run("", "compare --sim a --ref b --l-norm 0");
   EXPECT_EQ(o.code, 2) << o.err;
   EXPECT_NE(o.err.find("--l-norm"), std::string::npos) << o.err;
