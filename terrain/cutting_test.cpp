@@ -12,39 +12,12 @@ namespace talus {
 
 namespace {
 
-constexpr double kGravity = 9.81;  // [m/s^2], as DemSettings::gravity
 constexpr double kDegree = M_PI / 180.0;
 // the deepest cut the test makes [m]: the default pile's height (SPEC §2.5), which is all a bucket
 // ever cuts; the bed grows with the depth squared, so a typo must not start a huge run
 constexpr double kMaxDepth = 2.0;
 
 }  // namespace
-
-double fee_force(double density, double depth, double width, double rake_deg, double tool_friction_deg,
-                 double internal_friction_deg, double surcharge, double* beta_deg) {
-  const double alpha = rake_deg * kDegree, delta = tool_friction_deg * kDegree, phi = internal_friction_deg * kDegree;
-  // the failure angle that makes the force smallest, on a grid of 0.01 degrees
-  double best = 1e300, best_beta = 0.0;
-  for (int k = 1; k < 9000; ++k) {
-    const double beta = 0.01 * k * kDegree;
-    const double den = std::cos(alpha + delta) + std::sin(alpha + delta) / std::tan(beta + phi);
-    if (!(den > 0.0)) continue;  // the wedge cannot fail along this plane
-    const double n_q = (1.0 / std::tan(alpha) + 1.0 / std::tan(beta)) / den;
-    // F / (rho g w) = d^2 N_gamma + h d N_q with N_gamma = N_q / 2
-    const double f = 0.5 * depth * depth * n_q + std::max(0.0, surcharge) * depth * n_q;
-    if (f < best) {
-      best = f;
-      best_beta = 0.01 * k;
-    }
-  }
-  if (best_beta == 0.0)
-    throw InputError("earthmoving equation: no failure plane for rake " + std::to_string(rake_deg) + " deg, tool friction " +
-                     std::to_string(tool_friction_deg) + " deg and internal friction " +
-                     std::to_string(internal_friction_deg) + " deg (--phi): their sum must stay below 180 deg");
-  if (beta_deg) *beta_deg = best_beta;
-  // the soil's force on the blade acts at delta from its normal: horizontal part sin(alpha + delta)
-  return density * kGravity * best * width * std::sin(alpha + delta);
-}
 
 void check_cutting_options(const CuttingOptions& o) {
   if (!(o.diameter > 0.0) || !(o.dt > 0.0) || o.iterations < 1 || !(o.depth > 0.0) || !(o.speed > 0.0) ||

@@ -9,12 +9,7 @@
 // bucket-soil friction of the paper (0.2), its bottom `depth` below the bed's mean surface,
 // reaching 3 D above it; a wall under the blade's path holds the bed's face below the cut.
 //
-// The FEE for a cohesionless soil: F / w = rho g d^2 N_gamma + q d N_q with
-//   den = cos(alpha + delta) + sin(alpha + delta) cot(beta + phi)
-//   N_gamma = (cot alpha + cot beta) / (2 den),  N_q = (cot alpha + cot beta) / den
-// (alpha rake angle from the horizontal, delta soil-tool friction angle, phi internal friction,
-// beta the failure plane's angle from the horizontal, the one that makes F smallest); the blade's
-// horizontal force is F sin(alpha + delta). The soil the blade pushes heaps up in front of it
+// The FEE itself is terrain/earthmoving_equation. The soil the blade pushes heaps up in front of it
 // (the side walls keep it from spilling sideways), and that heap is a surcharge q on the failure
 // wedge: q = rho g h with h the heap's mean height above the original surface over the wedge's
 // length at the surface, d cot beta, measured from the particles in every window. The equation's
@@ -25,6 +20,7 @@
 
 #include "host/progress.hpp"
 #include "solvers/dem_world.hpp"
+#include "terrain/earthmoving_equation.hpp"
 
 namespace talus {
 
@@ -69,12 +65,5 @@ void check_cutting_options(const CuttingOptions& options);
 
 CuttingResult run_cutting_test(Device& dev, const Material& material, const CuttingOptions& options,
                                Progress* progress = nullptr);
-
-// the FEE's horizontal force [N] on a blade of width `width` [m] at depth `depth` [m] in a
-// cohesionless soil of bulk density `density` [kg/m^3] under a surcharge of `surcharge` [m] of the
-// same soil; rake, soil-tool friction and internal friction angles in degrees; `beta_deg`
-// receives the failure angle that minimises it
-double fee_force(double density, double depth, double width, double rake_deg, double tool_friction_deg,
-                 double internal_friction_deg, double surcharge = 0.0, double* beta_deg = nullptr);
 
 }  // namespace talus

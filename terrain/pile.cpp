@@ -113,12 +113,37 @@ const std::vector<FidelityPreset>& fidelity_presets() {
   return presets;
 }
 
+const std::vector<FidelityPreset>& multiscale_presets() {
+  // paper Table 3 (type G): voxel cell and particle size, timestep, PGS iterations, most particles
+  static const std::vector<FidelityPreset> presets = {
+      {"G50", 0.050, 0.005, 50, 28000},
+      {"G100", 0.100, 0.010, 25, 3500},
+      {"G200", 0.200, 0.020, 15, 480},
+      {"G400", 0.400, 0.050, 10, 55},
+  };
+  return presets;
+}
+
+const FidelityPreset* find_multiscale_preset(const std::string& name) {
+  for (auto& p : multiscale_presets())
+    if (p.name == name) return &p;
+  return nullptr;
+}
+
 const FidelityPreset& fidelity_preset(const std::string& name) {
   std::string known;
   for (auto& p : fidelity_presets()) {
     if (p.name == name) return p;
     known += " " + p.name;
   }
+  // the type-G levels are named, so a user asking for one learns it is coming, not misspelt
+  if (find_multiscale_preset(name))
+    throw InputError(
+        "fidelity level '" + name +
+        "' is the multiscale (type G) terrain, which cannot dig yet: its voxel terrain "
+        "exists (docs/multiscale.md), its active zone's particles, aggregate and coupling "
+        "to the machine do not (issue 14). Use a type-D level:" +
+        known);
   throw InputError("unknown fidelity level '" + name + "'; known:" + known);
 }
 

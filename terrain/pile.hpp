@@ -52,8 +52,14 @@ struct FidelityPreset {
   int paper_particles;   // N_p in paper Table 3
 };
 const std::vector<FidelityPreset>& fidelity_presets();
-// throws InputError listing the known names
+// throws InputError listing the known names; a type-G name gets the "not yet" error of
+// multiscale_preset_not_runnable
 const FidelityPreset& fidelity_preset(const std::string& name);
+// the multiscale levels of paper Table 3 (type G, issue 14): D is the voxel cell and the size of
+// the active zone's particles, N_p the most particles the paper's zone held (its "≲")
+const std::vector<FidelityPreset>& multiscale_presets();
+// the type-G preset of that name, or nullptr
+const FidelityPreset* find_multiscale_preset(const std::string& name);
 
 // the container: ground, side walls, rear wall (open front)
 std::vector<StaticGeom> pile_container(const PileProfile& profile);

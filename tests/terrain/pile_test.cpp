@@ -102,6 +102,22 @@ TEST(Pile, UnknownLevelListsTheKnownOnes) {
   }
 }
 
+// a type-G level is known, and its error says it is not built yet rather than "unknown"
+TEST(Pile, AMultiscaleLevelIsNamedAsNotYetRunnable) {
+  ASSERT_NE(find_multiscale_preset("G200"), nullptr);
+  EXPECT_DOUBLE_EQ(find_multiscale_preset("G200")->dt, 0.020);
+  EXPECT_EQ(find_multiscale_preset("D200"), nullptr);
+  try {
+    fidelity_preset("G200");
+    FAIL();
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("type G"), std::string::npos) << what;
+    EXPECT_EQ(what.find("unknown"), std::string::npos) << what;
+    EXPECT_NE(what.find("D100"), std::string::npos) << what;
+  }
+}
+
 TEST(Pile, BulkDensityOfASimpleCubicLatticeIsPiOverSix) {
   // spheres of diameter a on a cubic lattice of spacing a fill pi/6 of space
   Particles p;

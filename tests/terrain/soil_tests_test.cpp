@@ -57,35 +57,5 @@ TEST(SoilTests, RunoutFrontIgnoresAStrayGrain) {
   EXPECT_NEAR(runout_front(p, 0.0, 0.1), 2.17, 1e-9);
 }
 
-TEST(SoilTests, EarthmovingEquationMeetsRankineForASmoothVerticalWall) {
-  // delta = 0, alpha = 90 deg: the least force is Rankine's passive thrust 1/2 gamma d^2 K_p w,
-  // K_p = tan^2(45 + phi/2), on the plane beta = 45 - phi/2
-  for (double phi : {25.0, 32.0, 40.0}) {
-    double beta = 0.0;
-    const double f = fee_force(1727.0, 0.3, 2.0, 90.0, 0.0, phi, 0.0, &beta);
-    const double kp = std::pow(std::tan((45.0 + 0.5 * phi) * kDeg), 2);
-    const double rankine = 0.5 * 1727.0 * 9.81 * 0.09 * kp * 2.0;
-    std::printf("[ measured ] phi %.0f: FEE %.1f N, Rankine %.1f N, beta %.2f deg (45 - phi/2 = %.2f)\n", phi, f,
-                rankine, beta, 45.0 - 0.5 * phi);
-    EXPECT_NEAR(f, rankine, 1e-4 * rankine);
-    EXPECT_NEAR(beta, 45.0 - 0.5 * phi, 0.02);
-  }
-}
-
-TEST(SoilTests, EarthmovingEquationGrowsWithToolFrictionAndDepthSquared) {
-  const double rough = fee_force(1727.0, 0.3, 1.0, 90.0, std::atan(0.2) / kDeg, 32.0);
-  const double smooth = fee_force(1727.0, 0.3, 1.0, 90.0, 0.0, 32.0);
-  EXPECT_GT(rough, smooth);
-  EXPECT_NEAR(fee_force(1727.0, 0.6, 1.0, 90.0, 11.0, 32.0), 4.0 * fee_force(1727.0, 0.3, 1.0, 90.0, 11.0, 32.0), 1e-6);
-}
-
-TEST(SoilTests, ASurchargeOnASmoothWallAddsRankinesUniformPressure) {
-  // delta = 0, alpha = 90 deg: a surcharge h adds K_p q d with q = gamma h, on the same plane
-  const double kp = std::pow(std::tan((45.0 + 16.0) * kDeg), 2);
-  const double f = fee_force(1727.0, 0.3, 1.0, 90.0, 0.0, 32.0, 0.2);
-  const double rankine = 1727.0 * 9.81 * kp * (0.5 * 0.09 + 0.2 * 0.3);
-  EXPECT_NEAR(f, rankine, 1e-4 * rankine);
-}
-
 }  // namespace
 }  // namespace talus

@@ -1,0 +1,220 @@
+#include "terrain/voxel_terrain.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "host/error.hpp"
+
+namespace talus {
+namespace {
+
+// a volume this small against a cell's is rounding, not soil: a layer that overshoots a cell's
+// room by less still fits, and a cell this close to full is full
+constexpr double kVolumeRounding = 1e-12;
+
+// the exact integral of the profile's height over [a, b] [m^2]: the polyline's trapezoids
+// clipped to the interval, then its flat top to the rear wall
+double profile_integral(const PileProfile& profile, double a, double b) {
+  auto clipped = [&](double xa, double za, double xb, double zb) {
+    double lo = std::max(a, xa), hi = std::min(b, xb);
+    if (hi <= lo || xb <= xa) return 0.0;
+    auto z = [&](double x) { return za + (zb - za) * (x - xa) / (xb - xa); };
+    return 0.5 * (z(lo) + z(hi)) * (hi - lo);
+  };
+  double area = 0.0;
+  const auto& p = profile.points;
+  for (size_t k = 1; k < p.size(); ++k)
+    area += clipped(p[k - 1].x(), p[k - 1].z(), p[k].x(), p[k].z());
+  if (!p.empty() && profile.rear_wall_x > p.back().x())
+    area += clipped(p.back().x(), p.back().z(), profile.rear_wall_x, p.back().z());
+  return area;
+}
+
+}  // namespace
+
+VoxelTerrain::VoxelTerrain(double x0, double y0, double z0, double cell, int nx, int ny, int nz,
+                           double bank_density)
+    : x0_(x0), y0_(y0), z0_(z0), h_(cell), nx_(nx), ny_(ny), nz_(nz), rho_bank_(bank_density) {
+  if (!(cell > 0.0) || !(bank_density > 0.0) || nx < 1 || ny < 1 || nz < 1)
+    throw Error(
+        "voxel terrain: the cell size, the bank density and the grid's size must be positive");
+  if (static_cast<double>(nx) * ny * nz > kMaxVoxelCells)
+    throw Error("voxel terrain: " + std::to_string(nx) + " x " + std::to_string(ny) + " x " +
+                std::to_string(nz) + " cells is more than the limit of " +
+                std::to_string(static_cast<long>(kMaxVoxelCells)));
+  size_t n = static_cast<size_t>(nx) * ny * nz;
+  mass_.assign(n, 0.0);
+  volume_.assign(n, 0.0);
+}
+
+VoxelTerrain VoxelTerrain::from_profile(const PileProfile& profile,
+                                        const VoxelTerrainOptions& options) {
+  const std::string where = profile.path.empty() ? std::string("pile profile") : profile.path;
+  const double h = options.cell;
+  if (!(h >= 1e-3 && h <= 1.0))
+    throw InputError(where + ": voxel cell " + std::to_string(h) +
+                     " m is outside 1 mm .. 1 m; the type-G levels use 0.05 to 0.4 m");
+  if (profile.points.size() < 2)
+    throw InputError(where + ": profile_xz_m needs at least two points for a voxel terrain");
+  // columns from front_margin ahead of the toe to the rear wall, the last ending on the wall
+  double x_back = profile.rear_wall_x;
+  double x_front = profile.points.front().x() - options.front_margin;
+  int nx = static_cast<int>(std::ceil((x_back - x_front) / h - kVolumeRounding));
+  int ny = std::max(1, static_cast<int>(std::lround(profile.width / h)));
+  double top = 0.0;
+  for (const Vec3& p : profile.points) top = std::max(top, p.z());
+  int nz = static_cast<int>(std::ceil((top + options.head_room) / h));
+  double cells = static_cast<double>(nx) * ny * nz;
+  if (cells > kMaxVoxelCells)
+    throw InputError(where + ": profile_xz_m and width_m need " +
+                     std::to_string(static_cast<long>(cells)) + " voxels of " + std::to_string(h) +
+                     " m, more than the limit of " +
+                     std::to_string(static_cast<long>(kMaxVoxelCells)) +
+                     "; check the profile's units (metres) or use a coarser level");
+  VoxelTerrain terrain(x_back - nx * h, -0.5 * ny * h, 0.0, h, nx, ny, nz, options.bank_density);
+  // each column holds the profile's mean height over its x-span, at bank density
+  for (int i = 0; i < nx; ++i) {
+    double xa = terrain.x0_ + i * h;
+    double volume = profile_integral(profile, xa, xa + h) * h;
+    if (volume <= 0.0) continue;
+    for (int j = 0; j < ny; ++j) terrain.restack(i, j, {{volume * options.bank_density, volume}});
+  }
+  return terrain;
+}
+
+bool VoxelTerrain::column_at(double x, double y, int* i, int* j) const {
+  double fi = std::floor((x - x0_) / h_), fj = std::floor((y - y0_) / h_);
+  if (!(fi >= 0.0 && fi < nx_ && fj >= 0.0 && fj < ny_)) return false;
+  *i = static_cast<int>(fi);
+  *j = static_cast<int>(fj);
+  return true;
+}
+
+double VoxelTerrain::occupancy(int i, int j, int k) const {
+  return volume_[index(i, j, k)] / (h_ * h_ * h_);
+}
+
+double VoxelTerrain::compaction(int i, int j, int k) const {
+  size_t c = index(i, j, k);
+  return volume_[c] > 0.0 ? mass_[c] / (rho_bank_ * volume_[c]) : 1.0;
+}
+
+double VoxelTerrain::column_mass(int i, int j) const {
+  double m = 0.0;
+  for (int k = 0; k < nz_; ++k) m += mass_[index(i, j, k)];
+  return m;
+}
+
+double VoxelTerrain::column_volume(int i, int j) const {
+  double v = 0.0;
+  for (int k = 0; k < nz_; ++k) v += volume_[index(i, j, k)];
+  return v;
+}
+
+double VoxelTerrain::total_mass() const {
+  // column by column, then over the columns: a fixed order, so the same bits on every run
+  double m = 0.0;
+  for (int j = 0; j < ny_; ++j)
+    for (int i = 0; i < nx_; ++i) m += column_mass(i, j);
+  return m;
+}
+
+std::vector<double> VoxelTerrain::surface_heights() const {
+  std::vector<double> heights(static_cast<size_t>(nx_) * ny_);
+  for (int j = 0; j < ny_; ++j)
+    for (int i = 0; i < nx_; ++i) heights[static_cast<size_t>(j) * nx_ + i] = surface_height(i, j);
+  return heights;
+}
+
+Heightmap VoxelTerrain::surface(const embree::Device& device) const {
+  if (nx_ < 2 || ny_ < 2) throw Error("voxel terrain: a surface needs at least 2 x 2 columns");
+  return Heightmap(x0_ + 0.5 * h_, y0_ + 0.5 * h_, h_, nx_, ny_, surface_heights(), device);
+}
+
+void VoxelTerrain::restack(int i, int j, const std::vector<Layer>& layers) {
+  const double cap = h_ * h_ * h_;
+  for (int k = 0; k < nz_; ++k) mass_[index(i, j, k)] = volume_[index(i, j, k)] = 0.0;
+  int k = 0;
+  double room = cap;
+  for (Layer layer : layers) {
+    while (layer.volume > 0.0) {
+      if (k >= nz_)
+        throw Error("voxel terrain: a column overflows its " + std::to_string(nz_) + " cells");
+      size_t c = index(i, j, k);
+      // the layer fits (to rounding): all of it goes here
+      if (layer.volume <= room + kVolumeRounding * cap) {
+        mass_[c] += layer.mass;
+        volume_[c] += layer.volume;
+        room -= layer.volume;
+        layer.volume = 0.0;
+      } else {
+        // it does not: the share of its mass that fills the room
+        double share = layer.mass * (room / layer.volume);
+        mass_[c] += share;
+        layer.mass -= share;
+        layer.volume -= room;
+        room = 0.0;
+      }
+      // a full cell holds exactly h^3, so the cells under a column's top stay exactly full
+      if (room <= kVolumeRounding * cap) {
+        volume_[c] = cap;
+        ++k;
+        room = cap;
+      }
+    }
+  }
+}
+
+SoilTaken VoxelTerrain::take(int i, int j, double z_lo, double z_hi) {
+  SoilTaken taken;
+  const double area = h_ * h_;
+  // the interval in the column's own height, clamped to its soil
+  double a = std::max(z_lo - z0_, 0.0);
+  double b = std::min(z_hi - z0_, column_volume(i, j) / area);
+  if (!(b > a)) return taken;
+  // each cell's soil spans [k h, k h + V / h^2]: split it into below, inside and above [a, b]
+  std::vector<Layer> below, above;
+  for (int k = 0; k < nz_; ++k) {
+    size_t c = index(i, j, k);
+    double m = mass_[c], v = volume_[c];
+    if (v <= 0.0) break;
+    double lo = k * h_, hi = lo + v / area;
+    double f_below = std::clamp((a - lo) / (hi - lo), 0.0, 1.0);
+    double f_above = std::clamp((hi - b) / (hi - lo), 0.0, 1.0);
+    double m_below = m * f_below, m_above = m * f_above;
+    double m_inside = m - m_below - m_above;
+    if (f_below > 0.0) below.push_back({m_below, v * f_below});
+    if (f_above > 0.0) above.push_back({m_above, v * f_above});
+    if (m_inside > 0.0) {
+      taken.mass += m_inside;
+      taken.volume += v * (1.0 - f_below - f_above);
+    }
+  }
+  // what lay above drops onto what lay below
+  below.insert(below.end(), above.begin(), above.end());
+  restack(i, j, below);
+  taken.bank_volume = taken.mass / rho_bank_;
+  return taken;
+}
+
+void VoxelTerrain::deposit(int i, int j, double mass, double compaction) {
+  if (!(mass >= 0.0) || !(compaction > 0.0 && compaction <= kMaxCompaction))
+    throw Error("voxel terrain: deposit of " + std::to_string(mass) + " kg at compaction " +
+                std::to_string(compaction) + " (mass must be >= 0, compaction in (0, " +
+                std::to_string(kMaxCompaction) + "])");
+  if (mass == 0.0) return;
+  double volume = mass / (rho_bank_ * compaction);
+  const double cap = h_ * h_ * h_;
+  if (column_volume(i, j) + volume > nz_ * cap * (1.0 + kVolumeRounding))
+    throw Error("voxel terrain: column (" + std::to_string(i) + ", " + std::to_string(j) +
+                ") cannot take " + std::to_string(mass) + " kg more: it would rise above the grid");
+  // the column's layers as they are (one per cell), the new soil on top
+  std::vector<Layer> layers;
+  for (int k = 0; k < nz_ && volume_[index(i, j, k)] > 0.0; ++k)
+    layers.push_back({mass_[index(i, j, k)], volume_[index(i, j, k)]});
+  layers.push_back({mass, volume});
+  restack(i, j, layers);
+}
+
+}  // namespace talus

@@ -1,0 +1,157 @@
+// terrain/voxel_terrain: the solid soil of the type-G terrain. The pile of a profile at bank
+// density; soil taken out of and laid onto columns keeps the mass balance and the columns'
+// filled-from-the-bottom invariant under fresh random operations; loose soil swells; the surface
+// heightmap stands where the columns' soil ends.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <string>
+
+#include "host/error.hpp"
+#include "terrain/voxel_terrain.hpp"
+
+namespace talus {
+namespace {
+
+// every cell under a column's top one exactly full, none over full, and the top where the soil's
+// volume says: the invariant every operation keeps
+void expect_columns_filled_from_the_bottom(const VoxelTerrain& t) {
+  for (int j = 0; j < t.ny(); ++j)
+    for (int i = 0; i < t.nx(); ++i) {
+      bool top_seen = false;
+      for (int k = 0; k < t.nz(); ++k) {
+        double occ = t.occupancy(i, j, k);
+        ASSERT_LE(occ, 1.0 + 1e-12) << i << " " << j << " " << k;
+        if (top_seen) {
+          ASSERT_EQ(occ, 0.0) << "soil above a partly filled cell at " << i << " " << j << " " << k;
+        }
+        if (occ < 1.0) top_seen = true;
+      }
+    }
+}
+
+// the default pile at G200: the mass is the profile's volume at 1727 kg/m^3, each column stands at
+// the profile's mean height over its span, all soil at bank compaction
+TEST(VoxelTerrain, ThePileOfAProfileHoldsItsVolumeAtBankDensity) {
+  const PileProfile profile = default_pile_profile();
+  VoxelTerrainOptions options;
+  options.cell = 0.2;
+  const VoxelTerrain t = VoxelTerrain::from_profile(profile, options);
+  EXPECT_EQ(t.ny(), 30);
+  EXPECT_NEAR(t.x0() + t.nx() * t.cell(), profile.rear_wall_x, 1e-12);
+  const double expected = profile.volume() * kFieldBulkDensity;
+  EXPECT_NEAR(t.total_mass() / expected, 1.0, 1e-12);
+  expect_columns_filled_from_the_bottom(t);
+  // a column on the face (mean of a linear stretch) and one on the flat top
+  int i = 0, j = 0;
+  ASSERT_TRUE(t.column_at(1.5, 0.1, &i, &j));
+  const double xa = t.x0() + i * t.cell(), xb = xa + t.cell();
+  EXPECT_NEAR(t.surface_height(i, j), 0.5 * (profile.height_at(xa) + profile.height_at(xb)), 1e-12);
+  ASSERT_TRUE(t.column_at(4.5, -2.9, &i, &j));
+  EXPECT_NEAR(t.surface_height(i, j), 2.0, 1e-12);
+  EXPECT_NEAR(t.compaction(i, j, 0), 1.0, 1e-12);
+  ASSERT_TRUE(t.column_at(-1.0, 0.0, &i, &j));  // ahead of the toe: bare ground
+  EXPECT_EQ(t.surface_height(i, j), 0.0);
+}
+
+// fresh random takes and deposits: the terrain's mass is what it started with, less what was
+// taken, plus what was laid, to rounding; the columns stay filled from the bottom
+TEST(VoxelTerrain, TakingAndLayingSoilKeepsTheMassBalance) {
+  const unsigned seed = std::random_device{}();
+  SCOPED_TRACE("seed " + std::to_string(seed));
+  std::mt19937_64 rng(seed);
+  VoxelTerrainOptions options;
+  options.cell = 0.4;
+  VoxelTerrain t = VoxelTerrain::from_profile(default_pile_profile(), options);
+  const double start = t.total_mass();
+  double taken = 0.0, laid = 0.0;
+  std::uniform_int_distribution<int> ui(0, t.nx() - 1), uj(0, t.ny() - 1), op(0, 1);
+  std::uniform_real_distribution<double> uz(-0.2, 2.5), um(0.0, 300.0), uc(0.6, 1.1);
+  for (int n = 0; n < 2000; ++n) {
+    int i = ui(rng), j = uj(rng);
+    if (op(rng) == 0) {
+      double a = uz(rng), b = uz(rng);
+      double before = t.surface_height(i, j);
+      SoilTaken s = t.take(i, j, std::min(a, b), std::max(a, b));
+      taken += s.mass;
+      // the column sank by the thickness taken
+      EXPECT_NEAR(before - t.surface_height(i, j), s.volume / (t.cell() * t.cell()), 1e-12);
+      EXPECT_GE(s.mass, 0.0);
+    } else {
+      double m = um(rng);
+      try {
+        t.deposit(i, j, m, uc(rng));
+        laid += m;
+      } catch (const Error&) {
+        // a full column refuses and keeps its soil: the balance below checks it
+      }
+    }
+  }
+  EXPECT_NEAR(t.total_mass(), start - taken + laid, 1e-12 * start);
+  expect_columns_filled_from_the_bottom(t);
+}
+
+// loose soil swells: 100 kg of bank soil laid back at compaction 0.8 stands 1 / 0.8 as tall, and
+// a slab taken under it lets it drop with its looseness intact
+TEST(VoxelTerrain, LooseSoilStandsTallerAndDropsIntoAGapUnchanged) {
+  VoxelTerrain t(0.0, 0.0, 0.0, 0.5, 2, 2, 8, kFieldBulkDensity);
+  t.deposit(0, 0, 2.0 * 0.125 * kFieldBulkDensity, 1.0);  // two full cells of bank soil
+  EXPECT_DOUBLE_EQ(t.surface_height(0, 0), 1.0);
+  const double loose = 0.8;
+  t.deposit(0, 0, 0.125 * kFieldBulkDensity, loose);  // one cell's worth, loose
+  EXPECT_NEAR(t.surface_height(0, 0), 1.0 + 0.5 / loose, 1e-12);
+  // take the lower half of the bank soil: the loose soil comes down by 0.5 m
+  SoilTaken s = t.take(0, 0, 0.0, 0.5);
+  EXPECT_NEAR(s.mass, 0.125 * kFieldBulkDensity, 1e-9);
+  EXPECT_NEAR(s.volume, s.bank_volume, 1e-12);
+  EXPECT_NEAR(t.surface_height(0, 0), 0.5 + 0.5 / loose, 1e-12);
+  EXPECT_NEAR(t.compaction(0, 0, 0), 1.0, 1e-12);
+  EXPECT_NEAR(t.compaction(0, 0, 2), loose, 1e-12);
+  // the loose soil taken off the top is worth less bank volume than it filled: its swell
+  SoilTaken top = t.take(0, 0, 0.5, 10.0);
+  EXPECT_NEAR(top.volume / top.bank_volume, 1.0 / loose, 1e-12);
+}
+
+// the heightmap of the surface: a vertical ray at a column's centre finds that column's height
+TEST(VoxelTerrain, TheSurfaceHeightmapStandsOnTheColumns) {
+  VoxelTerrainOptions options;
+  options.cell = 0.4;
+  const VoxelTerrain t = VoxelTerrain::from_profile(default_pile_profile(), options);
+  const Heightmap map = t.surface();
+  for (int i = 0; i < t.nx(); i += 3)
+    for (int j = 0; j < t.ny(); j += 4) {
+      auto z = map.height_at(t.column_x(i), t.column_y(j));
+      ASSERT_TRUE(z.has_value());
+      EXPECT_NEAR(*z, t.surface_height(i, j), 1e-6);
+    }
+}
+
+// bad sizes are named: a cell out of range, a profile in millimetres, a column that would
+// overflow (refused whole, nothing changed)
+TEST(VoxelTerrain, BadSizesAreNamedAndAnOverflowChangesNothing) {
+  PileProfile profile = default_pile_profile();
+  profile.path = "pile.json";
+  VoxelTerrainOptions options;
+  options.cell = 0.0;
+  try {
+    VoxelTerrain::from_profile(profile, options);
+    FAIL() << "a zero cell was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("pile.json"), std::string::npos) << e.what();
+  }
+  options.cell = 0.05;
+  for (Vec3& p : profile.points) p *= 50.0;
+  profile.rear_wall_x *= 50.0;
+  EXPECT_THROW(VoxelTerrain::from_profile(profile, options), InputError);
+
+  VoxelTerrain t(0.0, 0.0, 0.0, 1.0, 1, 1, 2, 1000.0);
+  t.deposit(0, 0, 1500.0, 1.0);
+  EXPECT_THROW(t.deposit(0, 0, 600.0, 1.0), Error);
+  EXPECT_DOUBLE_EQ(t.column_mass(0, 0), 1500.0);
+  EXPECT_THROW(t.deposit(0, 0, 1.0, 0.0), Error);
+  EXPECT_THROW(t.deposit(0, 0, 1.0, 2.0), Error);
+}
+
+}  // namespace
+}  // namespace talus
