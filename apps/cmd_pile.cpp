@@ -37,10 +37,10 @@ void add_pile_command(CLI::App& app, const std::string& command_line) {
       ->check(finite_number())
       ->check(non_negative_number())
       ->capture_default_str();
-  cmd->add_option("--settle-iterations", opt->build.max_settle_iterations,
-                  "study: most sweeps per step while settling (the level's N_it is capped here)")
-      ->check(CLI::Range(1, 100000))
-      ->capture_default_str();
+  cmd->add_option("--settle-iterations", opt->build.settle_iterations,
+                  "study: sweeps per step while filling and settling, above the level's N_it too "
+                  "(default: the level's N_it, at most 100)")
+      ->check(CLI::Range(1, 100000));
   cmd->add_flag("--quiet", opt->quiet, "no progress on stderr");
   cmd->callback([opt, command_line] {
     const FidelityPreset& preset = fidelity_preset(opt->level);

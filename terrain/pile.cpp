@@ -381,6 +381,11 @@ double particle_toe(const Particles& particles, const PileProfile& profile, doub
   return profile.rear_wall_x;
 }
 
+int settle_sweeps(const FidelityPreset& preset, const PileBuildOptions& options) {
+  return options.settle_iterations > 0 ? options.settle_iterations
+                                       : std::min(preset.iterations, kSettleIterationCap);
+}
+
 PileBuild build_pile(Device& dev, const PileProfile& profile, const FidelityPreset& preset,
                      const Material& material, const PileBuildOptions& options, Progress* progress) {
   // a pile sized by mistake is refused before it is filled (kMaxPileParticles)
@@ -400,7 +405,7 @@ PileBuild build_pile(Device& dev, const PileProfile& profile, const FidelityPres
   out.bounds = pile_bounds(profile, preset.diameter);
   DemSettings settings;
   settings.dt = preset.dt;
-  settings.iterations = std::min(preset.iterations, options.max_settle_iterations);
+  settings.iterations = settle_sweeps(preset, options);
   // dense fill: friction off, the faces held by formwork (as gravel dumped and compacted)
   Material fill = material;
   fill.friction = 0.0;

@@ -122,10 +122,15 @@ struct PileBuild {
   std::string cache_file;
 };
 
+// the most sweeps per step the rule gives settling (PileBuildOptions::settle_iterations)
+inline constexpr int kSettleIterationCap = 100;
+
 struct PileBuildOptions {
   unsigned seed = 1;
-  // sweeps while settling: the preset's N_it capped here (settling needs no precise forces)
-  int max_settle_iterations = 100;
+  // sweeps per step while filling and settling: 0 takes the rule, the level's N_it capped at
+  // kSettleIterationCap (settling needs no precise forces); a positive value is a study's choice,
+  // used as it is, above the level's N_it too (issue 11: does the D100 pile stand with more?)
+  int settle_iterations = 0;
   double min_time = 1.0;  // [s]
   double max_time = 4.0;  // [s]
   // the formwork withdraws from the face at this speed before the pile settles [m/s] (0: removed
@@ -146,6 +151,9 @@ struct PileBuildOptions {
 inline constexpr double kToeHeight = 0.2;  // [m], a tenth of the default pile's 2 m (SPEC §2.5)
 double profile_toe(const PileProfile& profile);
 double particle_toe(const Particles& particles, const PileProfile& profile, double diameter);
+
+// the sweeps per step a pile is filled and settled with at that level under those options
+int settle_sweeps(const FidelityPreset& preset, const PileBuildOptions& options);
 
 PileBuild build_pile(Device& dev, const PileProfile& profile, const FidelityPreset& preset,
                      const Material& material, const PileBuildOptions& options, Progress* progress);

@@ -159,7 +159,8 @@ std::string pile_key_bytes(const PileProfile& profile, const FidelityPreset& pre
     w.f64(v);
   w.str("options");
   w.u64(options.seed);
-  w.u64(static_cast<std::uint64_t>(static_cast<std::int64_t>(options.max_settle_iterations)));
+  // the sweeps the pile is settled with, as the rule or the study resolved them
+  w.u64(static_cast<std::uint64_t>(static_cast<std::int64_t>(settle_sweeps(preset, options))));
   for (double v : {options.min_time, options.max_time, options.form_speed, options.form_travel})
     w.f64(v);
   w.u8(options.place_toe ? 1 : 0);

@@ -233,6 +233,12 @@ TEST(PileCache, KeyFollowsEveryInput) {
   PileBuildOptions unplaced = options;
   unplaced.place_toe = false;
   EXPECT_NE(base, key(profile, d400, soil, unplaced));
+  // the sweeps it settles with count as they are resolved: 15 at D400 by the rule or asked for
+  PileBuildOptions swept = options;
+  swept.settle_iterations = 15;
+  EXPECT_EQ(base, key(profile, d400, soil, swept));
+  swept.settle_iterations = 200;
+  EXPECT_NE(base, key(profile, d400, soil, swept));
   PileBuildOptions formed = options;
   formed.form_speed = 0.5;
   EXPECT_NE(base, key(profile, d400, soil, formed));

@@ -102,6 +102,16 @@ TEST(Pile, UnknownLevelListsTheKnownOnes) {
   }
 }
 
+// settling sweeps: the level's N_it capped at 100 by the rule; a study's count as it is, above
+// the level's N_it too
+TEST(Pile, SettleSweepsFollowTheRuleOrTheStudy) {
+  PileBuildOptions options;
+  EXPECT_EQ(settle_sweeps(fidelity_preset("D400"), options), 15);
+  EXPECT_EQ(settle_sweeps(fidelity_preset("D200"), options), kSettleIterationCap);
+  options.settle_iterations = 200;
+  EXPECT_EQ(settle_sweeps(fidelity_preset("D100"), options), 200);
+}
+
 // a type-G level is known, and its error says it is not built yet rather than "unknown"
 TEST(Pile, AMultiscaleLevelIsNamedAsNotYetRunnable) {
   ASSERT_NE(find_multiscale_preset("G200"), nullptr);
