@@ -166,15 +166,15 @@ void VoxelTerrain::restack(int i, int j, const std::vector<Layer>& layers) {
   }
 }
 
-SoilTaken VoxelTerrain::take(int i, int j, double z_lo, double z_hi) {
-  SoilTaken taken;
+SoilTaken VoxelTerrain::split(int i, int j, double z_lo, double z_hi, std::vector<Layer>* below,
+                              std::vector<Layer>* above) const {
+  SoilTaken inside;
   const double area = h_ * h_;
   // the interval in the column's own height, clamped to its soil
   double a = std::max(z_lo - z0_, 0.0);
   double b = std::min(z_hi - z0_, column_volume(i, j) / area);
-  if (!(b > a)) return taken;
+  if (!(b > a)) return inside;
   // each cell's soil spans [k h, k h + V / h^2]: split it into below, inside and above [a, b]
-  std::vector<Layer> below, above;
   for (int k = 0; k < nz_; ++k) {
     size_t c = index(i, j, k);
     double m = mass_[c], v = volume_[c];
@@ -184,17 +184,28 @@ SoilTaken VoxelTerrain::take(int i, int j, double z_lo, double z_hi) {
     double f_above = std::clamp((hi - b) / (hi - lo), 0.0, 1.0);
     double m_below = m * f_below, m_above = m * f_above;
     double m_inside = m - m_below - m_above;
-    if (f_below > 0.0) below.push_back({m_below, v * f_below});
-    if (f_above > 0.0) above.push_back({m_above, v * f_above});
+    if (below && f_below > 0.0) below->push_back({m_below, v * f_below});
+    if (above && f_above > 0.0) above->push_back({m_above, v * f_above});
     if (m_inside > 0.0) {
-      taken.mass += m_inside;
-      taken.volume += v * (1.0 - f_below - f_above);
+      inside.mass += m_inside;
+      inside.volume += v * (1.0 - f_below - f_above);
     }
   }
+  inside.bank_volume = inside.mass / rho_bank_;
+  return inside;
+}
+
+SoilTaken VoxelTerrain::soil_between(int i, int j, double z_lo, double z_hi) const {
+  return split(i, j, z_lo, z_hi, nullptr, nullptr);
+}
+
+SoilTaken VoxelTerrain::take(int i, int j, double z_lo, double z_hi) {
+  std::vector<Layer> below, above;
+  const SoilTaken taken = split(i, j, z_lo, z_hi, &below, &above);
+  if (taken.volume <= 0.0 && taken.mass <= 0.0) return taken;
   // what lay above drops onto what lay below
   below.insert(below.end(), above.begin(), above.end());
   restack(i, j, below);
-  taken.bank_volume = taken.mass / rho_bank_;
   return taken;
 }
 

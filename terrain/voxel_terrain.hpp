@@ -95,6 +95,8 @@ class VoxelTerrain {
   // the column heights alone, nx × ny, index j nx + i
   std::vector<double> surface_heights() const;
 
+  // what `take` would take, left in place
+  SoilTaken soil_between(int i, int j, double z_lo, double z_hi) const;
   // take the soil of column (i, j) between heights z_lo and z_hi (clamped to the column); what
   // lay above z_hi drops by the thickness taken, keeping its compaction. Returns what was taken
   SoilTaken take(int i, int j, double z_lo, double z_hi);
@@ -116,6 +118,10 @@ class VoxelTerrain {
     double mass, volume;
   };
   void restack(int i, int j, const std::vector<Layer>& layers);
+  // the column's soil split at heights z_lo < z_hi: what lies inside (returned) and, when asked
+  // for, the layers below and above
+  SoilTaken split(int i, int j, double z_lo, double z_hi, std::vector<Layer>* below,
+                  std::vector<Layer>* above) const;
   std::vector<double> mass_;  // [kg] per cell
   // [m^3] per cell: h^3 exactly in every cell under a column's top one. Volume, not compaction,
   // is stored so that volumes add exactly; compaction is derived, m / (rho_bank V)

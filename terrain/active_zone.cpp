@@ -1,0 +1,173 @@
+#include "terrain/active_zone.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "host/error.hpp"
+#include "terrain/earthmoving_equation.hpp"
+
+namespace talus {
+namespace {
+
+constexpr double kDegree = M_PI / 180.0;
+
+// the terrain's surface under a point: the height of its column, or the ground off the grid
+double surface_under(const VoxelTerrain& terrain, const Vec3& p) {
+  int i = 0, j = 0;
+  if (!terrain.column_at(p.x(), p.y(), &i, &j)) return terrain.z0();
+  return terrain.surface_height(i, j);
+}
+
+// where a plane rising from the tip leaves through the surface along the centre line: the first
+// s (stepping by a quarter cell in direction `sign`) where the plane stands on or above the
+// surface, interpolated linearly between the last two samples; the whole grid's length if never
+double exit_along(const VoxelTerrain& terrain, const ActiveZone& zone, double sign, double rise) {
+  const double step = 0.25 * terrain.cell();
+  const double longest = (terrain.nx() + terrain.ny()) * terrain.cell();
+  double prev_gap = zone.depth;  // surface minus plane at s = 0
+  for (double s = step; s <= longest; s += step) {
+    const Vec3 p = zone.tip + sign * s * zone.forward;
+    const double gap = surface_under(terrain, p) - (zone.tip.z() + s * rise);
+    if (gap <= 0.0) return s - step * gap / (gap - prev_gap);
+    prev_gap = gap;
+  }
+  return longest;
+}
+
+}  // namespace
+
+bool ActiveZone::bounds_at(double s, double* z_lo, double* z_hi) const {
+  if (s < -reach_behind || s > reach_ahead) return false;
+  const double alpha = rake_deg * kDegree;
+  *z_hi = INFINITY;
+  if (s >= 0.0) {
+    *z_lo = tip.z() + s * std::tan(failure_angle_deg * kDegree);
+    // a tool leaning over the soil ahead (alpha > 90 deg) caps the zone from above
+    if (rake_deg > 90.0) *z_hi = tip.z() + s * std::tan(M_PI - alpha);
+  } else {
+    if (rake_deg >= 90.0) return false;  // behind a vertical or overhanging tool: no zone
+    *z_lo = tip.z() - s * std::tan(alpha);
+  }
+  return true;
+}
+
+bool ActiveZone::contains(const Vec3& p, double surface) const {
+  const Vec3 r = p - tip;
+  if (std::abs(r.dot(along)) > 0.5 * width) return false;
+  double lo = 0.0, hi = 0.0;
+  if (!bounds_at(r.dot(forward), &lo, &hi)) return false;
+  return p.z() >= lo && p.z() <= std::min(hi, surface);
+}
+
+ActiveZone predict_active_zone(const VoxelTerrain& terrain, const ToolEdges& tool,
+                               const BulkSoil& soil) {
+  ActiveZone zone;
+  const Vec3 edge = tool.cutting_right - tool.cutting_left;
+  zone.width = edge.norm();
+  if (!(zone.width >= 1e-3)) throw Error("active zone: the cutting edge is shorter than 1 mm");
+  zone.along = edge / zone.width;
+  zone.tip = 0.5 * (tool.cutting_left + tool.cutting_right);
+  // forward: horizontal, normal to the edge, away from the top edge's side
+  Vec3 forward = Vec3::UnitZ().cross(zone.along);
+  if (!(forward.norm() >= 0.1)) throw Error("active zone: the cutting edge stands nearly vertical");
+  forward.normalize();
+  const Vec3 top = 0.5 * (tool.top_left + tool.top_right) - zone.tip;
+  if (top.dot(forward) > 0.0) forward = -forward;
+  // a tool whose top edge stands straight above its tip faces the way it moves
+  if (std::abs(top.dot(forward)) < 1e-9 * top.norm() && tool.velocity.dot(forward) < 0.0)
+    forward = -forward;
+  zone.forward = forward;
+  // the rake: the tool plane's angle from the horizontal behind the tip, in the excavation plane
+  zone.rake_deg = std::atan2(top.z(), -top.dot(forward)) / kDegree;
+  zone.rake_deg = std::clamp(zone.rake_deg, 1.0, 179.0);
+  // depth and speed in the excavation plane
+  zone.depth = surface_under(terrain, zone.tip) - zone.tip.z();
+  const Vec3 v = tool.velocity;
+  zone.speed = std::hypot(v.dot(forward), v.z());
+  // the failure plane: none where the tool leans so far over the soil ahead that rake, tool
+  // friction and internal friction reach 180 deg (the FEE has no wedge; the tool presses the soil
+  // down rather than failing it ahead), and then no zone
+  const double tool_friction_deg = std::atan(soil.tool_friction) / kDegree;
+  if (zone.rake_deg + tool_friction_deg + soil.effective_friction_deg() >= 180.0) return zone;
+  zone.failure_angle_deg =
+      fee_failure_angle(zone.rake_deg, tool_friction_deg, soil.effective_friction_deg());
+  zone.active = zone.depth > 0.0 && zone.speed > soil.activation_speed;
+  if (zone.depth <= 0.0) return zone;
+  // where the two planes leave through the surface
+  zone.reach_ahead = exit_along(terrain, zone, 1.0, std::tan(zone.failure_angle_deg * kDegree));
+  if (zone.rake_deg < 90.0)
+    zone.reach_behind = exit_along(terrain, zone, -1.0, std::tan(zone.rake_deg * kDegree));
+  return zone;
+}
+
+bool zone_interval(const ActiveZone& zone, const VoxelTerrain& terrain, int i, int j, double* z_lo,
+                   double* z_hi) {
+  const Vec3 c(terrain.column_x(i), terrain.column_y(j), zone.tip.z());
+  const Vec3 r = c - zone.tip;
+  if (std::abs(r.dot(zone.along)) > 0.5 * zone.width) return false;
+  double lo = 0.0, hi = 0.0;
+  if (!zone.bounds_at(r.dot(zone.forward), &lo, &hi)) return false;
+  *z_lo = std::max(lo, terrain.z0());
+  *z_hi = std::min(hi, terrain.surface_height(i, j));
+  return *z_hi > *z_lo;
+}
+
+namespace {
+
+// the columns a zone can reach: the box around its footprint, clamped to the grid
+void zone_columns(const ActiveZone& zone, const VoxelTerrain& terrain, int* i0, int* i1, int* j0,
+                  int* j1) {
+  const Vec3 half = 0.5 * zone.width * zone.along;
+  const Vec3 corners[4] = {zone.tip - half + zone.reach_ahead * zone.forward,
+                           zone.tip + half + zone.reach_ahead * zone.forward,
+                           zone.tip - half - zone.reach_behind * zone.forward,
+                           zone.tip + half - zone.reach_behind * zone.forward};
+  double xlo = INFINITY, xhi = -INFINITY, ylo = INFINITY, yhi = -INFINITY;
+  for (const Vec3& p : corners) {
+    xlo = std::min(xlo, p.x());
+    xhi = std::max(xhi, p.x());
+    ylo = std::min(ylo, p.y());
+    yhi = std::max(yhi, p.y());
+  }
+  const double h = terrain.cell();
+  *i0 = std::max(0, static_cast<int>(std::floor((xlo - terrain.x0()) / h)));
+  *i1 = std::min(terrain.nx() - 1, static_cast<int>(std::floor((xhi - terrain.x0()) / h)));
+  *j0 = std::max(0, static_cast<int>(std::floor((ylo - terrain.y0()) / h)));
+  *j1 = std::min(terrain.ny() - 1, static_cast<int>(std::floor((yhi - terrain.y0()) / h)));
+}
+
+}  // namespace
+
+double zone_soil_mass(const ActiveZone& zone, const VoxelTerrain& terrain) {
+  if (zone.depth <= 0.0) return 0.0;
+  int i0 = 0, i1 = 0, j0 = 0, j1 = 0;
+  zone_columns(zone, terrain, &i0, &i1, &j0, &j1);
+  double mass = 0.0;
+  for (int j = j0; j <= j1; ++j)
+    for (int i = i0; i <= i1; ++i) {
+      double lo = 0.0, hi = 0.0;
+      if (zone_interval(zone, terrain, i, j, &lo, &hi))
+        mass += terrain.soil_between(i, j, lo, hi).mass;
+    }
+  return mass;
+}
+
+DynamicSoil excavate(VoxelTerrain& terrain, const ActiveZone& zone, const BulkSoil& soil) {
+  DynamicSoil dynamic;
+  if (!zone.active) return dynamic;
+  int i0 = 0, i1 = 0, j0 = 0, j1 = 0;
+  zone_columns(zone, terrain, &i0, &i1, &j0, &j1);
+  // column by column in a fixed order, so the same bits on every run
+  for (int j = j0; j <= j1; ++j)
+    for (int i = i0; i <= i1; ++i) {
+      double lo = 0.0, hi = 0.0;
+      if (!zone_interval(zone, terrain, i, j, &lo, &hi)) continue;
+      const SoilTaken taken = terrain.take(i, j, lo, hi);
+      dynamic.mass += taken.mass;
+      dynamic.bank_volume += taken.bank_volume;
+    }
+  dynamic.volume = dynamic.bank_volume * soil.swell;
+  return dynamic;
+}
+
+}  // namespace talus

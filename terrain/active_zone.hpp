@@ -1,0 +1,101 @@
+// The active zone of the type-G terrain (issue 14, paper §4.4, Servin, Berglund & Nystedt 2021):
+// the soil a moving tool is about to fail, predicted every step from the tool's cutting edge, its
+// top edge and its motion. It is the wedge of the fundamental earthmoving equation
+// (terrain/earthmoving_equation) in the excavation plane, extruded along the cutting edge:
+//
+//             surface ____________________________
+//     top edge  \                        ___/ failure plane, beta from the horizontal
+//                \ tool plane,     ___/
+//                 \ rake alpha ___/
+//                  \      ___/
+//          cutting  *___/
+//             edge
+//
+// Frame: the tip is the cutting edge's midpoint; `along` runs along the cutting edge; `forward` is
+// horizontal, normal to the cutting edge, pointing away from the top edge's side (into the soil
+// the tool faces). In the excavation plane (forward, up) a point is (s, z). The tool plane runs
+// from the tip through the top edge at the rake angle alpha from the horizontal behind the tip
+// (90 deg: a vertical blade; a loader's bucket with its bottom level, about 45 deg). The failure
+// plane runs from the tip ahead at beta, the FEE's least-force angle for this alpha, the
+// bucket-soil friction and the soil's effective internal friction phi + psi (paper §4.4: dilatancy
+// "adds directly to the internal friction", 32 + 8 = 40 deg). The zone is the soil above both
+// planes and under the surface, as wide as the cutting edge, from where the tool plane leaves the
+// surface behind the tip to where the failure plane leaves it ahead.
+//
+// Soil turns dynamic only while the tool moves through it: when the cutting edge is under the
+// surface and its speed in the excavation plane is above the activation speed (0.1 m/s, the
+// reference engine's documented threshold, SPEC §2.5).
+#pragma once
+#include "solvers/particles.hpp"
+#include "terrain/voxel_terrain.hpp"
+
+namespace talus {
+
+// the bulk soil of the type-G terrain: the paper's §4.4 values for the field's gravel
+struct BulkSoil {
+  double internal_friction_deg = 32.0;  // phi
+  double dilatancy_deg = 8.0;           // psi: phi + psi = 40 deg on a failure plane
+  double tool_friction = 0.2;           // bucket-soil friction coefficient
+  // the volume of excavated (dynamic) soil over its bank volume: the reference engine's default
+  // swell factor, 1.1 (AGX Dynamics terrain material; the paper gives none)
+  double swell = 1.1;
+  // tool speed in the excavation plane above which soil turns dynamic [m/s] (SPEC §2.5)
+  double activation_speed = 0.1;
+  double effective_friction_deg() const { return internal_friction_deg + dilatancy_deg; }
+};
+
+// where the tool is: the ends of its cutting edge and of its top edge, and the cutting edge's
+// velocity (the bucket's, at the edge's midpoint) [m, m/s]
+struct ToolEdges {
+  Vec3 cutting_left = Vec3::Zero(), cutting_right = Vec3::Zero();
+  Vec3 top_left = Vec3::Zero(), top_right = Vec3::Zero();
+  Vec3 velocity = Vec3::Zero();
+};
+
+struct ActiveZone {
+  bool active = false;  // the tool cuts: edge under the surface, moving faster than activation
+  Vec3 tip = Vec3::Zero();
+  Vec3 along = Vec3::UnitY();
+  Vec3 forward = Vec3::UnitX();
+  double width = 0.0;              // the cutting edge's length [m]
+  double depth = 0.0;              // the surface above the tip [m] (negative: the tip is above it)
+  double speed = 0.0;              // the tool's speed in the excavation plane [m/s]
+  double rake_deg = 90.0;          // alpha
+  double failure_angle_deg = 0.0;  // beta
+  double reach_ahead = 0.0;        // s where the failure plane leaves through the surface [m]
+  double reach_behind = 0.0;       // -s where the tool plane leaves through the surface [m]
+
+  // the zone's lower and upper bound at s from the tip, before the surface: above the failure
+  // plane ahead of the tip, above the tool plane behind it (alpha < 90 deg), under the tool plane
+  // ahead of it (alpha > 90 deg); false where s lies outside [-reach_behind, reach_ahead]
+  bool bounds_at(double s, double* z_lo, double* z_hi) const;
+  // is the point in the zone, with the surface at `surface` [m] above it?
+  bool contains(const Vec3& p, double surface) const;
+};
+
+// predicts the zone from the tool's edges on the terrain's surface. Throws talus::Error for a
+// cutting edge shorter than 1 mm or lying nearly vertical (no excavation plane)
+ActiveZone predict_active_zone(const VoxelTerrain& terrain, const ToolEdges& tool,
+                               const BulkSoil& soil);
+
+// the zone's share of column (i, j): its soil between z_lo and z_hi; false when the column's centre
+// lies outside the zone or the zone holds none of its soil
+bool zone_interval(const ActiveZone& zone, const VoxelTerrain& terrain, int i, int j, double* z_lo,
+                   double* z_hi);
+
+// the solid soil inside the zone [kg], left in place
+double zone_soil_mass(const ActiveZone& zone, const VoxelTerrain& terrain);
+
+// soil turned dynamic by the tool: its mass, the bank volume it stood for (mass / rho_bank) and
+// the volume it fills now, swollen (bank volume times the swell) [kg, m^3]
+struct DynamicSoil {
+  double mass = 0.0;
+  double bank_volume = 0.0;
+  double volume = 0.0;
+};
+
+// excavation: every column's share of an active zone leaves the terrain as dynamic soil; an
+// inactive zone takes nothing
+DynamicSoil excavate(VoxelTerrain& terrain, const ActiveZone& zone, const BulkSoil& soil);
+
+}  // namespace talus

@@ -1,0 +1,40 @@
+// Avalanching of the type-G terrain's surface (issue 14, SPEC §2.5): where the slope between two
+// neighbouring columns is steeper than the angle of repose, soil slides from the higher to the
+// lower one until the slope relaxes to it. What the bucket leaves behind (a cut face steeper than
+// the gravel can stand, soil dropped back on the pile) comes to rest at the repose angle.
+//
+// The rule (the reference engine's documented one; the paper gives none): between columns a and b,
+// h apart (the four neighbours of each column), the excess height Δh − h tan θ over the repose
+// slope decays by a fraction f each step, f / 2 of it leaving the higher column and landing on the
+// lower one. The engine moves f = 0.1 of the excess per step at its usual 60 Hz; talus states the
+// same decay per second, k = −ln(1 − 0.1) / (1/60 s) = 6.3 /s, f = 1 − exp(−k Δt), so the surface
+// relaxes at the same speed at every level's timestep (G400's 50 ms: f = 0.27; G50's 5 ms: 0.031).
+// f is capped at 0.25: a column with four lower neighbours then gives at most half its excess over
+// the steepest, so no step overshoots into a reversed slope.
+//
+// The soil keeps its mass and compaction: it leaves the top of the higher column (terrain's
+// `take`) and is laid on the lower one at the compaction it had (`deposit`). All exchanges of a
+// step are computed from the heights at its start and applied in a fixed order (every take, then
+// every deposit, by column index), so the result does not depend on a sweep order and is the same
+// on every run.
+#pragma once
+#include "terrain/voxel_terrain.hpp"
+
+namespace talus {
+
+struct AvalancheOptions {
+  double repose_deg = 32.0;  // the gravel's angle of repose (paper §4.4: internal friction 32 deg)
+  double rate = 6.3;         // decay rate of the excess slope [1/s] (see above)
+};
+
+struct AvalancheStep {
+  double moved_mass = 0.0;    // soil that slid this step [kg]
+  int slopes = 0;             // neighbour pairs steeper than the repose angle at the step's start
+  double steepest_deg = 0.0;  // the steepest slope between neighbours at the step's start
+};
+
+// one step of avalanching over the whole terrain; throws talus::Error for a non-positive timestep,
+// a negative rate or a repose angle outside (0, 90) deg
+AvalancheStep avalanche(VoxelTerrain& terrain, double dt, const AvalancheOptions& options = {});
+
+}  // namespace talus
