@@ -140,9 +140,9 @@ const FidelityPreset& fidelity_preset(const std::string& name) {
   if (find_multiscale_preset(name))
     throw InputError(
         "fidelity level '" + name +
-        "' is the multiscale (type G) terrain, which cannot dig yet: its voxel terrain "
-        "exists (docs/multiscale.md), its active zone's particles, aggregate and coupling "
-        "to the machine do not (issue 14). Use a type-D level:" +
+        "' is the multiscale (type G) terrain, which cannot dig yet: its voxel terrain, "
+        "active zone and avalanching exist (docs/multiscale.md), its particles, aggregate and "
+        "coupling to the machine do not (issue 14). Use a type-D level:" +
         known);
   throw InputError("unknown fidelity level '" + name + "'; known:" + known);
 }
