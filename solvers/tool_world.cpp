@@ -24,8 +24,11 @@ void add_box(vehicle::BucketMesh& mesh, const Vec3& centre, const Vec3& half) {
 // one tool's device side and its warm-start memory
 struct ToolWorld::Side {
   Side(Device& dev, Tool t, const embree::Device& embree)
-      : tool(std::move(t)), scene(tool.mesh, embree), selection(dev), block(dev) {}
+      : tool(std::move(t)), scene(tool.mesh, embree), selection(dev), block(dev) {
+    for (const Vec3& v : tool.mesh.vertices) reach = std::max(reach, v.norm());
+  }
   Tool tool;
+  double reach = 0.0;  // the farthest vertex from the frame's origin [m]
   BucketScene scene;
   DeviceBoxSelection selection;
   BucketRowBlock block;
@@ -71,8 +74,10 @@ void ToolWorld::step() {
     side->candidates.clear();
     BucketPose pose;
     pose.position = t.position;
+    pose.orientation = t.orientation;
     // what the tool and a particle can close within the step is covered by speculative rows
-    const double reach = 2.0 * h * (t.velocity.norm() + dem_.settings().max_speed);
+    const double tool_speed = t.velocity.norm() + t.omega.norm() * side->reach;
+    const double reach = 2.0 * h * (tool_speed + dem_.settings().max_speed);
     std::vector<BucketContact> contacts;
     Particles near;
     if (dem_.size() > 0) {
@@ -98,6 +103,7 @@ void ToolWorld::step() {
                                                               : std::vector<int>();
     BucketBody body;
     body.velocity = t.velocity;
+    body.omega = t.omega;
     body.mobility = t.mobility;
     side->rows = make_bucket_rows(contacts, near, body, t.position, params, t.material, side->previous, match);
     set_bucket_effective_masses(side->rows, contacts, near, t.mobility);
@@ -146,7 +152,14 @@ void ToolWorld::step() {
                      [](const BucketImpulse& a, const BucketImpulse& b) { return a.particle < b.particle; });
   }
   dem_.end_step();
-  for (auto& side : sides_) side->tool.position += h * side->tool.velocity;
+  // the tools move: translation, and the prescribed turn as the rotation by h omega
+  for (auto& side : sides_) {
+    Tool& t = side->tool;
+    t.position += h * t.velocity;
+    const double angle = h * t.omega.norm();
+    if (angle > 0.0)
+      t.orientation = (Eigen::AngleAxisd(angle, t.omega.normalized()) * t.orientation).normalized();
+  }
 }
 
 }  // namespace talus

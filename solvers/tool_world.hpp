@@ -7,7 +7,9 @@
 // rows (solvers/bucket_rows), solved on the device by the same kernel after every particle sweep;
 // only the mobility W that the vehicle's direct solve gives the bucket is the tool's own:
 //   - kinematic (W = 0): the motion is prescribed, the particles cannot push the tool; the rows'
-//     impulses are the force the drive must supply (the cutting blade, the shear ring);
+//     impulses are the force the drive must supply (the cutting blade, the shear ring, the
+//     bucket of the type-G terrain, which the machine moves and the particles only feel). A
+//     kinematic tool may turn: its orientation and angular velocity are prescribed too;
 //   - loaded (W = 1/M on the axes the tool may move along): a body of mass M, pulled by an
 //     external force (a platen's weight) and pushed by the particles within the same sweeps, so
 //     the coupling is as strong as the bucket's. Tools translate only: W's angular rows must be
@@ -36,6 +38,10 @@ struct Tool {
   vehicle::BucketMesh mesh;        // the triangles, in the tool's frame (profile and volumes unused)
   Vec3 position = Vec3::Zero();    // of the tool's frame origin in the world [m]; arms are taken about it
   Vec3 velocity = Vec3::Zero();    // of the tool [m/s]
+  // the mesh frame's orientation in the world, and its angular velocity [1/s] (prescribed; a
+  // loaded tool keeps omega zero, as its mobility cannot turn it)
+  Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();
+  Vec3 omega = Vec3::Zero();
   // response to an impulse wrench about the origin (twist change per [N s; N m s]): zero for a
   // kinematic tool, 1/M on the free axes of a loaded one; the angular rows must be zero
   Mat6 mobility = Mat6::Zero();
