@@ -55,6 +55,10 @@ ToolWorld::ToolWorld(Device& dev, DemWorld& dem, std::vector<Tool> tools, const 
 
 ToolWorld::~ToolWorld() = default;
 
+void ToolWorld::forget_contacts() {
+  for (auto& side : sides_) side->previous.clear();
+}
+
 size_t ToolWorld::size() const { return sides_.size(); }
 Tool& ToolWorld::tool(size_t i) { return sides_.at(i)->tool; }
 const Tool& ToolWorld::tool(size_t i) const { return sides_.at(i)->tool; }

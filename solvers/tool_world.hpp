@@ -67,6 +67,10 @@ class ToolWorld {
   // one particle step with the tools' rows solved inside every sweep, then both sides move
   void step();
 
+  // drops the tools' memory of last step's contact impulses: after DemWorld::set_particles has
+  // renumbered the particles, a warm start by particle index would hand impulses to strangers
+  void forget_contacts();
+
   size_t size() const;
   // the tools; a kinematic tool's velocity may be changed between steps (its prescribed motion)
   Tool& tool(size_t i);

@@ -152,7 +152,8 @@ double zone_soil_mass(const ActiveZone& zone, const VoxelTerrain& terrain) {
   return mass;
 }
 
-DynamicSoil excavate(VoxelTerrain& terrain, const ActiveZone& zone, const BulkSoil& soil) {
+DynamicSoil excavate(VoxelTerrain& terrain, const ActiveZone& zone, const BulkSoil& soil,
+                     std::vector<ExcavatedColumn>* columns) {
   DynamicSoil dynamic;
   if (!zone.active) return dynamic;
   int i0 = 0, i1 = 0, j0 = 0, j1 = 0;
@@ -163,6 +164,10 @@ DynamicSoil excavate(VoxelTerrain& terrain, const ActiveZone& zone, const BulkSo
       double lo = 0.0, hi = 0.0;
       if (!zone_interval(zone, terrain, i, j, &lo, &hi)) continue;
       const SoilTaken taken = terrain.take(i, j, lo, hi);
+      if (columns && taken.mass > 0.0)
+        columns->push_back({i, j, lo,
+                            std::min(hi, lo + taken.volume / (terrain.cell() * terrain.cell())),
+                            taken.mass});
       dynamic.mass += taken.mass;
       dynamic.bank_volume += taken.bank_volume;
     }

@@ -26,6 +26,8 @@
 // surface and its speed in the excavation plane is above the activation speed (0.1 m/s, the
 // reference engine's documented threshold, SPEC §2.5).
 #pragma once
+#include <vector>
+
 #include "solvers/particles.hpp"
 #include "terrain/voxel_terrain.hpp"
 
@@ -94,8 +96,17 @@ struct DynamicSoil {
   double volume = 0.0;
 };
 
+// one column's share of an excavation: where the soil was [m] and its mass [kg]
+struct ExcavatedColumn {
+  int i = 0, j = 0;
+  double z_lo = 0.0, z_hi = 0.0;
+  double mass = 0.0;
+};
+
 // excavation: every column's share of an active zone leaves the terrain as dynamic soil; an
-// inactive zone takes nothing
-DynamicSoil excavate(VoxelTerrain& terrain, const ActiveZone& zone, const BulkSoil& soil);
+// inactive zone takes nothing. `columns`, when given, receives each column's share, in the order
+// taken (by row j, then i)
+DynamicSoil excavate(VoxelTerrain& terrain, const ActiveZone& zone, const BulkSoil& soil,
+                     std::vector<ExcavatedColumn>* columns = nullptr);
 
 }  // namespace talus

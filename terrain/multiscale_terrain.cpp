@@ -1,0 +1,286 @@
+#include "terrain/multiscale_terrain.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <unordered_map>
+
+#include "host/error.hpp"
+#include "solvers/tool_world.hpp"
+
+namespace talus {
+namespace {
+
+// how high above an excavated column's floor spawning looks for room [m]: the soil a bucket
+// pushes heaps up in front of it, to about the default pile's height (SPEC §2.5: 2 m)
+constexpr double kSpawnHeight = 2.0;
+// the spread of the particles' diameters, as the type-D piles' (terrain/pile: D ± 10 %)
+constexpr double kSizeSpread = 0.1;
+
+// a hash of particle centres by cell, for "does a new particle touch one already there?"
+class CentreGrid {
+ public:
+  explicit CentreGrid(double cell) : cell_(cell) {}
+  void add(const Vec3& x, double r) {
+    grid_[key(x)].push_back(static_cast<int>(centres_.size()));
+    centres_.push_back(x);
+    radii_.push_back(r);
+  }
+  bool touches(const Vec3& x, double r) const {
+    const long cx = std::lround(std::floor(x.x() / cell_)),
+               cy = std::lround(std::floor(x.y() / cell_)),
+               cz = std::lround(std::floor(x.z() / cell_));
+    for (long dz = -1; dz <= 1; ++dz)
+      for (long dy = -1; dy <= 1; ++dy)
+        for (long dx = -1; dx <= 1; ++dx) {
+          const auto it = grid_.find(pack(cx + dx, cy + dy, cz + dz));
+          if (it == grid_.end()) continue;
+          for (int k : it->second)
+            if ((centres_[k] - x).norm() < radii_[k] + r) return true;
+        }
+    return false;
+  }
+
+ private:
+  static long long pack(long x, long y, long z) {
+    return ((static_cast<long long>(x) & 0x1fffff) << 42) |
+           ((static_cast<long long>(y) & 0x1fffff) << 21) | (static_cast<long long>(z) & 0x1fffff);
+  }
+  long long key(const Vec3& x) const {
+    return pack(std::lround(std::floor(x.x() / cell_)), std::lround(std::floor(x.y() / cell_)),
+                std::lround(std::floor(x.z() / cell_)));
+  }
+  double cell_;
+  std::unordered_map<long long, std::vector<int>> grid_;
+  std::vector<Vec3> centres_;
+  std::vector<double> radii_;
+};
+
+BucketPose pose_of(const KinematicBucket& b) {
+  BucketPose pose;
+  pose.position = b.position;
+  pose.orientation = b.orientation;
+  return pose;
+}
+
+}  // namespace
+
+ToolEdges bucket_edges(const vehicle::BucketMesh& mesh, const KinematicBucket& bucket) {
+  const BucketPose pose = pose_of(bucket);
+  const double half = 0.5 * mesh.inner_width;
+  const Vec3 lip = mesh.profile.empty() ? Vec3(0, 0, 1) : mesh.profile.back();
+  ToolEdges edges;
+  edges.cutting_left = pose.to_world(Vec3(0.0, half, 0.0));
+  edges.cutting_right = pose.to_world(Vec3(0.0, -half, 0.0));
+  edges.top_left = pose.to_world(Vec3(lip.x(), half, lip.z()));
+  edges.top_right = pose.to_world(Vec3(lip.x(), -half, lip.z()));
+  // the frame's origin is the cutting edge's middle: its velocity is the frame's
+  edges.velocity = bucket.velocity;
+  return edges;
+}
+
+MultiscaleTerrain::MultiscaleTerrain(Device& dev, const PileProfile& profile,
+                                     const FidelityPreset& level, const vehicle::BucketMesh& bucket,
+                                     const KinematicBucket& start, const MultiscaleOptions& options,
+                                     const embree::Device& embree)
+    : level_(level),
+      options_(options),
+      profile_(profile),
+      voxels_(VoxelTerrain::from_profile(profile,
+                                         [&] {
+                                           VoxelTerrainOptions v;
+                                           v.cell = level.diameter;
+                                           v.front_margin = options.front_margin;
+                                           return v;
+                                         }())),
+      bucket_mesh_(bucket),
+      bucket_scene_(bucket, embree),
+      sizes_(options.seed) {
+  if (!find_multiscale_preset(level.name))
+    throw InputError("multiscale terrain: level '" + level.name +
+                     "' is not a type-G level (G50, G100, G200, G400)");
+  DemSettings settings;
+  settings.dt = level.dt;
+  settings.iterations = level.iterations;
+  settings.max_speed = options.max_particle_speed;
+  dem_ = std::make_unique<DemWorld>(dev, options.particle_material, settings,
+                                    pile_bounds(profile, level.diameter), pile_container(profile));
+  Tool tool;
+  tool.mesh = bucket;
+  tool.position = start.position;
+  tool.orientation = start.orientation;
+  tool.velocity = start.velocity;
+  tool.omega = start.omega;
+  tool.material = options.bucket_material;
+  tools_ = std::make_unique<ToolWorld>(dev, *dem_, std::vector<Tool>{tool}, embree);
+}
+
+MultiscaleTerrain::~MultiscaleTerrain() = default;
+
+Particles MultiscaleTerrain::particles() const {
+  if (ledger_.empty()) return Particles{};
+  return dem_->particles();
+}
+
+MassBalance MultiscaleTerrain::mass_balance() const {
+  MassBalance m;
+  m.solid = voxels_.total_mass();
+  m.pool = pool_;
+  for (double x : ledger_) m.particles += x;
+  return m;
+}
+
+void MultiscaleTerrain::step(const KinematicBucket& bucket) {
+  last_ = MultiscaleStep{};
+  const BucketPose pose = pose_of(bucket);
+  // 1. the zone and its soil into the pool
+  last_.zone = predict_active_zone(voxels_, bucket_edges(bucket_mesh_, bucket), options_.soil);
+  std::vector<ExcavatedColumn> columns;
+  const DynamicSoil dynamic = excavate(voxels_, last_.zone, options_.soil, &columns);
+  pool_ += dynamic.mass;
+  last_.excavated = dynamic.mass;
+
+  // 2. particles from the pool; 4. resting particles back (on the state the last step left)
+  Particles particles = this->particles();
+  last_.merged = merge(particles, bucket);
+  last_.spawned = spawn(particles, columns, pose);
+  if (last_.merged > 0 || last_.spawned > 0) {
+    dem_->set_particles(particles);
+    tools_->forget_contacts();
+  }
+
+  // 3. one DEM step with the bucket kinematic, on the voxel surface near the particles
+  Tool& tool = tools_->tool(0);
+  tool.position = bucket.position;
+  tool.orientation = bucket.orientation;
+  tool.velocity = bucket.velocity;
+  tool.omega = bucket.omega;
+  if (!ledger_.empty()) {
+    const std::vector<StaticGeom> geoms = geometry(particles);
+    last_.terrain_boxes = static_cast<int>(geoms.size() - pile_container(profile_).size());
+    dem_->set_geoms(geoms);
+    tools_->step();
+    last_.bucket_wrench = tools_->load(0).wrench;
+  }
+
+  // 5. the surface relaxes
+  last_.avalanched = avalanche(voxels_, level_.dt, options_.avalanche).moved_mass;
+  time_ += level_.dt;
+}
+
+int MultiscaleTerrain::merge(Particles& particles, const KinematicBucket& bucket) {
+  // the bucket's box, grown by the margin in which nothing merges
+  Aabb keep = bucket_scene_.world_bounds(pose_of(bucket));
+  keep.lo -= Vec3::Constant(options_.no_merge_margin);
+  keep.hi += Vec3::Constant(options_.no_merge_margin);
+  Particles kept;
+  std::vector<double> kept_mass;
+  int merged = 0;
+  for (size_t k = 0; k < particles.size(); ++k) {
+    const Vec3& x = particles.position[k];
+    const double r = particles.radius[k];
+    int i = 0, j = 0;
+    bool rests = particles.velocity[k].norm() < options_.merge_speed && !keep.contains(x) &&
+                 voxels_.column_at(x.x(), x.y(), &i, &j);
+    if (rests) {
+      const double surface = voxels_.surface_height(i, j);
+      // on the surface or on one layer of grains above it, and not in the zone's soil
+      rests = x.z() - r <= surface + level_.diameter && !last_.zone.contains(x, INFINITY);
+    }
+    if (rests) {
+      voxels_.deposit(i, j, ledger_[k], 1.0 / options_.soil.swell);
+      ++merged;
+      continue;
+    }
+    kept.position.push_back(particles.position[k]);
+    kept.velocity.push_back(particles.velocity[k]);
+    kept.omega.push_back(particles.omega[k]);
+    kept.rotation.push_back(particles.rotation[k]);
+    kept.radius.push_back(particles.radius[k]);
+    kept.inv_mass.push_back(particles.inv_mass[k]);
+    kept.inv_inertia.push_back(particles.inv_inertia[k]);
+    kept_mass.push_back(ledger_[k]);
+  }
+  if (merged > 0) {
+    particles = std::move(kept);
+    ledger_ = std::move(kept_mass);
+  }
+  return merged;
+}
+
+int MultiscaleTerrain::spawn(Particles& particles, const std::vector<ExcavatedColumn>& columns,
+                             const BucketPose& pose) {
+  if (pool_ <= 0.0) return 0;
+  const double d = level_.diameter;
+  // the sites: the columns this step excavated, or, when it excavated none, the last ones that
+  // were (the pool's soil came from there), each from its floor up to kSpawnHeight
+  if (!columns.empty()) sites_ = columns;
+  Particles slots;
+  const int layers = std::max(1, static_cast<int>(kSpawnHeight / d));
+  for (int k = 0; k < layers; ++k)
+    for (const ExcavatedColumn& c : sites_) {
+      const double floor = voxels_.surface_height(c.i, c.j);
+      slots.add(Vec3(voxels_.column_x(c.i), voxels_.column_y(c.j),
+                     floor + 0.5 * d * (1.0 + kSizeSpread) + k * d),
+                0.5 * d * (1.0 + kSizeSpread), options_.particle_material.density);
+    }
+  std::vector<int> all(slots.size());
+  for (size_t k = 0; k < all.size(); ++k) all[k] = static_cast<int>(k);
+  std::vector<bool> blocked(slots.size(), false);
+  for (const BucketContact& c : bucket_scene_.find_bucket_contacts(slots, all, pose, 0.0))
+    blocked[c.particle] = true;
+  // fill the free slots in order while the pool holds the next particle's mass
+  CentreGrid grid(d * (1.0 + kSizeSpread));
+  for (size_t k = 0; k < particles.size(); ++k)
+    grid.add(particles.position[k], particles.radius[k]);
+  std::uniform_real_distribution<double> spread(-kSizeSpread, kSizeSpread);
+  const double rho = options_.particle_material.density;
+  int made = 0;
+  double next_d = d * (1.0 + spread(sizes_));
+  for (size_t k = 0; k < slots.size(); ++k) {
+    const double mass = rho * M_PI / 6.0 * next_d * next_d * next_d;
+    if (pool_ < mass) break;
+    if (blocked[k]) continue;
+    const Vec3 x = slots.position[k];
+    if (grid.touches(x, 0.5 * next_d)) continue;
+    particles.add(x, 0.5 * next_d, rho);
+    ledger_.push_back(mass);
+    pool_ -= mass;
+    grid.add(x, 0.5 * next_d);
+    ++made;
+    next_d = d * (1.0 + spread(sizes_));
+  }
+  // a draw for a particle not made is dropped; the sequence, so every size, is the same on every
+  // run
+  return made;
+}
+
+std::vector<StaticGeom> MultiscaleTerrain::geometry(const Particles& particles) const {
+  std::vector<StaticGeom> geoms = pile_container(profile_);
+  if (particles.size() == 0) return geoms;
+  // the columns under the particles' box, grown by a particle: each a box up to its surface
+  Vec3 lo = particles.position[0], hi = particles.position[0];
+  for (const Vec3& x : particles.position) {
+    lo = lo.cwiseMin(x);
+    hi = hi.cwiseMax(x);
+  }
+  const double grow = 2.0 * level_.diameter;
+  const double h = voxels_.cell();
+  const int i0 = std::max(0, static_cast<int>(std::floor((lo.x() - grow - voxels_.x0()) / h)));
+  const int i1 =
+      std::min(voxels_.nx() - 1, static_cast<int>(std::floor((hi.x() + grow - voxels_.x0()) / h)));
+  const int j0 = std::max(0, static_cast<int>(std::floor((lo.y() - grow - voxels_.y0()) / h)));
+  const int j1 =
+      std::min(voxels_.ny() - 1, static_cast<int>(std::floor((hi.y() + grow - voxels_.y0()) / h)));
+  for (int j = j0; j <= j1; ++j)
+    for (int i = i0; i <= i1; ++i) {
+      const double top = voxels_.surface_height(i, j);
+      if (top <= voxels_.z0()) continue;  // bare ground: the ground plane holds them
+      const double bottom = voxels_.z0();
+      geoms.push_back(StaticGeom::box(
+          Vec3(voxels_.column_x(i), voxels_.column_y(j), 0.5 * (bottom + top)),
+          Vec3(0.5 * h, 0.5 * h, 0.5 * (top - bottom)), Eigen::Matrix3d::Identity()));
+    }
+  return geoms;
+}
+
+}  // namespace talus

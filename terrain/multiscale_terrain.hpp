@@ -1,0 +1,144 @@
+// The multiscale terrain's soil side (type G, issue 14; paper §4.4, Servin, Berglund & Nystedt
+// 2021): the solid voxel terrain, the active zone in front of the bucket, and the dynamic soil as
+// particles co-simulated by the OpenCL DEM with the bucket as a kinematic body. What the machine
+// feels of the soil (the aggregate body solved with the machine in the direct solver) is built on
+// top of this and is not part of it.
+//
+// One step, with the bucket's pose and twist given (the machine moved it):
+//   1. the active zone is predicted from the bucket's cutting edge, top edge and velocity
+//      (terrain/active_zone), and, while the bucket cuts, its soil leaves the voxels as dynamic
+//      mass into a pool;
+//   2. the pool becomes particles of the level's size (D ± 10 %, the gravel's grain density) over
+//      the columns the soil left, layer by layer from each one's new floor up (2 m at most: the
+//      soil a bucket pushes heaps up in front of it), wherever a particle fits without touching
+//      another one or the bucket; what does not fit yet waits in the pool;
+//   3. the particles take one DEM step with the bucket as a kinematic tool (solvers/tool_world),
+//      on the voxel surface near them (one static box per column) inside the pile's container;
+//   4. particles that have come to rest on the surface outside the zone and away from the bucket
+//      merge back into the column under them as loose soil (compaction 1 / swell);
+//   5. the surface avalanches to the repose angle (terrain/avalanche).
+// Mass is kept by bookkeeping: every kilogram is in the voxels, the pool or one particle's entry
+// of a double-precision ledger (the device's float masses are not used for it), and each transfer
+// hands the same double on. `mass_balance()` adds the three.
+//
+// Choices where the paper says nothing (docs/multiscale.md): particles appear at full size rather
+// than growing from small seeds; a particle merges whole once it rests, slower than the zone's
+// activation speed (0.1 m/s: soil slower than the tool that mobilises it counts as at rest),
+// touching the surface, outside the zone and more than 0.5 m from the bucket's bounding box (the
+// reference engine's default margin).
+#pragma once
+#include <memory>
+#include <random>
+#include <vector>
+
+#include "host/device.hpp"
+#include "solvers/bucket_contacts.hpp"
+#include "solvers/bucket_rows.hpp"
+#include "solvers/dem_world.hpp"
+#include "solvers/embree.hpp"
+#include "terrain/active_zone.hpp"
+#include "terrain/avalanche.hpp"
+#include "terrain/pile.hpp"
+#include "terrain/voxel_terrain.hpp"
+#include "vehicle/bucket_mesh.hpp"
+
+namespace talus {
+
+class ToolWorld;
+
+struct MultiscaleOptions {
+  BulkSoil soil;
+  AvalancheOptions avalanche;
+  Material particle_material = gravel();  // the zone's particles are the type-D gravel
+  BucketMaterial bucket_material;         // particle-bucket contacts (friction 0.2, paper §4.4)
+  double merge_speed = 0.1;               // [m/s] a particle slower than this may merge (see above)
+  double no_merge_margin = 0.5;           // [m] around the bucket's bounding box: no merging there
+  double front_margin = 2.0;              // voxels ahead of the toe [m] (VoxelTerrainOptions)
+  double max_particle_speed = 4.0;        // [m/s] DemSettings::max_speed of the zone's particles
+  unsigned seed = 1;                      // of the particles' sizes
+};
+
+// the bucket as the particles see it: its mesh frame (the bucket's profile frame: origin at the
+// cutting edge's middle, x forward along the bottom, z up) in the world, and the frame's twist
+struct KinematicBucket {
+  Vec3 position = Vec3::Zero();
+  Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();
+  Vec3 velocity = Vec3::Zero();  // of the frame's origin [m/s]
+  Vec3 omega = Vec3::Zero();     // [1/s]
+};
+
+// where the soil is [kg]: solid in the voxels, dynamic in the pool and in the particles
+struct MassBalance {
+  double solid = 0.0;
+  double pool = 0.0;
+  double particles = 0.0;
+  double total() const { return solid + pool + particles; }
+};
+
+// what one step did
+struct MultiscaleStep {
+  ActiveZone zone;
+  double excavated = 0.0;   // soil turned dynamic [kg]
+  int spawned = 0;          // particles made from the pool
+  int merged = 0;           // particles merged back into the voxels
+  double avalanched = 0.0;  // soil that slid [kg]
+  int terrain_boxes = 0;    // voxel columns the particles stood on as boxes
+  Vec6 bucket_wrench =
+      Vec6::Zero();  // the particles' mean wrench on the bucket about its frame's origin
+};
+
+class MultiscaleTerrain {
+ public:
+  // the terrain of a pile profile (placed where the pile stands) at a type-G level, with the
+  // bucket's mesh (its profile frame) where `start` puts it. Throws InputError for a level that
+  // is not type G
+  MultiscaleTerrain(Device& dev, const PileProfile& profile, const FidelityPreset& level,
+                    const vehicle::BucketMesh& bucket, const KinematicBucket& start,
+                    const MultiscaleOptions& options = {},
+                    const embree::Device& embree = embree::Device());
+  ~MultiscaleTerrain();
+
+  // one step of the level's timestep with the bucket at `bucket` (pose at the step's start, and
+  // the twist it moves with through the step)
+  void step(const KinematicBucket& bucket);
+
+  const VoxelTerrain& voxels() const { return voxels_; }
+  // the particles as they are on the device, and each one's mass from the ledger [kg]
+  Particles particles() const;
+  const std::vector<double>& particle_masses() const { return ledger_; }
+  MassBalance mass_balance() const;
+  const MultiscaleStep& last_step() const { return last_; }
+  double time() const { return time_; }
+  const FidelityPreset& level() const { return level_; }
+
+ private:
+  // step 2: particles from the pool in the excavated cells; returns how many
+  int spawn(Particles& particles, const std::vector<ExcavatedColumn>& columns,
+            const BucketPose& pose);
+  // step 4: resting particles back into the voxels; returns how many
+  int merge(Particles& particles, const KinematicBucket& bucket);
+  // step 3's static geometry: the container and a box per voxel column near the particles
+  std::vector<StaticGeom> geometry(const Particles& particles) const;
+
+  FidelityPreset level_;
+  MultiscaleOptions options_;
+  PileProfile profile_;
+  VoxelTerrain voxels_;
+  vehicle::BucketMesh bucket_mesh_;
+  BucketScene bucket_scene_;
+  std::unique_ptr<DemWorld> dem_;
+  std::unique_ptr<ToolWorld> tools_;
+  std::vector<double> ledger_;  // mass of each particle on the device, in its order [kg]
+  double pool_ = 0.0;           // dynamic soil not yet made into particles [kg]
+  std::vector<ExcavatedColumn>
+      sites_;              // where the pool's soil came from: the last excavation's columns
+  std::mt19937_64 sizes_;  // the particles' diameters, one draw per particle made
+  double time_ = 0.0;
+  MultiscaleStep last_;
+};
+
+// the bucket's cutting edge and top edge in the world, from its mesh (the profile frame's tip and
+// lip across the inner width) and pose, with the cutting edge's velocity
+ToolEdges bucket_edges(const vehicle::BucketMesh& mesh, const KinematicBucket& bucket);
+
+}  // namespace talus
