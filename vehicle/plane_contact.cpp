@@ -1,0 +1,70 @@
+#include "vehicle/plane_contact.hpp"
+
+#include <string>
+
+#include "host/error.hpp"
+
+namespace talus::vehicle {
+namespace {
+constexpr int kRowsPerPoint = 3;  // normal, two friction
+}
+
+PlaneContact::PlaneContact(int body_a, int body_b, int points, PlaneContactParameters p)
+    : a_(body_a), b_(body_b), points_(points), p_(p) {
+  if (points < 1) throw Error("plane contact: a patch needs at least one point");
+  g_.points.assign(points, Vec3::Zero());
+}
+
+void PlaneContact::set_geometry(const PlaneContactGeometry& g) {
+  if (static_cast<int>(g.points.size()) != points_)
+    throw Error("plane contact '" + name + "': " + std::to_string(g.points.size()) +
+                " points for a patch of " + std::to_string(points_));
+  g_ = g;
+}
+
+void PlaneContact::add_rows(const std::vector<RigidBody>& bodies,
+                            std::vector<ConstraintRow>& rows) {
+  const BodyFrame a{a_, Vec3::Zero(), Mat3::Identity()};
+  const BodyFrame b{b_, Vec3::Zero(), Mat3::Identity()};
+  frame_ = frame_from_axis(g_.normal);
+  for (int k = 0; k < points_; ++k) {
+    const Vec3& p = g_.points[k];
+    // normal: the gap, pushed apart only; an inactive contact carries no force
+    ConstraintRow normal = point_row(bodies, a, b, p, p, frame_.col(2));
+    normal.kind = RowKind::holonomic;
+    normal.unit = RowUnit::length;
+    normal.violation = g_.gap;
+    normal.compliance = points_ / p_.stiffness;
+    normal.damping_time = p_.damping_time;
+    normal.force_min = 0.0;
+    if (!g_.active) normal.force_max = 0.0;
+    rows.push_back(normal);
+    // friction along the plane, bounded by this point's normal row
+    for (int t = 0; t < 2; ++t) {
+      ConstraintRow f = point_row(bodies, a, b, p, p, frame_.col(t));
+      f.kind = RowKind::velocity;
+      f.target_speed = 0.0;
+      f.compliance = p_.viscous_compliance;
+      f.friction_normal = kRowsPerPoint * k;
+      f.friction_coefficient = g_.active ? p_.friction : 0.0;
+      if (!g_.active) f.force_min = f.force_max = 0.0;
+      rows.push_back(f);
+    }
+  }
+}
+
+double PlaneContact::normal_force() const {
+  double f = 0.0;
+  for (size_t k = 0; k < forces_.size(); k += kRowsPerPoint) f += forces_[k];
+  return f;
+}
+
+Vec3 PlaneContact::force_on_b() const {
+  Vec3 f = Vec3::Zero();
+  for (size_t k = 0; k + 2 < forces_.size(); k += kRowsPerPoint)
+    f += forces_[k] * frame_.col(2) + forces_[k + 1] * frame_.col(0) +
+         forces_[k + 2] * frame_.col(1);
+  return f;
+}
+
+}  // namespace talus::vehicle
