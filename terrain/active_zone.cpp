@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include "host/error.hpp"
 #include "terrain/earthmoving_equation.hpp"
@@ -11,23 +12,39 @@ namespace {
 
 constexpr double kDegree = M_PI / 180.0;
 
-// the terrain's surface under a point: the height of its column, or the ground off the grid
-double surface_under(const VoxelTerrain& terrain, const Vec3& p) {
-  int i = 0, j = 0;
-  if (!terrain.column_at(p.x(), p.y(), &i, &j)) return terrain.z0();
-  return terrain.surface_height(i, j);
+// the soil's surface under a point: the given heights (dynamic soil included) or the voxels'
+// columns, interpolated bilinearly between the column centres (as terrain/heightmap's surface),
+// so that a plane cut into the voxels reads as that plane and not as steps a cell wide; the
+// ground off the grid
+double surface_under(const VoxelTerrain& terrain, const std::vector<double>* surface,
+                     const Vec3& p) {
+  const double h = terrain.cell();
+  const double fx = (p.x() - terrain.x0()) / h - 0.5, fy = (p.y() - terrain.y0()) / h - 0.5;
+  if (!(fx > -1.0 && fx < terrain.nx() && fy > -1.0 && fy < terrain.ny())) return terrain.z0();
+  const int i = std::clamp(static_cast<int>(std::floor(fx)), 0, std::max(0, terrain.nx() - 2));
+  const int j = std::clamp(static_cast<int>(std::floor(fy)), 0, std::max(0, terrain.ny() - 2));
+  const double u = std::clamp(fx - i, 0.0, 1.0), v = std::clamp(fy - j, 0.0, 1.0);
+  const auto height = [&](int a, int b) {
+    a = std::min(a, terrain.nx() - 1);
+    b = std::min(b, terrain.ny() - 1);
+    return surface ? (*surface)[static_cast<size_t>(b) * terrain.nx() + a]
+                   : terrain.surface_height(a, b);
+  };
+  return (1 - u) * (1 - v) * height(i, j) + u * (1 - v) * height(i + 1, j) +
+         (1 - u) * v * height(i, j + 1) + u * v * height(i + 1, j + 1);
 }
 
 // where a plane rising from the tip leaves through the surface along the centre line: the first
 // s (stepping by a quarter cell in direction `sign`) where the plane stands on or above the
 // surface, interpolated linearly between the last two samples; the whole grid's length if never
-double exit_along(const VoxelTerrain& terrain, const ActiveZone& zone, double sign, double rise) {
+double exit_along(const VoxelTerrain& terrain, const std::vector<double>* surface,
+                  const ActiveZone& zone, double sign, double rise) {
   const double step = 0.25 * terrain.cell();
   const double longest = (terrain.nx() + terrain.ny()) * terrain.cell();
   double prev_gap = zone.depth;  // surface minus plane at s = 0
   for (double s = step; s <= longest; s += step) {
     const Vec3 p = zone.tip + sign * s * zone.forward;
-    const double gap = surface_under(terrain, p) - (zone.tip.z() + s * rise);
+    const double gap = surface_under(terrain, surface, p) - (zone.tip.z() + s * rise);
     if (gap <= 0.0) return s - step * gap / (gap - prev_gap);
     prev_gap = gap;
   }
@@ -60,7 +77,10 @@ bool ActiveZone::contains(const Vec3& p, double surface) const {
 }
 
 ActiveZone predict_active_zone(const VoxelTerrain& terrain, const ToolEdges& tool,
-                               const BulkSoil& soil) {
+                               const BulkSoil& soil, const std::vector<double>* surface) {
+  if (surface && surface->size() != static_cast<size_t>(terrain.nx()) * terrain.ny())
+    throw Error("active zone: the soil surface has " + std::to_string(surface->size()) +
+                " heights for " + std::to_string(terrain.nx() * terrain.ny()) + " columns");
   ActiveZone zone;
   const Vec3 edge = tool.cutting_right - tool.cutting_left;
   zone.width = edge.norm();
@@ -81,7 +101,7 @@ ActiveZone predict_active_zone(const VoxelTerrain& terrain, const ToolEdges& too
   zone.rake_deg = std::atan2(top.z(), -top.dot(forward)) / kDegree;
   zone.rake_deg = std::clamp(zone.rake_deg, 1.0, 179.0);
   // depth and speed in the excavation plane
-  zone.depth = surface_under(terrain, zone.tip) - zone.tip.z();
+  zone.depth = surface_under(terrain, surface, zone.tip) - zone.tip.z();
   const Vec3 v = tool.velocity;
   zone.speed = std::hypot(v.dot(forward), v.z());
   // the failure plane: none where the tool leans so far over the soil ahead that rake, tool
@@ -94,9 +114,10 @@ ActiveZone predict_active_zone(const VoxelTerrain& terrain, const ToolEdges& too
   zone.active = zone.depth > 0.0 && zone.speed > soil.activation_speed;
   if (zone.depth <= 0.0) return zone;
   // where the two planes leave through the surface
-  zone.reach_ahead = exit_along(terrain, zone, 1.0, std::tan(zone.failure_angle_deg * kDegree));
+  zone.reach_ahead =
+      exit_along(terrain, surface, zone, 1.0, std::tan(zone.failure_angle_deg * kDegree));
   if (zone.rake_deg < 90.0)
-    zone.reach_behind = exit_along(terrain, zone, -1.0, std::tan(zone.rake_deg * kDegree));
+    zone.reach_behind = exit_along(terrain, surface, zone, -1.0, std::tan(zone.rake_deg * kDegree));
   return zone;
 }
 

@@ -75,10 +75,12 @@ struct ActiveZone {
   bool contains(const Vec3& p, double surface) const;
 };
 
-// predicts the zone from the tool's edges on the terrain's surface. Throws talus::Error for a
-// cutting edge shorter than 1 mm or lying nearly vertical (no excavation plane)
+// predicts the zone from the tool's edges on the soil's surface: the voxels' columns, or `surface`
+// when given (nx × ny heights, index j nx + i: the dynamic soil heaped on the voxels included, as
+// terrain/multiscale_terrain passes it). Throws talus::Error for a cutting edge shorter than 1 mm
+// or lying nearly vertical (no excavation plane), or a surface of the wrong size
 ActiveZone predict_active_zone(const VoxelTerrain& terrain, const ToolEdges& tool,
-                               const BulkSoil& soil);
+                               const BulkSoil& soil, const std::vector<double>* surface = nullptr);
 
 // the zone's share of column (i, j): its soil between z_lo and z_hi; false when the column's centre
 // lies outside the zone or the zone holds none of its soil

@@ -6,7 +6,11 @@
 
 #include "host/error.hpp"
 #include "solvers/tool_world.hpp"
+#include "terrain/aggregate.hpp"
+#include "terrain/multiscale_terrain.hpp"
 #include "terrain/soil_sample.hpp"
+#include "vehicle/joints.hpp"
+#include "vehicle/multibody.hpp"
 
 namespace talus {
 
@@ -136,6 +140,138 @@ CuttingResult run_cutting_test(Device& dev, const Material& material, const Cutt
                                      o.internal_friction_deg, 0.0, &result.fee_failure_angle_deg);
   result.sim_time = world.time();
   result.final_state = world.particles();
+  return result;
+}
+
+CuttingResult run_multiscale_cutting_test(Device& dev, const FidelityPreset& level,
+                                          const CuttingOptions& options, const BulkSoil& soil,
+                                          Progress* progress) {
+  if (!find_multiscale_preset(level.name))
+    throw InputError("cutting test: level '" + level.name +
+                     "' is not a type-G level (G50, G100, G200, G400)");
+  CuttingOptions o = options;
+  o.diameter = level.diameter;
+  o.dt = level.dt;
+  o.iterations = level.iterations;
+  check_cutting_options(o);
+  CuttingResult result;
+  const double h = level.diameter;
+  const double tool_friction_deg = std::atan(o.blade_friction) / kDegree;
+  const double phi = soil.effective_friction_deg();
+  // the bed: a level block of voxels `depth` + 2 cells high, as wide as the blade (4 depths, at
+  // least 10 cells: whole cells), long enough for the travel, two wedges and a margin
+  double beta = 0.0;
+  fee_force(kFieldBulkDensity, o.depth, 1.0, 90.0, tool_friction_deg, phi, 0.0, &beta);
+  const double wedge = o.depth / std::tan(beta * kDegree);
+  const double width = h * std::ceil(std::max(10.0 * h, 4.0 * o.depth) / h);
+  const double bed = o.depth + 2.0 * h;
+  PileProfile profile;
+  profile.name = "level bed";
+  profile.width = width;
+  profile.points = {Vec3(0.0, 0.0, bed), Vec3(o.travel + 2.0 * wedge + 1.0, 0.0, bed)};
+  profile.rear_wall_x = profile.points.back().x();
+  result.width = width;
+  result.bed_density = kFieldBulkDensity;
+
+  // the blade: a plate 5 cm thick behind its face, from its tip (the mesh origin) up to 3 cells
+  // above the bed, as wide as the bed; its cutting plane stands vertical (tip straight under the
+  // top)
+  const double thickness = 0.05, tall = bed - (bed - o.depth) + 3.0 * h;
+  vehicle::BucketMesh mesh;
+  add_box(mesh, Vec3(-0.5 * thickness, 0.0, 0.5 * tall),
+          Vec3(0.5 * thickness, 0.5 * width - 1e-3, 0.5 * tall));
+  mesh.profile = {Vec3::Zero(), Vec3(0.0, 0.0, tall)};
+  mesh.inner_width = width;
+  const Vec3 tip0(0.5 * h, 0.0, bed - o.depth);
+  const Vec3 com_offset(-0.5 * thickness, 0.0, 0.5 * tall);  // the blade body's centre from its tip
+
+  // the machine: the blade on a rail along x, its motor at the test's speed
+  vehicle::MultibodySystem system;
+  vehicle::RigidBody plate;
+  plate.name = "blade";
+  plate.mass = 500.0;  // [kg]: a blade's order; the motor holds its speed whatever the mass
+  plate.inertia = Eigen::Matrix3d::Identity() * 100.0;
+  plate.position = tip0 + com_offset;
+  plate.velocity = Vec3(o.speed, 0.0, 0.0);
+  const int blade = system.add_body(plate);
+  auto& rail = system.add_constraint(std::make_unique<vehicle::PrismaticJoint>(
+      system.bodies(), vehicle::kWorld, blade, plate.position, Vec3::UnitX()));
+  rail.name = "rail";
+  rail.motor.enabled = true;
+  rail.motor.target_speed = o.speed;
+  AggregateCoupling coupling(system, blade, soil);
+
+  KinematicBucket state;
+  state.position = tip0;
+  state.velocity = Vec3(o.speed, 0.0, 0.0);
+  MultiscaleOptions terrain_options;
+  terrain_options.soil = soil;
+  terrain_options.bucket_material.friction = o.blade_friction;
+  terrain_options.seed = o.seed;
+  MultiscaleTerrain terrain(dev, profile, level, mesh, state, terrain_options);
+
+  // push: force means per quarter of a wedge's length of travel
+  const int window_steps =
+      std::max(1, static_cast<int>(std::lround(0.25 * wedge / (o.speed * o.dt))));
+  const int steps = static_cast<int>(std::lround(o.travel / (o.speed * o.dt)));
+  double force_x = 0.0, force_z = 0.0, load = 0.0;
+  int in_window = 0, most = 0;
+  for (int k = 1; k <= steps; ++k) {
+    // the aggregate from the last terrain step, the machine's step, then the terrain's
+    coupling.update(terrain, mesh, state, o.dt);
+    system.step(o.dt);
+    coupling.after_step(o.dt);
+    state.velocity = system.body(blade).velocity;
+    terrain.step(state);
+    state.position = system.body(blade).position - com_offset;
+    force_x += rail.actuator_force();
+    force_z += coupling.force_on_bucket().z();
+    load += coupling.aggregate().mass;
+    most = std::max(most, static_cast<int>(terrain.particle_masses().size()));
+    if (++in_window < window_steps && k < steps) continue;
+    CuttingSample x;
+    x.travel = k * o.speed * o.dt;
+    x.force_x = force_x / in_window;
+    x.force_z = force_z / in_window;
+    // the load the aggregate carried, as the wedge and a surcharge q over its top (length d cot
+    // beta)
+    const double mass = load / in_window;
+    x.surcharge =
+        mass / (kFieldBulkDensity * width * o.depth / std::tan(beta * kDegree)) - 0.5 * o.depth;
+    x.fee_force =
+        fee_force(kFieldBulkDensity, o.depth, width, 90.0, tool_friction_deg, phi, x.surcharge);
+    result.series.push_back(x);
+    force_x = force_z = load = 0.0;
+    in_window = 0;
+    if (progress) {
+      char note[96];
+      std::snprintf(note, sizeof note, "blade at %.2f m, %.1f kN", x.travel, 1e-3 * x.force_x);
+      progress->update(terrain.time(), note);
+    }
+  }
+
+  // the steady part: after the first wedge has formed
+  result.steady_from = std::min(wedge, 0.5 * o.travel);
+  double mean = 0.0, square = 0.0, fee = 0.0;
+  int n = 0;
+  for (const CuttingSample& x : result.series)
+    if (x.travel >= result.steady_from) {
+      mean += x.force_x;
+      square += x.force_x * x.force_x;
+      fee += x.fee_force;
+      ++n;
+    }
+  if (n > 0) {
+    mean /= n;
+    result.force = mean;
+    result.force_spread = std::sqrt(std::max(0.0, square / n - mean * mean));
+    result.fee_force = fee / n;
+  }
+  result.fee_force_level = fee_force(kFieldBulkDensity, o.depth, width, 90.0, tool_friction_deg,
+                                     phi, 0.0, &result.fee_failure_angle_deg);
+  result.particles = most;
+  result.sim_time = terrain.time();
+  result.final_state = terrain.particles();
   return result;
 }
 

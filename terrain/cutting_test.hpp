@@ -20,7 +20,9 @@
 
 #include "host/progress.hpp"
 #include "solvers/dem_world.hpp"
+#include "terrain/active_zone.hpp"
 #include "terrain/earthmoving_equation.hpp"
+#include "terrain/pile.hpp"
 
 namespace talus {
 
@@ -65,5 +67,16 @@ void check_cutting_options(const CuttingOptions& options);
 
 CuttingResult run_cutting_test(Device& dev, const Material& material, const CuttingOptions& options,
                                Progress* progress = nullptr);
+
+// the same test on the type-G terrain (issue 14) at a multiscale level: a level bed of voxels at
+// bank density, the blade a body of a multibody system driven along x at the test's speed by a
+// prismatic joint's motor, the soil it fails reaching it through the aggregate body (terrain/
+// aggregate). The force is the motor's; the equation's is evaluated window by window for the load
+// the aggregate carries (its mass as the wedge plus a surcharge q over the wedge's top), with the
+// soil's effective internal friction phi + psi (40 deg), as the zone and interface B use.
+// `options.diameter`, `dt` and `iterations` are taken from the level
+CuttingResult run_multiscale_cutting_test(Device& dev, const FidelityPreset& level,
+                                          const CuttingOptions& options, const BulkSoil& soil = {},
+                                          Progress* progress = nullptr);
 
 }  // namespace talus

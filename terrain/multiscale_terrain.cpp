@@ -132,15 +132,18 @@ MassBalance MultiscaleTerrain::mass_balance() const {
 void MultiscaleTerrain::step(const KinematicBucket& bucket) {
   last_ = MultiscaleStep{};
   const BucketPose pose = pose_of(bucket);
-  // 1. the zone and its soil into the pool
-  last_.zone = predict_active_zone(voxels_, bucket_edges(bucket_mesh_, bucket), options_.soil);
+  // 1. the zone on the soil's surface (the voxels, raised to the tops of the particles heaped on
+  // them), and its solid soil into the pool
+  Particles particles = this->particles();
+  const std::vector<double> surface = soil_surface(particles);
+  last_.zone =
+      predict_active_zone(voxels_, bucket_edges(bucket_mesh_, bucket), options_.soil, &surface);
   std::vector<ExcavatedColumn> columns;
   const DynamicSoil dynamic = excavate(voxels_, last_.zone, options_.soil, &columns);
   pool_ += dynamic.mass;
   last_.excavated = dynamic.mass;
 
   // 2. particles from the pool; 4. resting particles back (on the state the last step left)
-  Particles particles = this->particles();
   last_.merged = merge(particles, bucket);
   last_.spawned = spawn(particles, columns, pose);
   if (last_.merged > 0 || last_.spawned > 0) {
@@ -252,6 +255,29 @@ int MultiscaleTerrain::spawn(Particles& particles, const std::vector<ExcavatedCo
   // a draw for a particle not made is dropped; the sequence, so every size, is the same on every
   // run
   return made;
+}
+
+std::vector<double> MultiscaleTerrain::soil_surface(const Particles& particles) const {
+  std::vector<double> surface = voxels_.surface_heights();
+  // a particle raises its column to its top if it rests on the soil there, within a cell of the
+  // surface found so far (bottom up): the heap in front of a tool counts, a grain in the bucket or
+  // in flight does not
+  const int nx = voxels_.nx();
+  std::vector<std::vector<std::pair<double, double>>> by_column(surface.size());
+  for (size_t k = 0; k < particles.size(); ++k) {
+    int i = 0, j = 0;
+    if (!voxels_.column_at(particles.position[k].x(), particles.position[k].y(), &i, &j)) continue;
+    const double r = particles.radius[k];
+    by_column[static_cast<size_t>(j) * nx + i].emplace_back(particles.position[k].z() - r,
+                                                            particles.position[k].z() + r);
+  }
+  for (size_t c = 0; c < surface.size(); ++c) {
+    auto& column = by_column[c];
+    std::sort(column.begin(), column.end());
+    for (const auto& [bottom, top] : column)
+      if (bottom <= surface[c] + voxels_.cell()) surface[c] = std::max(surface[c], top);
+  }
+  return surface;
 }
 
 std::vector<StaticGeom> MultiscaleTerrain::geometry(const Particles& particles) const {

@@ -6,8 +6,10 @@
 //
 // One step, with the bucket's pose and twist given (the machine moved it):
 //   1. the active zone is predicted from the bucket's cutting edge, top edge and velocity
-//      (terrain/active_zone), and, while the bucket cuts, its soil leaves the voxels as dynamic
-//      mass into a pool;
+//      (terrain/active_zone) on the soil's surface (the voxels raised to the tops of the particles
+//      heaped on them: once the soil in front of a blade is particles, the voxels there stand on
+//      the last failure plane), and, while the bucket cuts, its solid soil leaves the voxels as
+//      dynamic mass into a pool;
 //   2. the pool becomes particles of the level's size (D ± 10 %, the gravel's grain density) over
 //      the columns the soil left, layer by layer from each one's new floor up (2 m at most: the
 //      soil a bucket pushes heaps up in front of it), wherever a particle fits without touching
@@ -117,6 +119,8 @@ class MultiscaleTerrain {
             const BucketPose& pose);
   // step 4: resting particles back into the voxels; returns how many
   int merge(Particles& particles, const KinematicBucket& bucket);
+  // the soil's surface: the voxels' columns raised to the tops of the particles heaped on them
+  std::vector<double> soil_surface(const Particles& particles) const;
   // step 3's static geometry: the container and a box per voxel column near the particles
   std::vector<StaticGeom> geometry(const Particles& particles) const;
 

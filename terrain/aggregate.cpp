@@ -1,0 +1,170 @@
+#include "terrain/aggregate.hpp"
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <cmath>
+#include <memory>
+
+namespace talus {
+namespace {
+
+constexpr double kDegree = M_PI / 180.0;
+
+// the points of a patch: on the plane through the cutting edge along `u`, on its centre line, at a
+// tenth and nine tenths of its length (see the header)
+constexpr int kPatchPoints = 2;
+std::vector<Vec3> patch(const ToolEdges& edges, const Vec3& u, double length) {
+  const Vec3 mid = 0.5 * (edges.cutting_left + edges.cutting_right);
+  return {mid + 0.1 * length * u, mid + 0.9 * length * u};
+}
+
+}  // namespace
+
+Aggregate aggregate_of(const Particles& p, const std::vector<double>& masses,
+                       const std::vector<int>& members) {
+  Aggregate a;
+  a.particles = static_cast<int>(members.size());
+  if (members.empty()) return a;
+  // mass, centre and momentum
+  Vec3 moment = Vec3::Zero(), momentum = Vec3::Zero();
+  for (int k : members) {
+    a.mass += masses[k];
+    moment += masses[k] * p.position[k];
+    momentum += masses[k] * p.velocity[k];
+  }
+  a.centre = moment / a.mass;
+  a.velocity = momentum / a.mass;
+  // inertia and angular momentum about the centre: each sphere's own, and its orbit
+  Vec3 spin = Vec3::Zero();
+  for (int k : members) {
+    const Vec3 d = p.position[k] - a.centre;
+    const double own = 0.4 * masses[k] * p.radius[k] * p.radius[k];
+    a.inertia += own * Eigen::Matrix3d::Identity() +
+                 masses[k] * (d.squaredNorm() * Eigen::Matrix3d::Identity() - d * d.transpose());
+    spin += masses[k] * d.cross(p.velocity[k] - a.velocity) + own * p.omega[k];
+  }
+  a.omega = a.inertia.ldlt().solve(spin);
+  return a;
+}
+
+std::vector<int> zone_members(const Particles& particles, const ActiveZone& zone) {
+  std::vector<int> members;
+  if (zone.depth <= 0.0) return members;
+  for (size_t k = 0; k < particles.size(); ++k)
+    if (zone.contains(particles.position[k], INFINITY)) members.push_back(static_cast<int>(k));
+  return members;
+}
+
+AggregateCoupling::AggregateCoupling(vehicle::MultibodySystem& system, int bucket,
+                                     const BulkSoil& soil, const AggregateParameters& parameters)
+    : system_(system), bucket_(bucket), soil_(soil), parameters_(parameters) {
+  vehicle::RigidBody body;
+  body.name = "aggregate";
+  body.mass = parameters.idle_mass;
+  body.position = system.body(bucket).position;
+  body_ = system.add_body(body);
+  vehicle::PlaneContactParameters a;
+  a.friction = soil.tool_friction;
+  vehicle::PlaneContactParameters b;
+  b.friction = std::tan(soil.effective_friction_deg() * kDegree);
+  a_ = &system.add_constraint(
+      std::make_unique<vehicle::PlaneContact>(bucket, body_, kPatchPoints, a));
+  a_->name = "aggregate interface A (bucket)";
+  b_ = &system.add_constraint(
+      std::make_unique<vehicle::PlaneContact>(vehicle::kWorld, body_, kPatchPoints, b));
+  b_->name = "aggregate interface B (terrain)";
+}
+
+void AggregateCoupling::update(const MultiscaleTerrain& terrain, const vehicle::BucketMesh& mesh,
+                               const KinematicBucket& bucket, double dt) {
+  // the zone of the terrain's last step (predicted before it excavated: the voxels now stand on
+  // its failure plane), and the particles in it
+  const ToolEdges edges = bucket_edges(mesh, bucket);
+  const ActiveZone& zone = terrain.last_step().zone;
+  const Particles particles = terrain.particles();
+  const std::vector<int> members = zone_members(particles, zone);
+  aggregate_ = aggregate_of(particles, terrain.particle_masses(), members);
+  const bool engaged = zone.active && aggregate_.particles > 0;
+  if (!engaged) depth_a_ = depth_b_ = 0.0;
+
+  // the body: the particles' mass, inertia and momentum, or a nominal body at the cutting edge
+  vehicle::RigidBody& body = system_.body(body_);
+  body.orientation = Eigen::Quaterniond::Identity();
+  if (aggregate_.particles > 0) {
+    body.mass = aggregate_.mass;
+    body.inertia = aggregate_.inertia;
+    body.position = aggregate_.centre;
+    body.velocity = aggregate_.velocity;
+    body.angular_velocity = aggregate_.omega;
+  } else {
+    const double h = terrain.voxels().cell();
+    body.mass = parameters_.idle_mass;
+    body.inertia = Eigen::Matrix3d::Identity() * (parameters_.idle_mass * h * h);
+    body.position = zone.tip;
+    body.velocity = bucket.velocity;
+    body.angular_velocity = Vec3::Zero();
+  }
+
+  // interface A on the cutting plane, as far up as the soil reaches (or the top edge)
+  const double h = terrain.voxels().cell();
+  const double e_m = parameters_.youngs_modulus * parameters_.stiffness_multiplier;
+  const Vec3 top = 0.5 * (edges.top_left + edges.top_right) - zone.tip;
+  const Vec3 u_tool = top.normalized();
+  Vec3 n_a = zone.along.cross(u_tool).normalized();
+  if (n_a.dot(zone.forward) < 0.0) n_a = -n_a;
+  // as far up the cutting plane as the zone's particles reach
+  double reach = 0.0;
+  for (int k : members)
+    reach = std::max(reach, (particles.position[k] - zone.tip).dot(u_tool) + particles.radius[k]);
+  const double length_a = std::clamp(reach, h, top.norm());
+  vehicle::PlaneContactGeometry ga;
+  ga.active = engaged;
+  ga.points = patch(edges, u_tool, length_a);
+  ga.normal = n_a;
+  ga.gap = -depth_a_;
+  vehicle::PlaneContactParameters pa = a_->parameters();
+  pa.stiffness = e_m * zone.width * length_a / h;
+  pa.damping_time = parameters_.damping_steps * dt;
+  a_->set_parameters(pa);
+  a_->set_geometry(ga);
+
+  // interface B on the failure plane, from the cutting edge to where it leaves the surface
+  const double beta = zone.failure_angle_deg * kDegree;
+  const Vec3 u_fail = std::cos(beta) * zone.forward + std::sin(beta) * Vec3::UnitZ();
+  const Vec3 n_b = -std::sin(beta) * zone.forward + std::cos(beta) * Vec3::UnitZ();
+  const double length_b = std::max(zone.reach_ahead / std::max(std::cos(beta), 1e-3), h);
+  vehicle::PlaneContactGeometry gb;
+  gb.active = engaged;
+  gb.points = patch(edges, u_fail, length_b);
+  gb.normal = n_b;
+  gb.gap = -depth_b_;
+  vehicle::PlaneContactParameters pb = b_->parameters();
+  pb.stiffness = e_m * zone.width * length_b / h;
+  pb.damping_time = parameters_.damping_steps * dt;
+  b_->set_parameters(pb);
+  b_->set_geometry(gb);
+}
+
+void AggregateCoupling::after_step(double dt) {
+  const vehicle::RigidBody& aggregate = system_.body(body_);
+  const vehicle::RigidBody& bucket = system_.body(bucket_);
+  // the relative normal velocity at each patch's centre (positive: the sides part)
+  const auto centre = [](const std::vector<Vec3>& points) {
+    Vec3 c = Vec3::Zero();
+    for (const Vec3& p : points) c += p;
+    return Vec3(c / static_cast<double>(points.size()));
+  };
+  const vehicle::PlaneContactGeometry& ga = a_->geometry();
+  const vehicle::PlaneContactGeometry& gb = b_->geometry();
+  if (ga.active) {
+    const Vec3 c = centre(ga.points);
+    const double parting = (aggregate.point_velocity(c) - bucket.point_velocity(c)).dot(ga.normal);
+    depth_a_ = std::max(0.0, depth_a_ - dt * parting);
+  }
+  if (gb.active) {
+    const double parting = aggregate.point_velocity(centre(gb.points)).dot(gb.normal);
+    depth_b_ = std::max(0.0, depth_b_ - dt * parting);
+  }
+}
+
+}  // namespace talus

@@ -1,0 +1,109 @@
+// The aggregate body of the type-G terrain (issue 14, paper §4.4; Servin, Berglund & Nystedt
+// 2021): what the machine feels of the active zone. Every step it is remade as a rigid body that
+// inherits the momentary mass, centre of mass, inertia and momentum of the zone's particles, and
+// it is solved with the machine in the direct solver through two interfaces (vehicle/
+// plane_contact), placed where the zone says:
+//   A  bucket–aggregate, on the bucket's cutting plane (the plane through the cutting edge and the
+//      top edge), with the bucket–soil friction (0.2);
+//   B  terrain–aggregate, on the failure plane from the cutting edge to the surface, with the
+//      soil's effective internal friction (phi + psi = 40 deg; paper §4.4: dilatancy "adds directly
+//      to the internal friction").
+// Each patch is a line contact in the excavation plane: two points on the centre line of its part
+// of the plane, at a tenth and nine tenths of its length up from the cutting edge, so it holds the
+// torques of that plane as a face does and leaves the aggregate free to roll about the line (a
+// patch of four corner points made the vehicle's direct solver cycle between active sets of its
+// redundant rows: 'did not converge' within the first second of a G200 cut). Its stiffness is the
+// bulk Young's modulus times the aggregate stiffness multiplier (the paper: 4.6 MPa × 0.01) over a
+// layer one cell thick: k = E m A / h for a patch of area A.
+//
+// The interfaces' deformation is a state of their own. The aggregate is remade on the planes every
+// step, so a gap measured from its body would always be zero, and a compliant row would then push
+// back only with what one step's approach compresses (k u h), a tenth of the soil's resistance at
+// G400: the machine would cut through the soil as through mud. Instead each interface keeps the
+// depth by which the two sides have pressed into each other, integrated from the relative normal
+// velocity the machine's solve gave them (`after_step`), never below zero; the rows see it as the
+// gap (-depth), so the interface pushes back with k depth as a spring that builds up while the
+// bucket presses and relaxes as it lets go. Without particles in the zone the depths are zero.
+//
+// The aggregate's own solved motion is not kept: the particles move with the bucket as a kinematic
+// body in their own DEM (terrain/multiscale_terrain), and the next step's aggregate is remade from
+// them. Without particles in the zone the aggregate keeps a nominal mass and both interfaces carry
+// no force, so the machine's system keeps its rows and sparsity.
+#pragma once
+#include <vector>
+
+#include "terrain/multiscale_terrain.hpp"
+#include "vehicle/multibody.hpp"
+#include "vehicle/plane_contact.hpp"
+
+namespace talus {
+
+// a rigid body's share of a set of particles
+struct Aggregate {
+  int particles = 0;
+  double mass = 0.0;                                  // [kg]
+  Vec3 centre = Vec3::Zero();                         // centre of mass [m]
+  Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();  // world axes, about the centre [kg m^2]
+  Vec3 velocity = Vec3::Zero();                       // of the centre [m/s]
+  Vec3 omega = Vec3::Zero();  // from the angular momentum about the centre [1/s]
+};
+
+// the aggregate of the particles `members` (indices into `particles`), each with its mass from
+// `masses` [kg] (the ledger) and its inertia as a solid sphere: mass and centre as sums, inertia by
+// the parallel-axis rule, velocity from the momentum, omega solving I omega = L about the centre
+Aggregate aggregate_of(const Particles& particles, const std::vector<double>& masses,
+                       const std::vector<int>& members);
+
+// the particles of the zone: inside its wedge, whatever the surface (they stand above it)
+std::vector<int> zone_members(const Particles& particles, const ActiveZone& zone);
+
+struct AggregateParameters {
+  double youngs_modulus = 4.6e6;       // bulk E [Pa], paper §4.4
+  double stiffness_multiplier = 0.01;  // paper §4.4
+  double damping_steps = 2.0;          // SPOOK damping time of the interfaces, in timesteps
+  // kg: the mass the aggregate body keeps while the zone holds no particle (its rows carry no
+  // force then; a nominal mass keeps the system regular)
+  double idle_mass = 1.0;
+};
+
+// the aggregate as a body of a machine's multibody system, and its two interfaces
+class AggregateCoupling {
+ public:
+  // adds the aggregate body and the interfaces A (bucket–aggregate) and B (terrain–aggregate) to
+  // `system`, whose body `bucket` is the one the terrain's bucket is
+  AggregateCoupling(vehicle::MultibodySystem& system, int bucket, const BulkSoil& soil,
+                    const AggregateParameters& parameters = {});
+
+  // before the machine's step: the aggregate remade from the particles in the zone of the
+  // terrain's last step, its interfaces placed on the bucket's planes at its state `bucket` (its
+  // mesh frame); A reaches as far up the cutting plane as the zone's particles do; `dt` the step
+  void update(const MultiscaleTerrain& terrain, const vehicle::BucketMesh& mesh,
+              const KinematicBucket& bucket, double dt);
+
+  // after the machine's step: the interfaces' depths from the relative normal velocities it solved
+  void after_step(double dt);
+
+  const Aggregate& aggregate() const { return aggregate_; }
+  // how far the interfaces are pressed in [m]
+  double depth_a() const { return depth_a_; }
+  double depth_b() const { return depth_b_; }
+  int body() const { return body_; }
+  // after the machine's step: the force of interface A on the bucket, of B on the aggregate [N]
+  Vec3 force_on_bucket() const { return -a_->force_on_b(); }
+  Vec3 terrain_force() const { return b_->force_on_b(); }
+  const vehicle::PlaneContact& interface_a() const { return *a_; }
+  const vehicle::PlaneContact& interface_b() const { return *b_; }
+
+ private:
+  vehicle::MultibodySystem& system_;
+  int bucket_;
+  int body_;
+  BulkSoil soil_;
+  AggregateParameters parameters_;
+  vehicle::PlaneContact* a_ = nullptr;
+  vehicle::PlaneContact* b_ = nullptr;
+  Aggregate aggregate_;
+  double depth_a_ = 0.0, depth_b_ = 0.0;
+};
+
+}  // namespace talus

@@ -1,0 +1,48 @@
+// terrain/aggregate: the aggregate of a set of particles against the rigid-body sums worked by hand
+// (mass, centre, momentum, parallel-axis inertia, spin from the angular momentum), and the zone's
+// members.
+#include "terrain/aggregate.hpp"
+
+#include <gtest/gtest.h>
+
+namespace talus {
+namespace {
+
+// two equal spheres at (±a, 0, 1) moving at (0, ±u, 0): at rest as a whole, spinning about z at
+// 2 m a u / I_zz with I_zz = 2 (2/5 m r^2 + m a^2)
+TEST(Aggregate, TwoOrbitingSpheresSpinAboutTheirCentre) {
+  const double a = 0.3, u = 0.5, r = 0.1, m = 10.0;
+  Particles p;
+  p.add(Vec3(a, 0, 1), r, 2590.0);
+  p.add(Vec3(-a, 0, 1), r, 2590.0);
+  p.velocity[0] = Vec3(0, u, 0);
+  p.velocity[1] = Vec3(0, -u, 0);
+  p.add(Vec3(5, 5, 5), r, 2590.0);  // not a member
+  const Aggregate g = aggregate_of(p, {m, m, 99.0}, {0, 1});
+  EXPECT_EQ(g.particles, 2);
+  EXPECT_DOUBLE_EQ(g.mass, 2 * m);
+  EXPECT_LT((g.centre - Vec3(0, 0, 1)).norm(), 1e-15);
+  EXPECT_LT(g.velocity.norm(), 1e-15);
+  const double izz = 2 * (0.4 * m * r * r + m * a * a);
+  EXPECT_NEAR(g.inertia(2, 2), izz, 1e-12);
+  EXPECT_NEAR(g.inertia(0, 0), 2 * 0.4 * m * r * r, 1e-12);
+  EXPECT_NEAR(g.omega.z(), 2 * m * a * u / izz, 1e-12);
+  EXPECT_NEAR(g.omega.head<2>().norm(), 0.0, 1e-12);
+}
+
+// one sphere: its own mass, place, velocity and spin
+TEST(Aggregate, OneSphereIsItself) {
+  Particles p;
+  p.add(Vec3(1, 2, 3), 0.2, 2590.0);
+  p.velocity[0] = Vec3(0.1, 0.2, 0.3);
+  p.omega[0] = Vec3(1, -2, 3);
+  const Aggregate g = aggregate_of(p, {7.0}, {0});
+  EXPECT_DOUBLE_EQ(g.mass, 7.0);
+  EXPECT_EQ(g.centre, Vec3(1, 2, 3));
+  EXPECT_LT((g.velocity - Vec3(0.1, 0.2, 0.3)).norm(), 1e-15);
+  EXPECT_LT((g.omega - Vec3(1, -2, 3)).norm(), 1e-12);
+  EXPECT_TRUE(aggregate_of(p, {7.0}, {}).mass == 0.0);
+}
+
+}  // namespace
+}  // namespace talus
