@@ -86,6 +86,8 @@ void AggregateCoupling::update(const MultiscaleTerrain& terrain, const vehicle::
   aggregate_ = aggregate_of(particles, terrain.particle_masses(), members);
   const bool engaged = zone.active && aggregate_.particles > 0;
   if (!engaged) depth_a_ = depth_b_ = 0.0;
+  engaged_before_ = engaged_now_;
+  engaged_now_ = engaged;
 
   // the body: the particles' mass, inertia and momentum, or a nominal body at the cutting edge
   vehicle::RigidBody& body = system_.body(body_);
@@ -94,8 +96,14 @@ void AggregateCoupling::update(const MultiscaleTerrain& terrain, const vehicle::
     body.mass = aggregate_.mass;
     body.inertia = aggregate_.inertia;
     body.position = aggregate_.centre;
-    body.velocity = aggregate_.velocity;
-    body.angular_velocity = aggregate_.omega;
+    if (engaged_before_) {
+      // engaged since the last step: the motion the machine's solve gave it (see the header)
+      body.velocity = solved_velocity_;
+      body.angular_velocity = solved_omega_;
+    } else {
+      body.velocity = aggregate_.velocity;
+      body.angular_velocity = aggregate_.omega;
+    }
   } else {
     const double h = terrain.voxels().cell();
     body.mass = parameters_.idle_mass;
@@ -147,6 +155,8 @@ void AggregateCoupling::update(const MultiscaleTerrain& terrain, const vehicle::
 
 void AggregateCoupling::after_step(double dt) {
   const vehicle::RigidBody& aggregate = system_.body(body_);
+  solved_velocity_ = aggregate.velocity;
+  solved_omega_ = aggregate.angular_velocity;
   const vehicle::RigidBody& bucket = system_.body(bucket_);
   // the relative normal velocity at each patch's centre (positive: the sides part)
   const auto centre = [](const std::vector<Vec3>& points) {

@@ -25,10 +25,16 @@
 // gap (-depth), so the interface pushes back with k depth as a spring that builds up while the
 // bucket presses and relaxes as it lets go. Without particles in the zone the depths are zero.
 //
-// The aggregate's own solved motion is not kept: the particles move with the bucket as a kinematic
-// body in their own DEM (terrain/multiscale_terrain), and the next step's aggregate is remade from
-// them. Without particles in the zone the aggregate keeps a nominal mass and both interfaces carry
-// no force, so the machine's system keeps its rows and sparsity.
+// Its motion is its own. When the zone first engages, the aggregate starts with the particles'
+// momentum; from then on it keeps the velocity and spin the machine's solve gave it, while the
+// particles renew its mass, centre and inertia every step (the particles themselves move with the
+// bucket as a kinematic body in their own DEM, terrain/multiscale_terrain). Taking the particles'
+// momentum every step, as the paper's words "inherits the momentaneous ... momentum" read, put
+// back each step the lag of the particles far ahead of the blade (they move slower than it, and
+// settle down the face), which the interfaces then had to make up within one step: the type-G
+// blade needed 1.13 (G400) and 1.54 (G200) times the FEE for its load; keeping the solved motion,
+// 0.95 and 0.96 (docs/multiscale.md). Without particles in the zone the aggregate keeps a nominal
+// mass and both interfaces carry no force, so the machine's system keeps its rows and sparsity.
 #pragma once
 #include <vector>
 
@@ -104,6 +110,8 @@ class AggregateCoupling {
   vehicle::PlaneContact* b_ = nullptr;
   Aggregate aggregate_;
   double depth_a_ = 0.0, depth_b_ = 0.0;
+  bool engaged_now_ = false, engaged_before_ = false;
+  Vec3 solved_velocity_ = Vec3::Zero(), solved_omega_ = Vec3::Zero();
 };
 
 }  // namespace talus
