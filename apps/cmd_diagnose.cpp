@@ -91,7 +91,10 @@ void add_diagnose_command(CLI::App& app) {
   cmd->add_option("--data", a->data, "measured run folders (metadata.json, timeseries.csv, summary.json; "
                                      "docs/measured-data.md); the last third are held out for validation")
       ->required()->expected(1, -1)->check(CLI::ExistingDirectory);
-  cmd->add_option("--fidelity", a->fidelity, "particle level for pile scenarios (D400, D200, D100, D50)")->capture_default_str();
+  cmd->add_option("--fidelity", a->fidelity,
+                  "level for pile scenarios (particles D400, D200, D100, D50; multiscale G400, "
+                  "G200, G100, G50)")
+      ->capture_default_str();
   cmd->add_option("--json", a->json, "write effects_found, error_before, error_after, unexplained and the details "
                                      "('-' for stdout)");
   cmd->add_option("--out", a->out, "also write diagnosis.json, report.md, errors-before/after.csv and per-run "

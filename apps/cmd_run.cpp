@@ -27,6 +27,7 @@
 #include "io/render.hpp"
 #include "sim2real/replay.hpp"
 #include "sim2real/timeseries.hpp"
+#include "terrain/voxel_terrain.hpp"
 #include "vehicle/data_file.hpp"
 #include "vehicle/effect.hpp"
 #include "vehicle/effect_plugin.hpp"
@@ -128,8 +129,9 @@ std::string pvd_collection(const std::vector<std::pair<double, std::string>>& sn
 }
 
 // the side view of particles and the posed bucket (cut away), ray-traced, coloured by speed
-void write_render(const std::string& path, const Particles& particles, const vehicle::WheelLoader& loader,
-                  const Bounds& view) {
+void write_render(const std::string& path, const Particles& particles,
+                  const vehicle::WheelLoader& loader, const Bounds& view,
+                  const VoxelTerrain* terrain = nullptr) {
   RenderScene scene;
   scene.particles = &particles;
   scene.colouring = ParticleColouring::Speed;
@@ -146,6 +148,8 @@ void write_render(const std::string& path, const Particles& particles, const veh
                                          }),
                           cutaway.triangles.end());
   scene.meshes.push_back(posed_mesh(cutaway, bucket_pose(loader)));
+  // the type-G terrain's voxel surface, gravel brown
+  if (terrain) scene.meshes.push_back(terrain_mesh(*terrain, scene.particle_colour));
   scene.ground_height = 0.0;
   const Camera camera = side_camera(view.lo, view.hi, double(kImageWidth) / kImageHeight);
   render_particles(scene, camera, kImageWidth, kImageHeight).write_png(path);
@@ -204,38 +208,41 @@ nlohmann::json dig_details(const RunOptions& o, const vehicle::Scenario& sc,
                            const DiggingSimulation& sim, double pile_wall, double dig_wall,
                            const Device& dev, const vehicle::EffectSet& effects) {
   const double sim_time = sim.time();
-  nlohmann::json details = {{"particles", static_cast<int>(pile.particles.size())},
-                            {"dt_s", preset.dt},
-                            {"iterations", preset.iterations},
-                            {"rolling_resistance", options.soil.rolling},
-                            {"seed", o.seed},
-                            {"form_speed_m_s", options.pile.form_speed},
-                            {"work_total_J", sim.log().work()},
-                            {"sim_time_s", sim_time},
-                            {"wall_time_s", dig_wall},
-                            {"realtime_factor", dig_wall > 0 ? sim_time / dig_wall : 0.0},
-                            {"pile_build_wall_s", pile_wall},
-                            {"pile_from_cache", pile.from_cache},
-                            {"pile_bulk_density", pile.bulk_density},
-                            {"pile_toe_shift_m", pile.toe_shift},
-                            {"pile_fill_at_rest", pile.fill_at_rest},
-                            {"pile_at_rest", pile.at_rest},
-                            {"pile_rms_speed_m_s", pile.rms_speed},
-                            {"scan_face_angle_deg", scan.face_angle_deg},
-                            {"scan_rms_to_profile_m", scan.rms_to_profile_m},
-                            {"scan_mean_to_profile_m", scan.mean_to_profile_m},
-                            {"soil_rms_to_profile_m", pile.soil_fit.rms_m},
-                            {"soil_mean_to_profile_m", pile.soil_fit.mean_m},
-                            {"coupling",
-                             {{"steps_with_bucket_contacts", sim.contact_steps()},
-                              {"mean_passes", sim.mean_passes()},
-                              {"max_passes", sim.max_passes()},
-                              {"max_residual_m_s", sim.max_residual()},
-                              {"steps_at_pass_limit", sim.steps_at_pass_limit()},
-                              {"max_bucket_overlap_rel", sim.max_bucket_overlap_rel()}}},
-                            {"device", dev.description()},
-                            {"reconstructed_inputs", true},
-                            {"effects", effects.to_json()}};
+  nlohmann::json details = {
+      {"particles",
+       static_cast<int>(sim.multiscale() ? sim.particle_count() : pile.particles.size())},
+      {"model", sim.multiscale() ? "multiscale (type G)" : "particles (type D)"},
+      {"dt_s", preset.dt},
+      {"iterations", preset.iterations},
+      {"rolling_resistance", options.soil.rolling},
+      {"seed", o.seed},
+      {"form_speed_m_s", options.pile.form_speed},
+      {"work_total_J", sim.log().work()},
+      {"sim_time_s", sim_time},
+      {"wall_time_s", dig_wall},
+      {"realtime_factor", dig_wall > 0 ? sim_time / dig_wall : 0.0},
+      {"pile_build_wall_s", pile_wall},
+      {"pile_from_cache", pile.from_cache},
+      {"pile_bulk_density", pile.bulk_density},
+      {"pile_toe_shift_m", pile.toe_shift},
+      {"pile_fill_at_rest", pile.fill_at_rest},
+      {"pile_at_rest", pile.at_rest},
+      {"pile_rms_speed_m_s", pile.rms_speed},
+      {"scan_face_angle_deg", scan.face_angle_deg},
+      {"scan_rms_to_profile_m", scan.rms_to_profile_m},
+      {"scan_mean_to_profile_m", scan.mean_to_profile_m},
+      {"soil_rms_to_profile_m", pile.soil_fit.rms_m},
+      {"soil_mean_to_profile_m", pile.soil_fit.mean_m},
+      {"coupling",
+       {{"steps_with_bucket_contacts", sim.contact_steps()},
+        {"mean_passes", sim.mean_passes()},
+        {"max_passes", sim.max_passes()},
+        {"max_residual_m_s", sim.max_residual()},
+        {"steps_at_pass_limit", sim.steps_at_pass_limit()},
+        {"max_bucket_overlap_rel", sim.max_bucket_overlap_rel()}}},
+      {"device", dev.description()},
+      {"reconstructed_inputs", true},
+      {"effects", effects.to_json()}};
   if (!sim.step_residuals().empty()) {
     // the particle rows' residual at the end of each step with contacts: median and 95th percentile
     std::vector<double> r = sim.step_residuals();
@@ -257,7 +264,8 @@ nlohmann::json dig_details(const RunOptions& o, const vehicle::Scenario& sc,
 // and the rendered side view of the particles at the end
 void write_dig_figures(const std::filesystem::path& dir, const sim2real::Run& run,
                        const PileScan& scan, const vehicle::Scenario& sc, const PileProfile& placed,
-                       const Particles& final_particles, const vehicle::WheelLoader& loader) {
+                       const Particles& final_particles, const vehicle::WheelLoader& loader,
+                       const VoxelTerrain* terrain) {
   channel_figure({run}, nullptr)
       .write_png((dir / "channels.png").string(), kFigureWidth, kFigureHeight);
   std::vector<std::pair<double, double>> surface;
@@ -269,12 +277,12 @@ void write_dig_figures(const std::filesystem::path& dir, const sim2real::Run& ru
   Bounds view;
   view.lo = Vec3(sc.pile_toe_x - 4.0, -3.0, 0.0);
   view.hi = Vec3(placed.rear_wall_x, 3.0, 4.0);
-  write_render((dir / "side.png").string(), final_particles, loader, view);
+  write_render((dir / "side.png").string(), final_particles, loader, view, terrain);
 }
 
 // a pile scenario: build the pile at the level, dig, write everything
 void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::EffectSet& effects) {
-  FidelityPreset preset = fidelity_preset(o.fidelity);
+  FidelityPreset preset = level_preset(o.fidelity);
   if (o.dt > 0.0) preset.dt = o.dt;
   if (o.iterations > 0) preset.iterations = o.iterations;
   const PileProfile placed = scenario_pile_profile(sc);
@@ -293,18 +301,27 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
     Progress progress("pile " + preset.name, 1.5 * options.pile.max_time, !o.quiet);
     // the pile is the level's own whatever the dig's timestep and sweeps: a convergence study
     // changes the dig alone
-    pile = build_scenario_pile(dev, sc, placed, fidelity_preset(o.fidelity), options, &progress);
+    pile = build_scenario_pile(dev, sc, placed, level_preset(o.fidelity), options, &progress);
     progress.finish(std::to_string(pile.particles.size()) + " particles");
   }
   const double pile_wall =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  const PileScan scan = scan_pile(pile.particles, placed, preset.diameter);
+  // the laser scan of the pile's surface: the settled particles' (type D) or the voxels' (type G)
+  const PileScan scan =
+      is_multiscale(preset)
+          ? scan_surface(
+                VoxelTerrain::from_profile(placed, VoxelTerrainOptions{preset.diameter}).surface(),
+                placed)
+          : scan_pile(pile.particles, placed, preset.diameter);
   write_file_atomically((dir / "scan.csv").string(), scan_csv(scan));
 
   // the run, with snapshots at the interval and progress notes; the steps alone are timed for the
   // real-time factor (snapshots and notes, which download the particles, are not)
   if (!effects.empty()) std::cerr << "talus run: effects: " << effects_note(effects) << "\n";
   DiggingSimulation sim(dev, sc, preset, pile, options, &effects);
+  if (sim.multiscale())
+    write_file_atomically((dir / "terrain_start.vts").string(),
+                          terrain_vts(sim.terrain().voxels()));
   // steps between snapshots, at most one more than the run has (an interval beyond the run, 1e308
   // meaning "never", overflowed the step count and took a snapshot every step)
   const double snapshot_steps =
@@ -320,8 +337,12 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
     snapshots.after_step(k, sim.time(), sim);
     if (!o.quiet && k % note_every == 0) {
       std::ostringstream note;
-      note << std::fixed << std::setprecision(0) << sim.split().stats().bucket_contacts
-           << " bucket contacts, " << sim.loaded_mass() << " kg in the bucket";
+      note << std::fixed << std::setprecision(0);
+      if (sim.multiscale())
+        note << sim.particle_count() << " zone particles, ";
+      else
+        note << sim.split().stats().bucket_contacts << " bucket contacts, ";
+      note << sim.loaded_mass() << " kg in the bucket";
       progress.update(sim.time(), note.str());
     }
   });
@@ -336,7 +357,11 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
       dig_details(o, sc, preset, options, pile, scan, sim, pile_wall, dig_wall, dev, effects);
   run.dir = dir;
   write_run(o, run);
-  write_dig_figures(dir, run, scan, sc, placed, final_particles, sim.loader());
+  write_dig_figures(dir, run, scan, sc, placed, final_particles, sim.loader(),
+                    sim.multiscale() ? &sim.terrain().voxels() : nullptr);
+  // the type-G terrain's surface at the end, beside the one it started from, for ParaView
+  if (sim.multiscale())
+    write_file_atomically((dir / "terrain.vts").string(), terrain_vts(sim.terrain().voxels()));
   std::cerr << "talus run: " << sc.name << " " << preset.name << ": " << run.summary.loaded_mass_kg
             << " kg loaded, work in the digging phase " << run.summary.work_J / 1e3
             << " kJ, real-time factor " << run.summary.details["realtime_factor"].get<double>()
@@ -355,7 +380,7 @@ void run_scenario(const RunOptions& o) {
                        "' has none; use it with a pile scenario (fb35, hd27, rd21)");
   }
   // the level and the sweep are checked for every scenario, though only a pile uses them
-  fidelity_preset(o.fidelity);
+  level_preset(o.fidelity);
   parse_sweep(o.sweep, "--sweep");
   if (sc.pile) {
     run_digging(o, sc, effects->set);
@@ -373,7 +398,9 @@ void add_run_command(CLI::App& app, const std::string& command_line) {
                                         "a particle pile for fb35, hd27, rd21)");
   cmd->add_option("--scenario", opts->scenario, "scenario name (data/scenarios/NAME.json: fb35, hd27, rd21, "
                                                 "flat-lift) or path")->required();
-  cmd->add_option("--fidelity", opts->fidelity, "particle level for pile scenarios: D400, D200, D100, D50")
+  cmd->add_option("--fidelity", opts->fidelity,
+                  "level for pile scenarios: particles D400, D200, D100, D50, or the multiscale "
+                  "terrain G400, G200, G100, G50")
       ->capture_default_str();
   cmd->add_option("--out", opts->out, "output folder for timeseries.csv, summary.json and, with a pile, "
                                       "scan.csv, snapshots/, particles.pvd and PNG figures")->required();

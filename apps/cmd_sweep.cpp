@@ -256,7 +256,7 @@ std::pair<int, int> parse_shard(const std::string& text) {
 void sweep(const SweepOptions& o) {
   if (o.samples < 1) throw InputError("--samples: must be at least 1");
   std::vector<const FidelityPreset*> presets;
-  for (const auto& f : o.fidelities) presets.push_back(&fidelity_preset(f));
+  for (const auto& f : o.fidelities) presets.push_back(&level_preset(f));
   start_output_folder(o.out);
   check_output_file(o.json, "--json");
   for (const auto* p : presets) make_output_dir((std::filesystem::path(o.out) / p->name).string());
@@ -324,9 +324,11 @@ void add_sweep_command(CLI::App& app, const std::string& command_line) {
                                           "(paper section 7); runs in parallel under mpirun");
   cmd->add_option("--scenario", o->scenario, "the pile's scenario (its profile): fb35, hd27, rd21 or a path")
       ->capture_default_str();
-  cmd->add_option("--fidelity", o->fidelities, "levels, comma-separated (D400, D200, D100, D50); with two, the "
-                                               "first is tuned and the second used")
-      ->delimiter(',')->capture_default_str();
+  cmd->add_option("--fidelity", o->fidelities,
+                  "levels, comma-separated (D400 ... D50, G400 ... G50); with two, the "
+                  "first is tuned and the second used")
+      ->delimiter(',')
+      ->capture_default_str();
   cmd->add_option("--samples", o->samples, "points s = 0 .. 1, evenly spaced")->capture_default_str()->check(CLI::Range(1, 10000));
   cmd->add_option("--out", o->out, "output folder: sweep.png, summary.json, LEVEL/sweep.csv")->required();
   cmd->add_option("--shard", o->shard, "run only the samples i with i mod N = K and write LEVEL/shard-K.csv (K/N)");

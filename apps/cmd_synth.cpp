@@ -129,7 +129,9 @@ void add_synth_command(CLI::App& app, const std::string& command_line) {
   auto* cmd = app.add_subcommand("synth", "field-like data from a scenario with effects and sensor noise; the "
                                           "answer key goes to a separate file");
   cmd->add_option("--scenario", o->run.scenario, "scenario name or path (fb35, hd27, rd21, flat-lift)")->required();
-  cmd->add_option("--fidelity", o->run.fidelity, "particle level for pile scenarios")->capture_default_str();
+  cmd->add_option("--fidelity", o->run.fidelity,
+                  "level for pile scenarios (D400 ... D50, G400 ... G50)")
+      ->capture_default_str();
   cmd->add_option("--effect", o->run.effects, "an effect NAME:param=value,... (repeatable; docs/effects.md)");
   cmd->add_option("--effect-plugin", o->run.effect_plugins, "a shared library with more effects (repeatable)");
   cmd->add_option("--noise", o->noise, "sensor noise: none, default, or CHANNEL=SIGMA,... (SI units; "

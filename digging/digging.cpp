@@ -36,6 +36,17 @@ PileProfile scenario_pile_profile(const vehicle::Scenario& scenario) {
 PileBuild build_scenario_pile(Device& dev, const vehicle::Scenario& scenario, const PileProfile& placed,
                               const FidelityPreset& preset, const DiggingOptions& options, Progress* progress) {
   if (!scenario.pile) throw InputError(scenario.path + ": scenario '" + scenario.name + "' has no pile (\"pile\": false)");
+  // a type-G level has no particle pile: its terrain is built from the profile by the simulation
+  if (is_multiscale(preset)) {
+    PileBuild pile;
+    pile.geoms = pile_container(placed);
+    pile.bounds = pile_bounds(placed, preset.diameter);
+    pile.bounds.lo.x() = std::min(pile.bounds.lo.x(), scenario.pile_toe_x - kCarryBack);
+    pile.bounds.hi.z() = std::max(pile.bounds.hi.z(), kCarryHeight);
+    pile.at_rest = pile.fill_at_rest = true;
+    pile.bulk_density = kFieldBulkDensity;
+    return pile;
+  }
   PileBuild pile = build_pile_cached(dev, placed, preset, options.soil, options.pile,
                                      options.pile_cache, progress);
   pile.bounds.lo.x() = std::min(pile.bounds.lo.x(), scenario.pile_toe_x - kCarryBack);
@@ -57,6 +68,25 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
   loader_->set_tilt_speed(0.0);
   for (int k = 0; k < static_cast<int>(std::lround(kVehicleSettle / h)); ++k) loader_->step(h);
 
+  steps_total_ = static_cast<int>(std::lround(scenario.duration / h));
+  Material soil = options.soil;
+  soil.cohesion = effects_.soil({options.soil.cohesion}).cohesion;
+  // type G: the voxel terrain of the scenario's profile, its zone's particles and the aggregate
+  // solved with the machine (terrain/multiscale_terrain, terrain/aggregate)
+  if (is_multiscale(preset)) {
+    MultiscaleOptions terrain;
+    terrain.particle_material = soil;
+    terrain.bucket_material = options.coupling.material;
+    terrain.max_particle_speed = options.max_particle_speed;
+    terrain.seed = options.pile.seed;
+    terrain_ = std::make_unique<MultiscaleTerrain>(dev, scenario_pile_profile(scenario), preset,
+                                                   loader_->bucket_mesh(),
+                                                   kinematic_bucket(*loader_), terrain);
+    aggregate_ = std::make_unique<AggregateCoupling>(loader_->system(), loader_->bucket_body(),
+                                                     terrain.soil);
+    sensors_ = vehicle::start_with_effects(*loader_, effects_, log_);
+    return;
+  }
   // the particles: the level's timestep and sweeps, speculative contacts for thrown gravel
   DemSettings settings;
   settings.dt = h;
@@ -64,12 +94,9 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
   settings.sweep = options.sweep;
   settings.max_speed = options.max_particle_speed;
   // the soil: the options' gravel, and what the effects make of it (soil_cohesion)
-  Material soil = options.soil;
-  soil.cohesion = effects_.soil({options.soil.cohesion}).cohesion;
   dem_ = std::make_unique<DemWorld>(dev, soil, settings, pile.bounds, pile.geoms);
   dem_->set_particles(pile.particles);
   split_ = std::make_unique<SplitSolver>(dev, *dem_, *loader_, options.coupling);
-  steps_total_ = static_cast<int>(std::lround(scenario.duration / h));
   // the effects start with the settled machine at t = 0
   sensors_ = vehicle::start_with_effects(*loader_, effects_, log_);
 }
@@ -99,6 +126,14 @@ void DiggingSimulation::step(double drive, double lift, double tilt) {
   StageScope stage(dev_, "other");
   const double h = preset_.dt;
   const double t_end = (steps_done_ + 1) * h;
+  if (terrain_) {
+    sensors_ = vehicle::step_with_effects(
+        *loader_, effects_, time_, h, t_end, {drive, lift, tilt}, [&] { multiscale_step(); },
+        &log_);
+    ++steps_done_;
+    time_ = t_end;
+    return;
+  }
   sensors_ = vehicle::step_with_effects(
       *loader_, effects_, time_, h, t_end, {drive, lift, tilt}, [&] { split_->step(); }, &log_);
   ++steps_done_;
@@ -117,7 +152,69 @@ void DiggingSimulation::step(double drive, double lift, double tilt) {
 }
 
 double DiggingSimulation::loaded_mass() const {
-  return talus::loaded_mass(dem_->particles(), loader_->bucket_mesh(), bucket_pose(*loader_));
+  return talus::loaded_mass(particles(), loader_->bucket_mesh(), bucket_pose(*loader_));
+}
+
+Particles DiggingSimulation::particles() const {
+  return terrain_ ? terrain_->particles() : dem_->particles();
+}
+
+size_t DiggingSimulation::particle_count() const {
+  return terrain_ ? terrain_->particle_masses().size() : dem_->size();
+}
+
+const DemWorld& DiggingSimulation::dem() const {
+  if (!dem_)
+    throw Error(
+        "digging: a type-G run has no particle world of its own (terrain() holds its particles)");
+  return *dem_;
+}
+
+const SplitSolver& DiggingSimulation::split() const {
+  if (!split_)
+    throw Error(
+        "digging: a type-G run has no split solver (its soil reaches the machine through the "
+        "aggregate)");
+  return *split_;
+}
+
+const MultiscaleTerrain& DiggingSimulation::terrain() const {
+  if (!terrain_) throw Error("digging: a type-D run has no multiscale terrain");
+  return *terrain_;
+}
+
+KinematicBucket kinematic_bucket(const vehicle::WheelLoader& loader) {
+  const vehicle::RigidBody& body = loader.bodies().at(loader.bucket_body());
+  KinematicBucket b;
+  b.position = loader.bucket_tip_world();
+  b.orientation = body.orientation;
+  b.velocity = body.point_velocity(b.position);
+  b.omega = body.angular_velocity;
+  return b;
+}
+
+void DiggingSimulation::multiscale_step() {
+  const double h = preset_.dt;
+  // the aggregate from the terrain's last step, on the bucket where it stands
+  aggregate_->update(*terrain_, loader_->bucket_mesh(), kinematic_bucket(*loader_), h);
+  // the soil in the bucket and outside the zone weighs on the bucket (its weight, not its
+  // inertia: docs/multiscale.md)
+  const Particles p = terrain_->particles();
+  const std::vector<double>& mass = terrain_->particle_masses();
+  const ActiveZone& zone = terrain_->last_step().zone;
+  const vehicle::RigidBody& bucket = loader_->bodies().at(loader_->bucket_body());
+  Vec6 weight = Vec6::Zero();
+  for (int k : particles_in_bucket(p, loader_->bucket_mesh(), bucket_pose(*loader_))) {
+    if (zone.depth > 0.0 && zone.contains(p.position[k], INFINITY)) continue;
+    const Vec3 f = mass[k] * loader_->system().gravity();
+    weight.head<3>() += f;
+    weight.tail<3>() += (p.position[k] - bucket.position).cross(f);
+  }
+  loader_->system().set_external_wrench(loader_->bucket_body(), weight);
+  // the machine's step with the aggregate, then the terrain's with the bucket as it moved
+  loader_->step(h);
+  aggregate_->after_step(h);
+  terrain_->step(kinematic_bucket(*loader_));
 }
 
 }  // namespace talus

@@ -1,6 +1,11 @@
-// The type-D digging simulator (issue 4): a scenario's pile built and settled at a fidelity level,
-// placed in front of the wheel loader, and the scenario's feedforward inputs replayed with the
-// particles and the machine coupled through the bucket (solvers/split_solver.hpp).
+// The digging simulator: a scenario's pile at a fidelity level in front of the wheel loader, and
+// the scenario's feedforward inputs replayed with the soil and the machine coupled.
+//   type D (issue 4): the pile built and settled as particles, coupled to the machine through the
+//     bucket's contacts (solvers/split_solver.hpp);
+//   type G (issue 14): the pile as the voxel terrain of its profile; each step the aggregate of the
+//     active zone's particles is solved with the machine (terrain/aggregate), the soil in the
+//     bucket weighs on the bucket, then the terrain steps with the bucket as the machine moved it
+//     (terrain/multiscale_terrain). No penetration resistance yet (docs/multiscale.md).
 //
 // Frames: the machine's reference pose has its front axle at x = 0 (data/machines/*.json); the
 // pile's profile (data/piles/*.json) is shifted so its toe lies at the scenario's pile_toe_x.
@@ -14,6 +19,8 @@
 
 #include "host/progress.hpp"
 #include "solvers/split_solver.hpp"
+#include "terrain/aggregate.hpp"
+#include "terrain/multiscale_terrain.hpp"
 #include "terrain/pile.hpp"
 #include "terrain/pile_cache.hpp"
 #include "vehicle/effect.hpp"
@@ -41,10 +48,14 @@ struct DiggingOptions {
 // field), moved along x so that its toe lies at the scenario's pile_toe_x
 PileProfile scenario_pile_profile(const vehicle::Scenario& scenario);
 
+// the bucket as the type-G terrain sees it: its profile frame (tip) and that point's twist
+KinematicBucket kinematic_bucket(const vehicle::WheelLoader& loader);
+
 // the scenario's pile at the level, built and settled on `placed` (scenario_pile_profile):
 // particles, container (ground, sides, rear wall) and the broad-phase bounds, which also cover
 // where the machine carries gravel (back to 6 m in front of the toe, up to 5 m high). Through the
-// pile cache when options.pile_cache.enabled (PileBuild::from_cache says whether it was read back)
+// pile cache when options.pile_cache.enabled (PileBuild::from_cache says whether it was read back).
+// At a type-G level: the container and bounds only, no particles (the run builds its voxels)
 PileBuild build_scenario_pile(Device& dev, const vehicle::Scenario& scenario, const PileProfile& placed,
                               const FidelityPreset& preset, const DiggingOptions& options, Progress* progress);
 
@@ -75,14 +86,19 @@ class DiggingSimulation {
   bool done() const { return steps_done_ >= steps_total_; }
 
   const vehicle::WheelLoader& loader() const { return *loader_; }
-  const DemWorld& dem() const { return *dem_; }
-  const SplitSolver& split() const { return *split_; }
+  // the type-D particle world and split solver (talus::Error at a type-G level), the type-G
+  // terrain (talus::Error at a type-D level)
+  const DemWorld& dem() const;
+  const SplitSolver& split() const;
+  const MultiscaleTerrain& terrain() const;
+  bool multiscale() const { return terrain_ != nullptr; }
   const vehicle::SensorLog& log() const { return log_; }
   // what the sensors report now, after the last step (at time()) and through the effects: what a
   // controller reads; the log holds only the 100 Hz instants, which a step under 10 ms may miss
   const vehicle::SensorSample& sensors() const { return sensors_; }
-  // particles now (downloaded from the device)
-  Particles particles() const { return dem_->particles(); }
+  // particles now (downloaded from the device): the pile's, or the type-G zone's
+  Particles particles() const;
+  size_t particle_count() const;
   // soil in the bucket now, by terrain/bucket_fill's rule [kg]
   double loaded_mass() const;
 
@@ -106,6 +122,10 @@ class DiggingSimulation {
   std::unique_ptr<vehicle::WheelLoader> loader_;
   std::unique_ptr<DemWorld> dem_;
   std::unique_ptr<SplitSolver> split_;
+  std::unique_ptr<MultiscaleTerrain> terrain_;
+  std::unique_ptr<AggregateCoupling> aggregate_;
+  // the type-G coupled step (see the top of this file)
+  void multiscale_step();
   vehicle::SensorLog log_;
   vehicle::SensorSample sensors_;
   vehicle::EffectSet no_effects_;

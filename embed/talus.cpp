@@ -132,7 +132,7 @@ vehicle::Scenario load_options_scenario(const SimulationOptions& options) {
 // the level of the options, InputError naming the option and the known levels
 FidelityPreset options_level(const SimulationOptions& options) {
   try {
-    return fidelity_preset(options.level);
+    return level_preset(options.level);
   } catch (const InputError& e) {
     throw InputError(std::string("SimulationOptions::level: ") + e.what() + "; give one of them");
   }
@@ -278,7 +278,9 @@ double Simulation::loaded_mass() const {
 
 bool Simulation::has_particles() const { return impl_->dig != nullptr; }
 
-std::size_t Simulation::particle_count() const { return impl_->dig ? impl_->dig->dem().size() : 0; }
+std::size_t Simulation::particle_count() const {
+  return impl_->dig ? impl_->dig->particle_count() : 0;
+}
 
 ParticleState Simulation::particles() const {
   ParticleState state;

@@ -60,4 +60,35 @@ std::string scan_csv(const PileScan& scan) {
   return csv;
 }
 
+std::string terrain_vts(const VoxelTerrain& t) {
+  std::ostringstream os;
+  os.precision(7);
+  const int nx = t.nx(), ny = t.ny();
+  os << "<?xml version=\"1.0\"?>\n"
+     << "<VTKFile type=\"StructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
+     << "<StructuredGrid WholeExtent=\"0 " << nx - 1 << " 0 " << ny - 1 << " 0 0\">\n"
+     << "<Piece Extent=\"0 " << nx - 1 << " 0 " << ny - 1 << " 0 0\">\n";
+  // points: x fastest, then y (VTK's order), at the columns' centres and surface heights
+  os << "<Points><DataArray type=\"Float32\" NumberOfComponents=\"3\" format=\"ascii\">\n";
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i)
+      os << t.column_x(i) << ' ' << t.column_y(j) << ' ' << t.surface_height(i, j) << '\n';
+  os << "</DataArray></Points>\n<PointData Scalars=\"height\">\n"
+     << "<DataArray type=\"Float32\" Name=\"height\" format=\"ascii\">\n";
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) os << t.surface_height(i, j) << '\n';
+  os << "</DataArray>\n<DataArray type=\"Float32\" Name=\"mass\" format=\"ascii\">\n";
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) os << t.column_mass(i, j) << '\n';
+  // the column's mean compaction: its mass over the bank mass of the volume it fills
+  os << "</DataArray>\n<DataArray type=\"Float32\" Name=\"compaction\" format=\"ascii\">\n";
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      const double v = t.column_volume(i, j);
+      os << (v > 0.0 ? t.column_mass(i, j) / (t.bank_density() * v) : 1.0) << '\n';
+    }
+  os << "</DataArray>\n</PointData>\n</Piece>\n</StructuredGrid>\n</VTKFile>\n";
+  return os.str();
+}
+
 }  // namespace talus

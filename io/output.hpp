@@ -1,10 +1,12 @@
-// Particle output: the state as CSV and as ParaView's PolyData, and a pile's laser scan as CSV,
-// written with host/files.hpp's atomic writers.
+// Particle output: the state as CSV and as ParaView's PolyData, a pile's laser scan as CSV, and the
+// type-G terrain's surface as ParaView's StructuredGrid, written with host/files.hpp's atomic
+// writers.
 #pragma once
 #include <string>
 
 #include "solvers/particles.hpp"
 #include "terrain/pile.hpp"
+#include "terrain/voxel_terrain.hpp"
 
 namespace talus {
 
@@ -16,5 +18,9 @@ std::string particles_vtp(const Particles& particles);
 // a pile's laser scan as CSV with header x,z [m], one point per line (scan.csv of talus pile and
 // talus run; talus synth reads it into a measured run's metadata)
 std::string scan_csv(const PileScan& scan);
+// the type-G terrain's surface as VTK XML StructuredGrid (.vts, readable by ParaView): one point
+// per voxel column at its centre and surface height, with the column's height [m], soil mass [kg]
+// and mean compaction as point data
+std::string terrain_vts(const VoxelTerrain& terrain);
 
 }  // namespace talus

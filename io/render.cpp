@@ -334,6 +334,24 @@ Colour viridis(double t) {
   return Colour{channel(0), channel(1), channel(2)};
 }
 
+RenderMesh terrain_mesh(const VoxelTerrain& terrain, const Colour& colour) {
+  RenderMesh mesh;
+  mesh.colour = colour;
+  const int nx = terrain.nx(), ny = terrain.ny();
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i)
+      mesh.vertices.emplace_back(terrain.column_x(i), terrain.column_y(j),
+                                 terrain.surface_height(i, j));
+  // the diagonal (i, j)-(i+1, j+1) of every cell, as terrain/heightmap splits them
+  for (int j = 0; j + 1 < ny; ++j)
+    for (int i = 0; i + 1 < nx; ++i) {
+      const int a = j * nx + i, b = a + 1, c = a + nx, d = c + 1;
+      mesh.triangles.push_back({a, b, d});
+      mesh.triangles.push_back({a, d, c});
+    }
+  return mesh;
+}
+
 RenderMesh posed_mesh(const vehicle::BucketMesh& mesh, const BucketPose& pose, const Colour& colour) {
   RenderMesh out;
   out.vertices.reserve(mesh.vertices.size());

@@ -16,8 +16,9 @@
 #include <vector>
 
 #include "io/image.hpp"
-#include "solvers/particles.hpp"
 #include "solvers/embree.hpp"
+#include "solvers/particles.hpp"
+#include "terrain/voxel_terrain.hpp"
 
 namespace talus {
 
@@ -41,6 +42,10 @@ struct RenderMesh {
   std::vector<std::array<int, 3>> triangles;  // indices into vertices
   Colour colour{0.90, 0.68, 0.10};            // machine yellow
 };
+
+// the type-G terrain's surface as a mesh: the column centres at their surface heights, two
+// triangles between every four (the piecewise-linear surface of terrain/heightmap)
+RenderMesh terrain_mesh(const VoxelTerrain& terrain, const Colour& colour);
 
 // the bucket mesh (profile frame) posed into the world: vertices pose.to_world(v), same triangles
 RenderMesh posed_mesh(const vehicle::BucketMesh& mesh, const BucketPose& pose,

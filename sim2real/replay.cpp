@@ -104,7 +104,7 @@ std::optional<double> scan_difference(const Series2& a, const std::vector<Eigen:
 Replay::Replay(const MeasuredRun& measured, const ReplayOptions& options, Device* device)
     : measured_(measured), scenario_(measured_scenario(measured)), options_(options), device_(device) {
   if (scenario_.pile) {
-    fidelity_preset(options_.fidelity);  // an unknown level fails now, listing the known ones
+    level_preset(options_.fidelity);  // an unknown level fails now, listing the known ones
     if (!device_) throw Error("replay of " + measured.run.dir.string() + ": a pile scenario needs an OpenCL device");
   }
 }
@@ -118,7 +118,7 @@ Run Replay::simulate(vehicle::EffectSet& effects) {
     run = vehicle_run(scenario_, simulate_on_flat_ground(scenario_, effects));
   } else {
     // the pile at the level, once; every simulation digs a copy of it
-    const FidelityPreset& preset = fidelity_preset(options_.fidelity);
+    const FidelityPreset& preset = level_preset(options_.fidelity);
     DiggingOptions digging;
     digging.pile.seed = options_.pile_seed;
     if (!pile_) {

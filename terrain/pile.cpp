@@ -130,20 +130,35 @@ const FidelityPreset* find_multiscale_preset(const std::string& name) {
   return nullptr;
 }
 
+bool is_multiscale(const FidelityPreset& preset) {
+  return find_multiscale_preset(preset.name) != nullptr;
+}
+
 const FidelityPreset& fidelity_preset(const std::string& name) {
   std::string known;
   for (auto& p : fidelity_presets()) {
     if (p.name == name) return p;
     known += " " + p.name;
   }
-  // the type-G levels are named, so a user asking for one learns it is coming, not misspelt
+  // the type-G levels are named, so a user asking for one learns what they are for
   if (find_multiscale_preset(name))
     throw InputError(
         "fidelity level '" + name +
-        "' is the multiscale (type G) terrain, which cannot dig yet: its voxel terrain, "
-        "active zone and avalanching exist (docs/multiscale.md), its particles, aggregate and "
-        "coupling to the machine do not (issue 14). Use a type-D level:" +
+        "' is the multiscale (type G) terrain: it runs scenarios (talus run, sweep, synth, "
+        "diagnose) but has no particle pile, soil test or DEM benchmark of its own "
+        "(docs/multiscale.md). Here use a type-D level:" +
         known);
+  throw InputError("unknown fidelity level '" + name + "'; known:" + known);
+}
+
+const FidelityPreset& level_preset(const std::string& name) {
+  if (const FidelityPreset* g = find_multiscale_preset(name)) return *g;
+  std::string known;
+  for (auto& p : fidelity_presets()) {
+    if (p.name == name) return p;
+    known += " " + p.name;
+  }
+  for (auto& p : multiscale_presets()) known += " " + p.name;
   throw InputError("unknown fidelity level '" + name + "'; known:" + known);
 }
 
@@ -287,6 +302,13 @@ PileScan scan_pile(const Particles& particles, const PileProfile& profile, doubl
       surface.radius.push_back(0.0);
     }
   Heightmap map = Heightmap::from_particles(surface, x0, -0.5 * profile.width, diameter, nx, ny);
+  return scan_surface(map, profile);
+}
+
+PileScan scan_surface(const Heightmap& map, const PileProfile& profile) {
+  double top = 0.0;
+  for (auto& p : profile.points) top = std::max(top, p.z());
+  const double x0 = profile.points.front().x() - 2.0 * top;
   // the laser: 800 rays in the mid plane from in front of the toe, aimed at ground points from the
   // run-out to far behind the rear wall: the rays aimed behind the pile are the ones that graze
   // its top (those that pass over the wall leave the map and are dropped)

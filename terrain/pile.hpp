@@ -9,6 +9,7 @@
 #include "host/progress.hpp"
 #include "solvers/dem_world.hpp"
 #include "solvers/particles.hpp"
+#include "terrain/heightmap.hpp"
 
 namespace talus {
 
@@ -52,14 +53,20 @@ struct FidelityPreset {
   int paper_particles;   // N_p in paper Table 3
 };
 const std::vector<FidelityPreset>& fidelity_presets();
-// throws InputError listing the known names; a type-G name gets the "not yet" error of
-// multiscale_preset_not_runnable
+// a type-D level; throws InputError listing the known names, and for a type-G name says that it has
+// no particles of its own to build or test (what asks for a particle level: piles, soil tests, DEM
+// benchmarks)
 const FidelityPreset& fidelity_preset(const std::string& name);
+// a level of either family, for what runs a scenario (talus run, sweep, synth, diagnose, the
+// facade); throws InputError listing both families' names
+const FidelityPreset& level_preset(const std::string& name);
 // the multiscale levels of paper Table 3 (type G, issue 14): D is the voxel cell and the size of
 // the active zone's particles, N_p the most particles the paper's zone held (its "≲")
 const std::vector<FidelityPreset>& multiscale_presets();
 // the type-G preset of that name, or nullptr
 const FidelityPreset* find_multiscale_preset(const std::string& name);
+// is the level the multiscale terrain's (a type-G preset)?
+bool is_multiscale(const FidelityPreset& preset);
 
 // the container: ground, side walls, rear wall (open front)
 std::vector<StaticGeom> pile_container(const PileProfile& profile);
@@ -171,5 +178,7 @@ struct PileScan {
   double mean_to_profile_m = 0.0;
 };
 PileScan scan_pile(const Particles& particles, const PileProfile& profile, double diameter);
+// the same laser scan of any surface standing on the profile's ground (the type-G terrain's voxels)
+PileScan scan_surface(const Heightmap& map, const PileProfile& profile);
 
 }  // namespace talus

@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
@@ -116,6 +117,27 @@ TEST(DiggingRunTest, Hd27AtD400WritesTheRunContractSnapshotsAndFigures) {
     EXPECT_TRUE(std::filesystem::exists(dir / "snapshots" / ("particles_" + std::to_string(k) + ".vtp"))) << k;
   for (const char* file : {"particles.pvd", "scan.csv", "channels.png", "trajectory.png", "power.png", "side.png"})
     EXPECT_GT(std::filesystem::file_size(dir / file), 100u) << file;
+}
+
+// a type-G level runs the same scenario end to end (~2 s): the run contract, the model named in
+// the summary, a loaded bucket, and the terrain's surface before and after for ParaView
+TEST(DiggingRunTest, Hd27AtG400WritesTheRunContractAndTheTerrain) {
+  const auto dir = std::filesystem::temp_directory_path() / "talus_run_hd27_g400";
+  std::filesystem::remove_all(dir);
+  const std::string cmd = kTalus + " run --scenario hd27 --fidelity G400 --quiet --out " +
+                          dir.string() + " 2>/dev/null";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  const auto summary = nlohmann::json::parse(std::ifstream(dir / "summary.json"));
+  EXPECT_EQ(summary.at("fidelity").get<std::string>(), "G400");
+  EXPECT_EQ(summary.at("model").get<std::string>(), "multiscale (type G)");
+  EXPECT_GT(summary.at("loaded_mass_kg").get<double>(), 0.0);
+  for (const char* file : {"timeseries.csv", "channels.png", "trajectory.png", "side.png",
+                           "terrain.vts", "terrain_start.vts", "scan.csv"})
+    EXPECT_GT(std::filesystem::file_size(dir / file), 100u) << file;
+  std::ifstream vts(dir / "terrain.vts");
+  const std::string text((std::istreambuf_iterator<char>(vts)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("StructuredGrid"), std::string::npos);
+  EXPECT_NE(text.find("Name=\"compaction\""), std::string::npos);
 }
 
 TEST(DiggingRunTest, UnknownFidelityIsBadInput) {

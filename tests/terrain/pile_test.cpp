@@ -112,11 +112,14 @@ TEST(Pile, SettleSweepsFollowTheRuleOrTheStudy) {
   EXPECT_EQ(settle_sweeps(fidelity_preset("D100"), options), 200);
 }
 
-// a type-G level is known, and its error says it is not built yet rather than "unknown"
-TEST(Pile, AMultiscaleLevelIsNamedAsNotYetRunnable) {
+// a type-G level is a level for runs: level_preset finds it, fidelity_preset (what wants
+// particles) says what it is rather than "unknown"
+TEST(Pile, AMultiscaleLevelIsARunLevelWithoutParticles) {
   ASSERT_NE(find_multiscale_preset("G200"), nullptr);
   EXPECT_DOUBLE_EQ(find_multiscale_preset("G200")->dt, 0.020);
   EXPECT_EQ(find_multiscale_preset("D200"), nullptr);
+  EXPECT_TRUE(is_multiscale(level_preset("G400")));
+  EXPECT_FALSE(is_multiscale(level_preset("D400")));
   try {
     fidelity_preset("G200");
     FAIL();
@@ -125,6 +128,12 @@ TEST(Pile, AMultiscaleLevelIsNamedAsNotYetRunnable) {
     EXPECT_NE(what.find("type G"), std::string::npos) << what;
     EXPECT_EQ(what.find("unknown"), std::string::npos) << what;
     EXPECT_NE(what.find("D100"), std::string::npos) << what;
+  }
+  try {
+    level_preset("G300");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("G400"), std::string::npos) << e.what();
   }
 }
 
