@@ -5,7 +5,8 @@
 //   type G (issue 14): the pile as the voxel terrain of its profile; each step the aggregate of the
 //     active zone's particles is solved with the machine (terrain/aggregate), the soil in the
 //     bucket weighs on the bucket, then the terrain steps with the bucket as the machine moved it
-//     (terrain/multiscale_terrain). No penetration resistance yet (docs/multiscale.md).
+//     (terrain/multiscale_terrain); the cutting edge's penetration resistance holds it back
+//     (terrain/penetration). docs/multiscale.md
 //
 // Frames: the machine's reference pose has its front axle at x = 0 (data/machines/*.json); the
 // pile's profile (data/piles/*.json) is shifted so its toe lies at the scenario's pile_toe_x.

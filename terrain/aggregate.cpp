@@ -73,6 +73,8 @@ AggregateCoupling::AggregateCoupling(vehicle::MultibodySystem& system, int bucke
   b_ = &system.add_constraint(
       std::make_unique<vehicle::PlaneContact>(vehicle::kWorld, body_, kPatchPoints, b));
   b_->name = "aggregate interface B (terrain)";
+  brake_ = &system.add_constraint(std::make_unique<vehicle::PointBrake>(bucket));
+  brake_->name = "penetration resistance (cutting edge)";
 }
 
 void AggregateCoupling::update(const MultiscaleTerrain& terrain, const vehicle::BucketMesh& mesh,
@@ -151,6 +153,16 @@ void AggregateCoupling::update(const MultiscaleTerrain& terrain, const vehicle::
   pb.damping_time = parameters_.damping_steps * dt;
   b_->set_parameters(pb);
   b_->set_geometry(gb);
+
+  // constraint C: the cutting edge along the bucket's cutting direction (its profile frame's x),
+  // resisted while it is under the soil's surface
+  const vehicle::RigidBody& bucket_body = system_.body(bucket_);
+  const double resistance =
+      parameters_.penetration
+          ? penetration_resistance(zone.depth, zone.width, soil_, parameters_.edge)
+          : 0.0;
+  brake_->set(bucket_body.point_to_local(bucket.position), bucket.orientation * Vec3::UnitX(),
+              resistance);
 }
 
 void AggregateCoupling::after_step(double dt) {

@@ -39,8 +39,10 @@
 #include <vector>
 
 #include "terrain/multiscale_terrain.hpp"
+#include "terrain/penetration.hpp"
 #include "vehicle/multibody.hpp"
 #include "vehicle/plane_contact.hpp"
+#include "vehicle/point_brake.hpp"
 
 namespace talus {
 
@@ -67,12 +69,18 @@ struct AggregateParameters {
   double youngs_modulus = 4.6e6;       // bulk E [Pa], paper §4.4
   double stiffness_multiplier = 0.01;  // paper §4.4
   double damping_steps = 2.0;          // SPOOK damping time of the interfaces, in timesteps
+  // constraint C, the cutting edge's penetration resistance (terrain/penetration), on unless a
+  // test of the aggregate alone turns it off
+  bool penetration = true;
+  PenetrationParameters edge;
   // kg: the mass the aggregate body keeps while the zone holds no particle (its rows carry no
   // force then; a nominal mass keeps the system regular)
   double idle_mass = 1.0;
 };
 
-// the aggregate as a body of a machine's multibody system, and its two interfaces
+// the aggregate as a body of a machine's multibody system, its two interfaces, and the cutting
+// edge's penetration resistance (a vehicle::PointBrake on the bucket's cutting edge along its
+// cutting direction, bounded by terrain/penetration's force at the zone's depth)
 class AggregateCoupling {
  public:
   // adds the aggregate body and the interfaces A (bucket–aggregate) and B (terrain–aggregate) to
@@ -97,6 +105,9 @@ class AggregateCoupling {
   // after the machine's step: the force of interface A on the bucket, of B on the aggregate [N]
   Vec3 force_on_bucket() const { return -a_->force_on_b(); }
   Vec3 terrain_force() const { return b_->force_on_b(); }
+  // the penetration resistance's force on the bucket in the last solve [N], against its cutting
+  // direction
+  double edge_force() const { return brake_->force(); }
   const vehicle::PlaneContact& interface_a() const { return *a_; }
   const vehicle::PlaneContact& interface_b() const { return *b_; }
 
@@ -108,6 +119,7 @@ class AggregateCoupling {
   AggregateParameters parameters_;
   vehicle::PlaneContact* a_ = nullptr;
   vehicle::PlaneContact* b_ = nullptr;
+  vehicle::PointBrake* brake_ = nullptr;
   Aggregate aggregate_;
   double depth_a_ = 0.0, depth_b_ = 0.0;
   bool engaged_now_ = false, engaged_before_ = false;

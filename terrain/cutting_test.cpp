@@ -214,7 +214,8 @@ CuttingResult run_multiscale_cutting_test(Device& dev, const FidelityPreset& lev
   const int window_steps =
       std::max(1, static_cast<int>(std::lround(0.25 * wedge / (o.speed * o.dt))));
   const int steps = static_cast<int>(std::lround(o.travel / (o.speed * o.dt)));
-  double force_x = 0.0, force_z = 0.0, load = 0.0;
+  double force_x = 0.0, force_z = 0.0, load = 0.0, edge = 0.0, edge_steady = 0.0;
+  int edge_windows = 0;
   int in_window = 0, most = 0;
   for (int k = 1; k <= steps; ++k) {
     // the aggregate from the last terrain step, the machine's step, then the terrain's
@@ -224,7 +225,8 @@ CuttingResult run_multiscale_cutting_test(Device& dev, const FidelityPreset& lev
     state.velocity = system.body(blade).velocity;
     terrain.step(state);
     state.position = system.body(blade).position - com_offset;
-    force_x += rail.actuator_force();
+    force_x += rail.actuator_force() - coupling.edge_force();
+    edge += coupling.edge_force();
     force_z += coupling.force_on_bucket().z();
     load += coupling.aggregate().mass;
     most = std::max(most, static_cast<int>(terrain.particle_masses().size()));
@@ -241,7 +243,11 @@ CuttingResult run_multiscale_cutting_test(Device& dev, const FidelityPreset& lev
     x.fee_force =
         fee_force(kFieldBulkDensity, o.depth, width, 90.0, tool_friction_deg, phi, x.surcharge);
     result.series.push_back(x);
-    force_x = force_z = load = 0.0;
+    if (x.travel >= std::min(wedge, 0.5 * o.travel)) {
+      edge_steady += edge / in_window;
+      ++edge_windows;
+    }
+    force_x = force_z = load = edge = 0.0;
     in_window = 0;
     if (progress) {
       char note[96];
@@ -270,6 +276,7 @@ CuttingResult run_multiscale_cutting_test(Device& dev, const FidelityPreset& lev
   result.fee_force_level = fee_force(kFieldBulkDensity, o.depth, width, 90.0, tool_friction_deg,
                                      phi, 0.0, &result.fee_failure_angle_deg);
   result.particles = most;
+  result.edge_force = edge_windows > 0 ? edge_steady / edge_windows : 0.0;
   result.sim_time = terrain.time();
   result.final_state = terrain.particles();
   return result;

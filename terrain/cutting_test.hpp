@@ -52,6 +52,9 @@ struct CuttingResult {
   double fee_force = 0.0;       // the FEE's value, mean over the steady part [N]
   double fee_force_level = 0.0; // the FEE's value for the level bed, no surcharge [N]
   double fee_failure_angle_deg = 0.0;  // its beta
+  // type G: the cutting edge's penetration resistance, mean over the steady part [N]; `force` is
+  // what the soil's wedge needs beside it (the motor's force less this), as the FEE knows no edge
+  double edge_force = 0.0;
   double steady_from = 0.0;     // start of the steady part [m of travel]
   double width = 0.0;           // blade (and bed) width [m]
   double bed_density = 0.0;     // bulk density of the bed [kg/m^3]
@@ -71,10 +74,12 @@ CuttingResult run_cutting_test(Device& dev, const Material& material, const Cutt
 // the same test on the type-G terrain (issue 14) at a multiscale level: a level bed of voxels at
 // bank density, the blade a body of a multibody system driven along x at the test's speed by a
 // prismatic joint's motor, the soil it fails reaching it through the aggregate body (terrain/
-// aggregate). The force is the motor's; the equation's is evaluated window by window for the load
-// the aggregate carries (its mass as the wedge plus a surcharge q over the wedge's top), with the
-// soil's effective internal friction phi + psi (40 deg), as the zone and interface B use.
-// `options.diameter`, `dt` and `iterations` are taken from the level
+// aggregate). The force is the motor's less the cutting edge's penetration resistance (which the
+// FEE, for an ideally sharp blade, does not know; reported as edge_force); the equation's is
+// evaluated window by window for the load the aggregate carries (its mass as the wedge plus a
+// surcharge q over the wedge's top), with the soil's effective internal friction phi + psi (40
+// deg), as the zone and interface B use. `options.diameter`, `dt` and `iterations` are taken from
+// the level
 CuttingResult run_multiscale_cutting_test(Device& dev, const FidelityPreset& level,
                                           const CuttingOptions& options, const BulkSoil& soil = {},
                                           Progress* progress = nullptr);
