@@ -24,7 +24,7 @@ root = args.dir
 runs = {}
 earlier = {}
 for f in sorted(root.glob("*/summary.json")):
-    m = re.fullmatch(r"(fb35|hd27|rd21)-(D\d+)-(seed\d+|dt[\d.]+|it\d+)", f.parent.name)
+    m = re.fullmatch(r"(fb35|hd27|rd21)-([DG]\d+)-(seed\d+|dt[\d.]+|it\d+)", f.parent.name)
     if m:
         runs[m.groups()] = json.loads(f.read_text())
     # earlier stages of the study, kept for the before/after table: mu_r 1.0 (talus before issue
