@@ -280,6 +280,22 @@ void write_dig_figures(const std::filesystem::path& dir, const sim2real::Run& ru
   write_render((dir / "side.png").string(), final_particles, loader, view, terrain);
 }
 
+// the type-G aggregate step by step as CSV (ParaView reads it with Table To Points on cx, cy, cz)
+std::string aggregate_csv(const std::vector<AggregateSample>& log) {
+  std::ostringstream os;
+  os << "t,particles,mass,cx,cy,cz,vx,vy,vz,fx_bucket,fy_bucket,fz_bucket,terrain_normal_force,"
+        "edge_force,"
+        "depth_a,depth_b\n";
+  os.precision(9);
+  for (const AggregateSample& a : log)
+    os << a.t << ',' << a.particles << ',' << a.mass << ',' << a.centre.x() << ',' << a.centre.y()
+       << ',' << a.centre.z() << ',' << a.velocity.x() << ',' << a.velocity.y() << ','
+       << a.velocity.z() << ',' << a.force_on_bucket.x() << ',' << a.force_on_bucket.y() << ','
+       << a.force_on_bucket.z() << ',' << a.terrain_normal_force << ',' << a.edge_force << ','
+       << a.depth_a << ',' << a.depth_b << '\n';
+  return os.str();
+}
+
 // a pile scenario: build the pile at the level, dig, write everything
 void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::EffectSet& effects) {
   FidelityPreset preset = level_preset(o.fidelity);
@@ -360,8 +376,10 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
   write_dig_figures(dir, run, scan, sc, placed, final_particles, sim.loader(),
                     sim.multiscale() ? &sim.terrain().voxels() : nullptr);
   // the type-G terrain's surface at the end, beside the one it started from, for ParaView
-  if (sim.multiscale())
+  if (sim.multiscale()) {
     write_file_atomically((dir / "terrain.vts").string(), terrain_vts(sim.terrain().voxels()));
+    write_file_atomically((dir / "aggregate.csv").string(), aggregate_csv(sim.aggregate_log()));
+  }
   std::cerr << "talus run: " << sc.name << " " << preset.name << ": " << run.summary.loaded_mass_kg
             << " kg loaded, work in the digging phase " << run.summary.work_J / 1e3
             << " kJ, real-time factor " << run.summary.details["realtime_factor"].get<double>()

@@ -215,6 +215,19 @@ void DiggingSimulation::multiscale_step() {
   loader_->step(h);
   aggregate_->after_step(h);
   terrain_->step(kinematic_bucket(*loader_));
+  // what the machine felt of the zone this step
+  AggregateSample a;
+  a.t = (steps_done_ + 1) * h;
+  a.particles = aggregate_->aggregate().particles;
+  a.mass = aggregate_->aggregate().mass;
+  a.centre = aggregate_->aggregate().centre;
+  a.velocity = loader_->system().body(aggregate_->body()).velocity;
+  a.force_on_bucket = aggregate_->force_on_bucket();
+  a.terrain_normal_force = aggregate_->interface_b().normal_force();
+  a.edge_force = aggregate_->edge_force();
+  a.depth_a = aggregate_->depth_a();
+  a.depth_b = aggregate_->depth_b();
+  aggregate_log_.push_back(a);
 }
 
 }  // namespace talus

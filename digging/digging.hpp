@@ -60,6 +60,19 @@ KinematicBucket kinematic_bucket(const vehicle::WheelLoader& loader);
 PileBuild build_scenario_pile(Device& dev, const vehicle::Scenario& scenario, const PileProfile& placed,
                               const FidelityPreset& preset, const DiggingOptions& options, Progress* progress);
 
+// the type-G aggregate after one step: what the machine felt of the active zone
+struct AggregateSample {
+  double t = 0.0;                       // end of the step [s]
+  int particles = 0;                    // in the zone
+  double mass = 0.0;                    // [kg]
+  Vec3 centre = Vec3::Zero();           // [m]
+  Vec3 velocity = Vec3::Zero();         // as solved with the machine [m/s]
+  Vec3 force_on_bucket = Vec3::Zero();  // interface A's on the bucket [N]
+  double terrain_normal_force = 0.0;    // interface B's normal force [N]
+  double edge_force = 0.0;              // the penetration resistance's [N]
+  double depth_a = 0.0, depth_b = 0.0;  // the interfaces' depths [m]
+};
+
 class DiggingSimulation {
  public:
   // the scenario must have a pile; `pile` from build_scenario_pile (or a saved one). With
@@ -93,6 +106,8 @@ class DiggingSimulation {
   const SplitSolver& split() const;
   const MultiscaleTerrain& terrain() const;
   bool multiscale() const { return terrain_ != nullptr; }
+  // type G: the aggregate after every step so far (empty at a type-D level)
+  const std::vector<AggregateSample>& aggregate_log() const { return aggregate_log_; }
   const vehicle::SensorLog& log() const { return log_; }
   // what the sensors report now, after the last step (at time()) and through the effects: what a
   // controller reads; the log holds only the 100 Hz instants, which a step under 10 ms may miss
@@ -127,6 +142,7 @@ class DiggingSimulation {
   std::unique_ptr<AggregateCoupling> aggregate_;
   // the type-G coupled step (see the top of this file)
   void multiscale_step();
+  std::vector<AggregateSample> aggregate_log_;
   vehicle::SensorLog log_;
   vehicle::SensorSample sensors_;
   vehicle::EffectSet no_effects_;

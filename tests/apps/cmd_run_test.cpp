@@ -120,7 +120,8 @@ TEST(DiggingRunTest, Hd27AtD400WritesTheRunContractSnapshotsAndFigures) {
 }
 
 // a type-G level runs the same scenario end to end (~2 s): the run contract, the model named in
-// the summary, a loaded bucket, and the terrain's surface before and after for ParaView
+// the summary, a loaded bucket, the terrain's surface before and after for ParaView, and the
+// aggregate step by step
 TEST(DiggingRunTest, Hd27AtG400WritesTheRunContractAndTheTerrain) {
   const auto dir = std::filesystem::temp_directory_path() / "talus_run_hd27_g400";
   std::filesystem::remove_all(dir);
@@ -132,7 +133,7 @@ TEST(DiggingRunTest, Hd27AtG400WritesTheRunContractAndTheTerrain) {
   EXPECT_EQ(summary.at("model").get<std::string>(), "multiscale (type G)");
   EXPECT_GT(summary.at("loaded_mass_kg").get<double>(), 0.0);
   for (const char* file : {"timeseries.csv", "channels.png", "trajectory.png", "side.png",
-                           "terrain.vts", "terrain_start.vts", "scan.csv"})
+                           "terrain.vts", "terrain_start.vts", "scan.csv", "aggregate.csv"})
     EXPECT_GT(std::filesystem::file_size(dir / file), 100u) << file;
   std::ifstream vts(dir / "terrain.vts");
   const std::string text((std::istreambuf_iterator<char>(vts)), std::istreambuf_iterator<char>());
