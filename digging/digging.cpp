@@ -211,10 +211,16 @@ void DiggingSimulation::multiscale_step() {
     weight.tail<3>() += (p.position[k] - bucket.position).cross(f);
   }
   loader_->system().set_external_wrench(loader_->bucket_body(), weight);
-  // the machine's step with the aggregate, then the terrain's with the bucket as it moved
+  // the machine's step with the aggregate, then the terrain's with the bucket as it moved: from
+  // its pose at the step's start with the twist the machine solved (the terrain moves its tool by
+  // h times that twist, so both end the step where the machine's bucket is)
+  const KinematicBucket start = kinematic_bucket(*loader_);
   loader_->step(h);
   aggregate_->after_step(h);
-  terrain_->step(kinematic_bucket(*loader_));
+  KinematicBucket moving = kinematic_bucket(*loader_);
+  moving.position = start.position;
+  moving.orientation = start.orientation;
+  terrain_->step(moving);
   // what the machine felt of the zone this step
   AggregateSample a;
   a.t = (steps_done_ + 1) * h;

@@ -42,7 +42,8 @@ for f in sorted(root.glob("*/summary.json")):
 
 field = {"fb35": (3460, 209e3), "hd27": (2700, 127e3), "rd21": (2100, 112e3)}
 scenarios = ("fb35", "hd27", "rd21")
-levels = ("D400", "D200", "D100", "D50")
+# each family's levels, coarsest first: type D (particles) and type G (the multiscale terrain)
+levels = ("D400", "D200", "D100", "D50", "G400", "G200", "G100", "G50")
 
 
 def seed_runs(table, s, level):
@@ -83,8 +84,9 @@ for s in scenarios:
         if seeds:
             means[level] = (len(seeds), statistics.mean(r["loaded_mass_kg"] for r in seeds),
                             statistics.mean(r["work_J"] for r in seeds))
-    finest = [l for l in levels if l in means][-1:] or [None]
     for level, (n, m, w) in means.items():
+        # against the finest level run of the same family
+        finest = [l for l in levels if l in means and l[0] == level[0]][-1:]
         fm, fw = means[finest[0]][1:]
         rel = lambda a, b: "-" if level == finest[0] else f"{100 * (a / b - 1):+.0f} % vs {finest[0]}"
         print(f"| {s.upper()} | {level} | {n} | {m / 1e3:.2f} | {rel(m, fm)} | {w / 1e3:.0f} | {rel(w, fw)} |")

@@ -49,6 +49,11 @@ ToolWorld::ToolWorld(Device& dev, DemWorld& dem, std::vector<Tool> tools, const 
     if (!t.mobility.bottomRows<3>().isZero(0.0) || !t.mobility.topRightCorner<3, 3>().isZero(0.0))
       throw InputError(field + ": mobility turns the tool or moves it with torques; tools translate only (angular rows and "
                        "the top-right block must be zero)");
+    if (!t.mobility.isZero(0.0) && !t.omega.isZero(0.0))
+      throw InputError(field +
+                       ": a loaded tool (non-zero mobility) cannot have a prescribed omega; only a "
+                       "kinematic tool "
+                       "turns");
     sides_.push_back(std::make_unique<Side>(dev, t, embree));
   }
 }

@@ -12,8 +12,9 @@
 //     kinematic tool may turn: its orientation and angular velocity are prescribed too;
 //   - loaded (W = 1/M on the axes the tool may move along): a body of mass M, pulled by an
 //     external force (a platen's weight) and pushed by the particles within the same sweeps, so
-//     the coupling is as strong as the bucket's. Tools translate only: W's angular rows must be
-//     zero, so a tool never turns (a platen held level by its frame, a blade on rails).
+//     the coupling is as strong as the bucket's. A loaded tool translates only: W's angular rows
+//     must be zero and it has no prescribed turn (a platen held level by its frame, a blade on
+//     rails); only a kinematic tool turns.
 // Each tool is swept serially after the particle rows, one after another in index order, so a
 // step is deterministic like every other.
 #pragma once

@@ -59,10 +59,8 @@ bool ActiveZone::bounds_at(double s, double* z_lo, double* z_hi) const {
   *z_hi = INFINITY;
   if (s >= 0.0) {
     *z_lo = tip.z() + s * std::tan(failure_angle_deg * kDegree);
-    // a tool leaning over the soil ahead (alpha > 90 deg) caps the zone from above
-    if (rake_deg > 90.0) *z_hi = tip.z() + s * std::tan(M_PI - alpha);
   } else {
-    if (rake_deg >= 90.0) return false;  // behind a vertical or overhanging tool: no zone
+    if (rake_deg >= 90.0) return false;  // behind a vertical tool: no zone
     *z_lo = tip.z() - s * std::tan(alpha);
   }
   return true;
@@ -103,7 +101,9 @@ ActiveZone predict_active_zone(const VoxelTerrain& terrain, const ToolEdges& too
   // depth and speed in the excavation plane
   zone.depth = surface_under(terrain, surface, zone.tip) - zone.tip.z();
   const Vec3 v = tool.velocity;
-  zone.speed = std::hypot(v.dot(forward), v.z());
+  // only motion into the wedge counts: forward, or up through the soil over the tool; a tool
+  // backing out or pressing down fails nothing ahead of it
+  zone.speed = std::hypot(std::max(0.0, v.dot(forward)), std::max(0.0, v.z()));
   // the failure plane: none where the tool leans so far over the soil ahead that rake, tool
   // friction and internal friction reach 180 deg (the FEE has no wedge; the tool presses the soil
   // down rather than failing it ahead), and then no zone

@@ -23,8 +23,8 @@
 // surface behind the tip to where the failure plane leaves it ahead.
 //
 // Soil turns dynamic only while the tool moves through it: when the cutting edge is under the
-// surface and its speed in the excavation plane is above the activation speed (0.1 m/s, the
-// reference engine's documented threshold, SPEC §2.5).
+// surface and its speed into the wedge in the excavation plane (forward, or up) is above the
+// activation speed (0.1 m/s, the reference engine's documented threshold, SPEC §2.5).
 #pragma once
 #include <vector>
 
@@ -68,8 +68,9 @@ struct ActiveZone {
   double reach_behind = 0.0;       // -s where the tool plane leaves through the surface [m]
 
   // the zone's lower and upper bound at s from the tip, before the surface: above the failure
-  // plane ahead of the tip, above the tool plane behind it (alpha < 90 deg), under the tool plane
-  // ahead of it (alpha > 90 deg); false where s lies outside [-reach_behind, reach_ahead]
+  // plane ahead of the tip, above the tool plane behind it (alpha < 90 deg); false where s lies
+  // outside [-reach_behind, reach_ahead]. (forward is taken away from the top edge, so the tool
+  // plane stands vertical or leans back over the soil it lifts: alpha <= 90 deg)
   bool bounds_at(double s, double* z_lo, double* z_hi) const;
   // is the point in the zone, with the surface at `surface` [m] above it?
   bool contains(const Vec3& p, double surface) const;

@@ -86,7 +86,10 @@ void AggregateCoupling::update(const MultiscaleTerrain& terrain, const vehicle::
   const Particles particles = terrain.particles();
   const std::vector<int> members = zone_members(particles, zone);
   aggregate_ = aggregate_of(particles, terrain.particle_masses(), members);
-  const bool engaged = zone.active && aggregate_.particles > 0;
+  // engaged while the cutting edge is under the soil with particles in the zone, whatever its
+  // speed: a bucket that slows against the pile meets the soil all the more (the speed threshold
+  // decides only what turns dynamic)
+  const bool engaged = zone.depth > 0.0 && aggregate_.particles > 0;
   if (!engaged) depth_a_ = depth_b_ = 0.0;
   engaged_before_ = engaged_now_;
   engaged_now_ = engaged;

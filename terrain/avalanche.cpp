@@ -69,9 +69,11 @@ AvalancheStep avalanche(VoxelTerrain& terrain, double dt, const AvalancheOptions
     double left = taken[c].mass;
     for (size_t k = 0; k < out[c].to.size(); ++k) {
       const auto [to, t] = out[c].to[k];
-      const double m = k + 1 < out[c].to.size() ? taken[c].mass * (t / out[c].thickness) : left;
+      // (rounding can leave the last a hair below zero when its share is negligible)
+      const double m =
+          k + 1 < out[c].to.size() ? taken[c].mass * (t / out[c].thickness) : std::max(0.0, left);
       left -= m;
-      terrain.deposit(to % nx, to / nx, m, std::min(compaction, kMaxCompaction));
+      if (m > 0.0) terrain.deposit(to % nx, to / nx, m, std::min(compaction, kMaxCompaction));
     }
   }
   return step;

@@ -8,9 +8,10 @@
 // slope decays by a fraction f each step, f / 2 of it leaving the higher column and landing on the
 // lower one. The engine moves f = 0.1 of the excess per step at its usual 60 Hz; talus states the
 // same decay per second, k = −ln(1 − 0.1) / (1/60 s) = 6.3 /s, f = 1 − exp(−k Δt), so the surface
-// relaxes at the same speed at every level's timestep (G400's 50 ms: f = 0.27; G50's 5 ms: 0.031).
-// f is capped at 0.25: a column with four lower neighbours then gives at most half its excess over
-// the steepest, so no step overshoots into a reversed slope.
+// relaxes at the same speed at every level's timestep up to G200 (G200's 20 ms: f = 0.12; G50's
+// 5 ms: 0.031). f is capped at 0.25: a column with four lower neighbours then gives at most half
+// its excess over the steepest, so no step overshoots into a reversed slope; at G400's 50 ms the
+// cap holds (1 − exp(−6.3 × 0.05) = 0.27), so G400's surface relaxes at −ln 0.75 / 0.05 = 5.75 /s.
 //
 // The soil keeps its mass and compaction: it leaves the top of the higher column (terrain's
 // `take`) and is laid on the lower one at the compaction it had (`deposit`). All exchanges of a

@@ -90,6 +90,9 @@ MultiscaleTerrain::MultiscaleTerrain(Device& dev, const PileProfile& profile,
                                            VoxelTerrainOptions v;
                                            v.cell = level.diameter;
                                            v.front_margin = options.front_margin;
+                                           // room above the pile for the heap a bucket pushes up
+                                           // and the soil merged onto it
+                                           v.head_room = kSpawnHeight + 2.0 * level.diameter;
                                            return v;
                                          }())),
       bucket_mesh_(bucket),
@@ -190,6 +193,12 @@ int MultiscaleTerrain::merge(Particles& particles, const KinematicBucket& bucket
       rests = x.z() - r <= surface + level_.diameter && !last_.zone.contains(x, INFINITY);
     }
     if (rests) {
+      // a column with no room left keeps the particle (the grid's head room is the heap's)
+      const double volume = ledger_[k] * options_.soil.swell / voxels_.bank_density();
+      const double room = voxels_.nz() * std::pow(voxels_.cell(), 3) - voxels_.column_volume(i, j);
+      if (volume > room) rests = false;
+    }
+    if (rests) {
       voxels_.deposit(i, j, ledger_[k], 1.0 / options_.soil.swell);
       ++merged;
       continue;
@@ -215,13 +224,25 @@ int MultiscaleTerrain::spawn(Particles& particles, const std::vector<ExcavatedCo
   if (pool_ <= 0.0) return 0;
   const double d = level_.diameter;
   // the sites: the columns this step excavated, or, when it excavated none, the last ones that
-  // were (the pool's soil came from there), each from its floor up to kSpawnHeight
+  // were (the pool's soil came from there), each from its floor up to kSpawnHeight. The floor is
+  // the highest of the column and its four neighbours: a particle (up to 0.55 D across its
+  // column's centre) would otherwise start inside a taller neighbour's box at a cut face
   if (!columns.empty()) sites_ = columns;
+  const auto floor_of = [&](int i, int j) {
+    double f = voxels_.surface_height(i, j);
+    const int di[4] = {-1, 1, 0, 0}, dj[4] = {0, 0, -1, 1};
+    for (int n = 0; n < 4; ++n) {
+      const int a = i + di[n], b = j + dj[n];
+      if (a >= 0 && a < voxels_.nx() && b >= 0 && b < voxels_.ny())
+        f = std::max(f, voxels_.surface_height(a, b));
+    }
+    return f;
+  };
   Particles slots;
   const int layers = std::max(1, static_cast<int>(kSpawnHeight / d));
   for (int k = 0; k < layers; ++k)
     for (const ExcavatedColumn& c : sites_) {
-      const double floor = voxels_.surface_height(c.i, c.j);
+      const double floor = floor_of(c.i, c.j);
       slots.add(Vec3(voxels_.column_x(c.i), voxels_.column_y(c.j),
                      floor + 0.5 * d * (1.0 + kSizeSpread) + k * d),
                 0.5 * d * (1.0 + kSizeSpread), options_.particle_material.density);

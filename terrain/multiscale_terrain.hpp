@@ -11,7 +11,8 @@
 //      the last failure plane), and, while the bucket cuts, its solid soil leaves the voxels as
 //      dynamic mass into a pool;
 //   2. the pool becomes particles of the level's size (D ± 10 %, the gravel's grain density) over
-//      the columns the soil left, layer by layer from each one's new floor up (2 m at most: the
+//      the columns the soil left, layer by layer from each one's new floor (or a taller
+//      neighbour's, so no particle starts inside the voxel surface) up (2 m at most: the
 //      soil a bucket pushes heaps up in front of it), wherever a particle fits without touching
 //      another one or the bucket; what does not fit yet waits in the pool;
 //   3. the particles take one DEM step with the bucket as a kinematic tool (solvers/tool_world),

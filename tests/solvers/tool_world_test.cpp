@@ -110,6 +110,12 @@ TEST(ToolWorld, AToolThatWouldTurnIsRefused) {
   add_box(t.mesh, Vec3::Zero(), Vec3(kD, kD, kD));
   t.mobility(3, 3) = 1.0;
   EXPECT_THROW(ToolWorld(dev, *b.dem, {t}), InputError);
+  // nor may a loaded tool be turned by hand
+  Tool loaded;
+  add_box(loaded.mesh, Vec3::Zero(), Vec3(kD, kD, kD));
+  loaded.mobility(2, 2) = 0.01;
+  loaded.omega = Vec3(0.0, 0.0, 1.0);
+  EXPECT_THROW(ToolWorld(dev, *b.dem, {loaded}), InputError);
 }
 
 // a kinematic paddle turning about the vertical through the bed: its orientation follows the
