@@ -65,7 +65,7 @@ struct Particles {
   void add(const Vec3& x, double r, double density);
   // mass of particle i [kg] (0 for fixed ones)
   double mass(size_t i) const { return inv_mass[i] > 0 ? 1.0 / inv_mass[i] : 0.0; }
-  // the same particles in the order `order` (a permutation of 0..size-1)
+  // the particles at the indices `order`, in that order (a permutation of 0..size-1, or a subset)
   Particles permuted(const std::vector<size_t>& order) const;
 };
 

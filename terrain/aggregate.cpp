@@ -18,6 +18,22 @@ std::vector<Vec3> patch(const ToolEdges& edges, const Vec3& u, double length) {
   return {mid + 0.1 * length * u, mid + 0.9 * length * u};
 }
 
+// an interface placed for this step: its patch, normal, the depth it is pressed in (as its gap),
+// its stiffness [N/m] and damping time [s]; an interface not engaged carries nothing
+void place(vehicle::PlaneContact& contact, bool engaged, std::vector<Vec3> points,
+           const Vec3& normal, double depth, double stiffness, double damping_time) {
+  vehicle::PlaneContactGeometry g;
+  g.active = engaged;
+  g.points = std::move(points);
+  g.normal = normal;
+  g.gap = -depth;
+  vehicle::PlaneContactParameters p = contact.parameters();
+  p.stiffness = stiffness;
+  p.damping_time = damping_time;
+  contact.set_parameters(p);
+  contact.set_geometry(g);
+}
+
 }  // namespace
 
 Aggregate aggregate_of(const Particles& p, const std::vector<double>& masses,
@@ -130,32 +146,16 @@ void AggregateCoupling::update(const MultiscaleTerrain& terrain, const vehicle::
   for (int k : members)
     reach = std::max(reach, (particles.position[k] - zone.tip).dot(u_tool) + particles.radius[k]);
   const double length_a = std::clamp(reach, h, top.norm());
-  vehicle::PlaneContactGeometry ga;
-  ga.active = engaged;
-  ga.points = patch(edges, u_tool, length_a);
-  ga.normal = n_a;
-  ga.gap = -depth_a_;
-  vehicle::PlaneContactParameters pa = a_->parameters();
-  pa.stiffness = e_m * zone.width * length_a / h;
-  pa.damping_time = parameters_.damping_steps * dt;
-  a_->set_parameters(pa);
-  a_->set_geometry(ga);
+  place(*a_, engaged, patch(edges, u_tool, length_a), n_a, depth_a_,
+        e_m * zone.width * length_a / h, parameters_.damping_steps * dt);
 
   // interface B on the failure plane, from the cutting edge to where it leaves the surface
   const double beta = zone.failure_angle_deg * kDegree;
   const Vec3 u_fail = std::cos(beta) * zone.forward + std::sin(beta) * Vec3::UnitZ();
   const Vec3 n_b = -std::sin(beta) * zone.forward + std::cos(beta) * Vec3::UnitZ();
   const double length_b = std::max(zone.reach_ahead / std::max(std::cos(beta), 1e-3), h);
-  vehicle::PlaneContactGeometry gb;
-  gb.active = engaged;
-  gb.points = patch(edges, u_fail, length_b);
-  gb.normal = n_b;
-  gb.gap = -depth_b_;
-  vehicle::PlaneContactParameters pb = b_->parameters();
-  pb.stiffness = e_m * zone.width * length_b / h;
-  pb.damping_time = parameters_.damping_steps * dt;
-  b_->set_parameters(pb);
-  b_->set_geometry(gb);
+  place(*b_, engaged, patch(edges, u_fail, length_b), n_b, depth_b_,
+        e_m * zone.width * length_b / h, parameters_.damping_steps * dt);
 
   // constraint C: the cutting edge along the bucket's cutting direction (its profile frame's x),
   // resisted while it is under the soil's surface

@@ -21,6 +21,25 @@ constexpr double kDegree = M_PI / 180.0;
 // ever cuts; the bed grows with the depth squared, so a typo must not start a huge run
 constexpr double kMaxDepth = 2.0;
 
+// the steady part's means (from result.steady_from on): the blade's force, its spread over the
+// windows, and the equation's force
+void steady_means(CuttingResult& result) {
+  double mean = 0.0, square = 0.0, fee = 0.0;
+  int n = 0;
+  for (const CuttingSample& x : result.series)
+    if (x.travel >= result.steady_from) {
+      mean += x.force_x;
+      square += x.force_x * x.force_x;
+      fee += x.fee_force;
+      ++n;
+    }
+  if (n == 0) return;
+  mean /= n;
+  result.force = mean;
+  result.force_spread = std::sqrt(std::max(0.0, square / n - mean * mean));
+  result.fee_force = fee / n;
+}
+
 }  // namespace
 
 void check_cutting_options(const CuttingOptions& o) {
@@ -121,21 +140,7 @@ CuttingResult run_cutting_test(Device& dev, const Material& material, const Cutt
 
   // the steady part: after the first wedge has formed
   result.steady_from = std::min(wedge, 0.5 * o.travel);
-  double mean = 0.0, square = 0.0, fee = 0.0;
-  int n = 0;
-  for (const CuttingSample& x : result.series)
-    if (x.travel >= result.steady_from) {
-      mean += x.force_x;
-      square += x.force_x * x.force_x;
-      fee += x.fee_force;
-      ++n;
-    }
-  if (n > 0) {
-    mean /= n;
-    result.force = mean;
-    result.force_spread = std::sqrt(std::max(0.0, square / n - mean * mean));
-    result.fee_force = fee / n;
-  }
+  steady_means(result);
   result.fee_force_level = fee_force(result.bed_density, o.depth, width, 90.0, tool_friction_deg,
                                      o.internal_friction_deg, 0.0, &result.fee_failure_angle_deg);
   result.sim_time = world.time();
@@ -258,21 +263,7 @@ CuttingResult run_multiscale_cutting_test(Device& dev, const FidelityPreset& lev
 
   // the steady part: after the first wedge has formed
   result.steady_from = std::min(wedge, 0.5 * o.travel);
-  double mean = 0.0, square = 0.0, fee = 0.0;
-  int n = 0;
-  for (const CuttingSample& x : result.series)
-    if (x.travel >= result.steady_from) {
-      mean += x.force_x;
-      square += x.force_x * x.force_x;
-      fee += x.fee_force;
-      ++n;
-    }
-  if (n > 0) {
-    mean /= n;
-    result.force = mean;
-    result.force_spread = std::sqrt(std::max(0.0, square / n - mean * mean));
-    result.fee_force = fee / n;
-  }
+  steady_means(result);
   result.fee_force_level = fee_force(kFieldBulkDensity, o.depth, width, 90.0, tool_friction_deg,
                                      phi, 0.0, &result.fee_failure_angle_deg);
   result.particles = most;

@@ -178,7 +178,7 @@ int MultiscaleTerrain::merge(Particles& particles, const KinematicBucket& bucket
   Aabb keep = bucket_scene_.world_bounds(pose_of(bucket));
   keep.lo -= Vec3::Constant(options_.no_merge_margin);
   keep.hi += Vec3::Constant(options_.no_merge_margin);
-  Particles kept;
+  std::vector<size_t> kept;  // the particles that stay, in order
   std::vector<double> kept_mass;
   int merged = 0;
   for (size_t k = 0; k < particles.size(); ++k) {
@@ -203,17 +203,11 @@ int MultiscaleTerrain::merge(Particles& particles, const KinematicBucket& bucket
       ++merged;
       continue;
     }
-    kept.position.push_back(particles.position[k]);
-    kept.velocity.push_back(particles.velocity[k]);
-    kept.omega.push_back(particles.omega[k]);
-    kept.rotation.push_back(particles.rotation[k]);
-    kept.radius.push_back(particles.radius[k]);
-    kept.inv_mass.push_back(particles.inv_mass[k]);
-    kept.inv_inertia.push_back(particles.inv_inertia[k]);
+    kept.push_back(k);
     kept_mass.push_back(ledger_[k]);
   }
   if (merged > 0) {
-    particles = std::move(kept);
+    particles = particles.permuted(kept);
     ledger_ = std::move(kept_mass);
   }
   return merged;
