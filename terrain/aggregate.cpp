@@ -115,7 +115,14 @@ void AggregateCoupling::update(const MultiscaleTerrain& terrain, const vehicle::
   body.orientation = Eigen::Quaterniond::Identity();
   if (aggregate_.particles > 0) {
     body.mass = aggregate_.mass;
+    // at least the inertia of a solid block of its mass as wide as the zone and a cell deep: the
+    // aggregate stands for the wedge, and a zone of one or two particles would otherwise be a
+    // body with almost no inertia, on which the interfaces' four normal rows left the vehicle's
+    // direct solver cycling (a force-feedback cycle at G400)
+    const double h_cell = terrain.voxels().cell();
+    const double block = aggregate_.mass * (zone.width * zone.width + h_cell * h_cell) / 12.0;
     body.inertia = aggregate_.inertia;
+    for (int k = 0; k < 3; ++k) body.inertia(k, k) = std::max(body.inertia(k, k), block);
     body.position = aggregate_.centre;
     if (engaged_before_) {
       // engaged since the last step: the motion the machine's solve gave it (see the header)
