@@ -27,7 +27,6 @@
 #include "io/render.hpp"
 #include "sim2real/replay.hpp"
 #include "sim2real/timeseries.hpp"
-#include "terrain/voxel_terrain.hpp"
 #include "vehicle/data_file.hpp"
 #include "vehicle/effect.hpp"
 #include "vehicle/effect_plugin.hpp"
@@ -322,13 +321,7 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
   }
   const double pile_wall =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  // the laser scan of the pile's surface: the settled particles' (type D) or the voxels' (type G)
-  const PileScan scan =
-      is_multiscale(preset)
-          ? scan_surface(
-                VoxelTerrain::from_profile(placed, VoxelTerrainOptions{preset.diameter}).surface(),
-                placed)
-          : scan_pile(pile.particles, placed, preset.diameter);
+  const PileScan scan = scan_scenario_pile(pile, placed, preset);
   write_file_atomically((dir / "scan.csv").string(), scan_csv(scan));
 
   // the run, with snapshots at the interval and progress notes; the steps alone are timed for the

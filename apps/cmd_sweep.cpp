@@ -127,7 +127,7 @@ LevelPile build_level_pile(Device& dev, const SweepOptions& o, const FidelityPre
   Progress progress("pile " + preset.name, 1.5 * options.pile.max_time, verbose);
   lp.pile = build_scenario_pile(dev, lp.scenario, placed, preset, options, &progress);
   progress.finish(std::to_string(lp.pile.particles.size()) + " particles");
-  for (const auto& q : scan_pile(lp.pile.particles, placed, preset.diameter).points)
+  for (const auto& q : scan_scenario_pile(lp.pile, placed, preset).points)
     lp.surface.emplace_back(q.x(), q.y());
   if (lp.surface.empty()) throw Error("the pile's laser scan found no surface; the cycle cannot find the pile");
   // hits come in ray order; the surface is a function of x

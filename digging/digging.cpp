@@ -54,6 +54,14 @@ PileBuild build_scenario_pile(Device& dev, const vehicle::Scenario& scenario, co
   return pile;
 }
 
+PileScan scan_scenario_pile(const PileBuild& pile, const PileProfile& placed,
+                            const FidelityPreset& preset) {
+  if (is_multiscale(preset))
+    return scan_surface(
+        VoxelTerrain::from_profile(placed, VoxelTerrainOptions{preset.diameter}).surface(), placed);
+  return scan_pile(pile.particles, placed, preset.diameter);
+}
+
 DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scenario, const FidelityPreset& preset,
                                      const PileBuild& pile, const DiggingOptions& options,
                                      vehicle::EffectSet* effects)

@@ -73,6 +73,11 @@ struct AggregateSample {
   double depth_a = 0.0, depth_b = 0.0;  // the interfaces' depths [m]
 };
 
+// the laser scan of a scenario's pile before loading, as the field tests measured it: the settled
+// particles' surface (type D) or the voxels' of the placed profile (type G)
+PileScan scan_scenario_pile(const PileBuild& pile, const PileProfile& placed,
+                            const FidelityPreset& preset);
+
 class DiggingSimulation {
  public:
   // the scenario must have a pile; `pile` from build_scenario_pile (or a saved one). With

@@ -126,7 +126,8 @@ Run Replay::simulate(vehicle::EffectSet& effects) {
       Progress progress("pile " + preset.name, 1.5 * digging.pile.max_time, options_.progress);
       pile_ = std::make_unique<PileBuild>(build_scenario_pile(*device_, scenario_, placed, preset, digging, &progress));
       progress.finish(std::to_string(pile_->particles.size()) + " particles");
-      scan_rms_ = scan_difference(measured_.meta.pile_scan, scan_pile(pile_->particles, placed, preset.diameter).points);
+      scan_rms_ = scan_difference(measured_.meta.pile_scan,
+                                  scan_scenario_pile(*pile_, placed, preset).points);
     }
     DiggingSimulation sim(*device_, scenario_, preset, *pile_, digging, &effects);
     sim.run();
