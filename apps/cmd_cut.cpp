@@ -2,6 +2,8 @@
 // vertical blade pushed at constant depth through a level bed, its mean horizontal force against
 // the fundamental earthmoving equation. Writes DIR/summary.json (force_N, fee_force_N, the force
 // series), DIR/cut.csv, DIR/cut.png, DIR/particles.csv (x,y,z,r,vx,vy,vz), particles.vtp, side.png.
+// At a type-G level the bed is the multiscale terrain's voxels and the blade meets the soil through
+// the aggregate (terrain/cutting_test's run_multiscale_cutting_test); the particles are the zone's.
 #include <chrono>
 #include <iostream>
 #include <sstream>
@@ -30,7 +32,12 @@ void add_cut_command(CLI::App& app, const std::string& command_line) {
   auto opt = std::make_shared<Options>();
   auto* cmd = app.add_subcommand("cut", "quasi-static cutting of a level bed by a flat blade, against the "
                                         "fundamental earthmoving equation");
-  cmd->add_option("--level", opt->level, "fidelity level whose D, timestep and sweeps the test uses")->capture_default_str();
+  cmd->add_option("--level", opt->level,
+                  "fidelity level whose D, timestep and sweeps the test uses: D400 ... D50 cut "
+                  "particles, G400 ... G50 "
+                  "the multiscale terrain (the equation then takes phi + psi = 40 deg, and --phi "
+                  "and --rolling do not apply)")
+      ->capture_default_str();
   cmd->add_option("--depth", opt->cut.depth, "cutting depth below the bed's mean surface [m]")
       ->check(finite_number())
       ->check(positive_number())
@@ -55,7 +62,9 @@ void add_cut_command(CLI::App& app, const std::string& command_line) {
   cmd->add_option("--seed", opt->cut.seed, "random seed of the bed")->capture_default_str();
   cmd->add_flag("--quiet", opt->quiet, "no progress on stderr");
   cmd->callback([opt, command_line] {
-    const FidelityPreset& level = fidelity_preset(opt->level);
+    // a type-D level cuts a bed of particles, a type-G one the voxels through the aggregate
+    const FidelityPreset& level = level_preset(opt->level);
+    const bool multiscale = is_multiscale(level);
     const CuttingOptions c = at_level(level, opt->cut);
     check_cutting_options(c);  // bad input leaves no output folder behind
     start_output_folder(opt->out);
@@ -63,7 +72,9 @@ void add_cut_command(CLI::App& app, const std::string& command_line) {
     const auto t0 = std::chrono::steady_clock::now();
     Device dev;
     Progress progress("cut " + level.name, 0.0, !opt->quiet);
-    const CuttingResult r = run_cutting_test(dev, opt->material, c, &progress);
+    const BulkSoil soil;
+    const CuttingResult r = multiscale ? run_multiscale_cutting_test(dev, level, c, soil, &progress)
+                                       : run_cutting_test(dev, opt->material, c, &progress);
     progress.finish();
 
     std::ostringstream csv;
@@ -88,7 +99,7 @@ void add_cut_command(CLI::App& app, const std::string& command_line) {
     force.label = "blade (talus " + level.name + ")";
     fee.colour = Rgb{0, 0, 0};
     fee.style = LineStyle::dashed;
-    fee.label = "equation, measured heap";
+    fee.label = multiscale ? "equation, the aggregate's load" : "equation, measured heap";
     Figure fig;
     fig.x_label = "blade travel [m]";
     char title[160];
@@ -99,31 +110,39 @@ void add_cut_command(CLI::App& app, const std::string& command_line) {
     p.shaded.push_back(Range{0.0, r.steady_from});
     fig.write_png(opt->out + "/cut.png", 900, 500);
 
-    nlohmann::json j = {{"level", level.name},
-                        {"diameter_m", level.diameter},
-                        {"dt_s", level.dt},
-                        {"iterations", level.iterations},
-                        {"depth_m", c.depth},
-                        {"width_m", r.width},
-                        {"speed_m_s", c.speed},
-                        {"force_N", r.force},
-                        {"force_spread_N", r.force_spread},
-                        {"fee_force_N", r.fee_force},
-                        {"fee_force_level_bed_N", r.fee_force_level},
-                        {"force_over_fee", r.fee_force > 0.0 ? r.force / r.fee_force : 0.0},
-                        {"fee_failure_angle_deg", r.fee_failure_angle_deg},
-                        {"internal_friction_deg", c.internal_friction_deg},
-                        {"blade_friction", c.blade_friction},
-                        {"bed_density", r.bed_density},
-                        {"steady_from_m", r.steady_from},
-                        {"rolling_resistance", opt->material.rolling},
-                        {"seed", c.seed},
-                        {"particles", r.particles},
-                        {"sim_time_s", r.sim_time},
-                        {"wall_s", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()},
-                        {"device", dev.description()},
-                        {"series", {{"travel_m", travel}, {"force_x_N", fx}, {"force_z_N", fz},
-                                    {"surcharge_m", heap}, {"fee_force_N", fe}}}};
+    nlohmann::json j = {
+        {"level", level.name},
+        {"diameter_m", level.diameter},
+        {"dt_s", level.dt},
+        {"iterations", level.iterations},
+        {"depth_m", c.depth},
+        {"width_m", r.width},
+        {"speed_m_s", c.speed},
+        {"force_N", r.force},
+        {"force_spread_N", r.force_spread},
+        {"fee_force_N", r.fee_force},
+        {"fee_force_level_bed_N", r.fee_force_level},
+        {"force_over_fee", r.fee_force > 0.0 ? r.force / r.fee_force : 0.0},
+        {"fee_failure_angle_deg", r.fee_failure_angle_deg},
+        {"model", multiscale ? "multiscale (type G)" : "particles (type D)"},
+        {"internal_friction_deg",
+         multiscale ? soil.effective_friction_deg() : c.internal_friction_deg},
+        {"edge_force_N", r.edge_force},
+        {"blade_friction", c.blade_friction},
+        {"bed_density", r.bed_density},
+        {"steady_from_m", r.steady_from},
+        {"rolling_resistance", opt->material.rolling},
+        {"seed", c.seed},
+        {"particles", r.particles},
+        {"sim_time_s", r.sim_time},
+        {"wall_s", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()},
+        {"device", dev.description()},
+        {"series",
+         {{"travel_m", travel},
+          {"force_x_N", fx},
+          {"force_z_N", fz},
+          {"surcharge_m", heap},
+          {"fee_force_N", fe}}}};
     add_provenance(j, command_line);
     write_particles_and_summary(opt->out, r.final_state, j, opt->json);
   });

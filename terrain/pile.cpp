@@ -145,8 +145,8 @@ const FidelityPreset& fidelity_preset(const std::string& name) {
     throw InputError(
         "fidelity level '" + name +
         "' is the multiscale (type G) terrain: it runs scenarios (talus run, sweep, synth, "
-        "diagnose) but has no particle pile, soil test or DEM benchmark of its own "
-        "(docs/multiscale.md). Here use a type-D level:" +
+        "diagnose) and the cutting test (talus cut), but has no particle pile, shear, collapse or "
+        "heap test, or DEM benchmark of its own (docs/multiscale.md). Here use a type-D level:" +
         known);
   throw InputError("unknown fidelity level '" + name + "'; known:" + known);
 }

@@ -58,7 +58,7 @@ const std::vector<FidelityPreset>& fidelity_presets();
 // benchmarks)
 const FidelityPreset& fidelity_preset(const std::string& name);
 // a level of either family, for what runs a scenario (talus run, sweep, synth, diagnose, the
-// facade); throws InputError listing both families' names
+// facade) or the cutting test (talus cut); throws InputError listing both families' names
 const FidelityPreset& level_preset(const std::string& name);
 // the multiscale levels of paper Table 3 (type G, issue 14): D is the voxel cell and the size of
 // the active zone's particles, N_p the most particles the paper's zone held (its "≲")

@@ -62,6 +62,20 @@ TEST(SoilCommand, CutWritesForceEquationAndSeries) {
   EXPECT_EQ(first_line(dir / "particles.csv"), "x,y,z,r,vx,vy,vz");
 }
 
+// at a type-G level the same command cuts the voxels through the aggregate (~1 s): the model is
+// named, the equation takes phi + psi = 40 deg, the edge's resistance is reported apart
+TEST(SoilCommand, CutAtAMultiscaleLevelNamesItsModel) {
+  const auto dir = std::filesystem::temp_directory_path() / "talus_cut_cli_g400";
+  std::filesystem::remove_all(dir);
+  ASSERT_EQ(run("cut --level G400 --depth 0.6 --quiet --out " + dir.string()), 0);
+  const auto j = summary(dir);
+  EXPECT_EQ(j["model"].get<std::string>(), "multiscale (type G)");
+  EXPECT_DOUBLE_EQ(j["internal_friction_deg"].get<double>(), 40.0);
+  EXPECT_GT(j["edge_force_N"].get<double>(), 0.0);
+  EXPECT_NEAR(j["force_over_fee"].get<double>(), 1.0, 0.2);
+  EXPECT_TRUE(std::filesystem::exists(dir / "cut.png"));
+}
+
 TEST(SoilCommand, BadInputIsRefusedWithExitCode2) {
   EXPECT_EQ(run("soil --test triaxial --level D400 --out /tmp/talus_unused"), 2);
   EXPECT_EQ(run("soil --test shear --level D75 --out /tmp/talus_unused"), 2);
