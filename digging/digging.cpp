@@ -213,7 +213,7 @@ void DiggingSimulation::multiscale_step() {
   const vehicle::RigidBody& bucket = loader_->bodies().at(loader_->bucket_body());
   Vec6 weight = Vec6::Zero();
   for (int k : particles_in_bucket(p, loader_->bucket_mesh(), bucket_pose(*loader_))) {
-    if (zone.depth > 0.0 && zone.contains(p.position[k], INFINITY)) continue;
+    if (zone.depth > 0.0 && zone.contains(p.position[k])) continue;
     const Vec3 f = mass[k] * loader_->system().gravity();
     weight.head<3>() += f;
     weight.tail<3>() += (p.position[k] - bucket.position).cross(f);

@@ -53,10 +53,9 @@ double exit_along(const VoxelTerrain& terrain, const std::vector<double>* surfac
 
 }  // namespace
 
-bool ActiveZone::bounds_at(double s, double* z_lo, double* z_hi) const {
+bool ActiveZone::floor_at(double s, double* z_lo) const {
   if (s < -reach_behind || s > reach_ahead) return false;
   const double alpha = rake_deg * kDegree;
-  *z_hi = INFINITY;
   if (s >= 0.0) {
     *z_lo = tip.z() + s * std::tan(failure_angle_deg * kDegree);
   } else {
@@ -66,12 +65,11 @@ bool ActiveZone::bounds_at(double s, double* z_lo, double* z_hi) const {
   return true;
 }
 
-bool ActiveZone::contains(const Vec3& p, double surface) const {
+bool ActiveZone::contains(const Vec3& p) const {
   const Vec3 r = p - tip;
   if (std::abs(r.dot(along)) > 0.5 * width) return false;
-  double lo = 0.0, hi = 0.0;
-  if (!bounds_at(r.dot(forward), &lo, &hi)) return false;
-  return p.z() >= lo && p.z() <= std::min(hi, surface);
+  double lo = 0.0;
+  return floor_at(r.dot(forward), &lo) && p.z() >= lo;
 }
 
 ActiveZone predict_active_zone(const VoxelTerrain& terrain, const ToolEdges& tool,
@@ -126,10 +124,10 @@ bool zone_interval(const ActiveZone& zone, const VoxelTerrain& terrain, int i, i
   const Vec3 c(terrain.column_x(i), terrain.column_y(j), zone.tip.z());
   const Vec3 r = c - zone.tip;
   if (std::abs(r.dot(zone.along)) > 0.5 * zone.width) return false;
-  double lo = 0.0, hi = 0.0;
-  if (!zone.bounds_at(r.dot(zone.forward), &lo, &hi)) return false;
+  double lo = 0.0;
+  if (!zone.floor_at(r.dot(zone.forward), &lo)) return false;
   *z_lo = std::max(lo, terrain.z0());
-  *z_hi = std::min(hi, terrain.surface_height(i, j));
+  *z_hi = terrain.surface_height(i, j);
   return *z_hi > *z_lo;
 }
 

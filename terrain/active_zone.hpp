@@ -67,13 +67,14 @@ struct ActiveZone {
   double reach_ahead = 0.0;        // s where the failure plane leaves through the surface [m]
   double reach_behind = 0.0;       // -s where the tool plane leaves through the surface [m]
 
-  // the zone's lower and upper bound at s from the tip, before the surface: above the failure
-  // plane ahead of the tip, above the tool plane behind it (alpha < 90 deg); false where s lies
+  // the zone's floor at s from the tip (the zone is the soil above it, up to the surface): the
+  // failure plane ahead of the tip, the tool plane behind it (alpha < 90 deg); false where s lies
   // outside [-reach_behind, reach_ahead]. (forward is taken away from the top edge, so the tool
   // plane stands vertical or leans back over the soil it lifts: alpha <= 90 deg)
-  bool bounds_at(double s, double* z_lo, double* z_hi) const;
-  // is the point in the zone, with the surface at `surface` [m] above it?
-  bool contains(const Vec3& p, double surface) const;
+  bool floor_at(double s, double* z_lo) const;
+  // is the point within the zone's width and reach and above its floor? (the surface is not
+  // asked: the zone's particles stand above the voxels' surface)
+  bool contains(const Vec3& p) const;
 };
 
 // predicts the zone from the tool's edges on the soil's surface: the voxels' columns, or `surface`

@@ -67,7 +67,7 @@ std::vector<int> zone_members(const Particles& particles, const ActiveZone& zone
   std::vector<int> members;
   if (zone.depth <= 0.0) return members;
   for (size_t k = 0; k < particles.size(); ++k)
-    if (zone.contains(particles.position[k], INFINITY)) members.push_back(static_cast<int>(k));
+    if (zone.contains(particles.position[k])) members.push_back(static_cast<int>(k));
   return members;
 }
 

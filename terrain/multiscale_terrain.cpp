@@ -162,7 +162,6 @@ void MultiscaleTerrain::step(const KinematicBucket& bucket) {
   tool.omega = bucket.omega;
   if (!ledger_.empty()) {
     const std::vector<StaticGeom> geoms = geometry(particles);
-    last_.terrain_boxes = static_cast<int>(geoms.size() - pile_container(profile_).size());
     dem_->set_geoms(geoms);
     tools_->step();
     last_.bucket_wrench = tools_->load(0).wrench;
@@ -190,7 +189,7 @@ int MultiscaleTerrain::merge(Particles& particles, const KinematicBucket& bucket
     if (rests) {
       const double surface = voxels_.surface_height(i, j);
       // on the surface or on one layer of grains above it, and not in the zone's soil
-      rests = x.z() - r <= surface + level_.diameter && !last_.zone.contains(x, INFINITY);
+      rests = x.z() - r <= surface + level_.diameter && !last_.zone.contains(x);
     }
     if (rests) {
       // a column with no room left keeps the particle (the grid's head room is the heap's)

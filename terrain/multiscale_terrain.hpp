@@ -85,7 +85,6 @@ struct MultiscaleStep {
   int spawned = 0;          // particles made from the pool
   int merged = 0;           // particles merged back into the voxels
   double avalanched = 0.0;  // soil that slid [kg]
-  int terrain_boxes = 0;    // voxel columns the particles stood on as boxes
   Vec6 bucket_wrench =
       Vec6::Zero();  // the particles' mean wrench on the bucket about its frame's origin
 };

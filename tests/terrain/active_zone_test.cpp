@@ -81,8 +81,8 @@ TEST(ActiveZone, TheWedgeTurnsWithTheTool) {
     EXPECT_NEAR(zone_soil_mass(zx, t), zone_soil_mass(zy, t), 1e-9 * zone_soil_mass(zx, t)) << rake;
     if (rake == 90.0) {
       EXPECT_EQ(zx.reach_behind, 0.0);
-      double lo = 0.0, hi = 0.0;
-      EXPECT_FALSE(zx.bounds_at(-0.05, &lo, &hi));
+      double lo = 0.0;
+      EXPECT_FALSE(zx.floor_at(-0.05, &lo));
     }
   }
 }
