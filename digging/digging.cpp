@@ -207,7 +207,7 @@ void DiggingSimulation::multiscale_step() {
   aggregate_->update(*terrain_, loader_->bucket_mesh(), kinematic_bucket(*loader_), h);
   // the soil in the bucket and outside the zone weighs on the bucket (its weight, not its
   // inertia: docs/multiscale.md)
-  const Particles p = terrain_->particles();
+  const Particles& p = terrain_->particles();
   const std::vector<double>& mass = terrain_->particle_masses();
   const ActiveZone& zone = terrain_->last_step().zone;
   const vehicle::RigidBody& bucket = loader_->bodies().at(loader_->bucket_body());

@@ -99,7 +99,7 @@ void AggregateCoupling::update(const MultiscaleTerrain& terrain, const vehicle::
   // its failure plane), and the particles in it
   const ToolEdges edges = bucket_edges(mesh, bucket);
   const ActiveZone& zone = terrain.last_step().zone;
-  const Particles particles = terrain.particles();
+  const Particles& particles = terrain.particles();
   const std::vector<int> members = zone_members(particles, zone);
   aggregate_ = aggregate_of(particles, terrain.particle_masses(), members);
   // engaged while the cutting edge is under the soil with particles in the zone, whatever its

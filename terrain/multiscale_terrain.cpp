@@ -119,11 +119,6 @@ MultiscaleTerrain::MultiscaleTerrain(Device& dev, const PileProfile& profile,
 
 MultiscaleTerrain::~MultiscaleTerrain() = default;
 
-Particles MultiscaleTerrain::particles() const {
-  if (ledger_.empty()) return Particles{};
-  return dem_->particles();
-}
-
 MassBalance MultiscaleTerrain::mass_balance() const {
   MassBalance m;
   m.solid = voxels_.total_mass();
@@ -137,7 +132,7 @@ void MultiscaleTerrain::step(const KinematicBucket& bucket) {
   const BucketPose pose = pose_of(bucket);
   // 1. the zone on the soil's surface (the voxels, raised to the tops of the particles heaped on
   // them), and its solid soil into the pool
-  Particles particles = this->particles();
+  Particles particles = state_;
   const std::vector<double> surface = soil_surface(particles);
   last_.zone =
       predict_active_zone(voxels_, bucket_edges(bucket_mesh_, bucket), options_.soil, &surface);
@@ -166,6 +161,8 @@ void MultiscaleTerrain::step(const KinematicBucket& bucket) {
     tools_->step();
     last_.bucket_wrench = tools_->load(0).wrench;
   }
+  // the particles as the step left them, downloaded once for everyone who reads them
+  state_ = ledger_.empty() ? Particles{} : dem_->particles();
 
   // 5. the surface relaxes
   last_.avalanched = avalanche(voxels_, level_.dt, options_.avalanche).moved_mass;

@@ -105,8 +105,9 @@ class MultiscaleTerrain {
   void step(const KinematicBucket& bucket);
 
   const VoxelTerrain& voxels() const { return voxels_; }
-  // the particles as they are on the device, and each one's mass from the ledger [kg]
-  Particles particles() const;
+  // the particles as the last step left them on the device (downloaded once per step), and each
+  // one's mass from the ledger [kg]
+  const Particles& particles() const { return state_; }
   const std::vector<double>& particle_masses() const { return ledger_; }
   MassBalance mass_balance() const;
   const MultiscaleStep& last_step() const { return last_; }
@@ -133,6 +134,7 @@ class MultiscaleTerrain {
   std::unique_ptr<DemWorld> dem_;
   std::unique_ptr<ToolWorld> tools_;
   std::vector<double> ledger_;  // mass of each particle on the device, in its order [kg]
+  Particles state_;             // the device's particles after the last step (host copy)
   double pool_ = 0.0;           // dynamic soil not yet made into particles [kg]
   std::vector<ExcavatedColumn>
       sites_;              // where the pool's soil came from: the last excavation's columns
