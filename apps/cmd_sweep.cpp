@@ -112,27 +112,13 @@ std::vector<CycleResult> read_results_csv(const std::string& path) {
 }
 
 // the pile for a level: built once per process, scanned, placed `approach` in front of the bucket
-struct LevelPile {
-  vehicle::Scenario scenario;
-  PileBuild pile;
-  std::vector<std::pair<double, double>> surface;
-};
-
-LevelPile build_level_pile(Device& dev, const SweepOptions& o, const FidelityPreset& preset,
+CyclePile build_level_pile(Device& dev, const SweepOptions& o, const FidelityPreset& preset,
                            const DiggingOptions& options, bool verbose) {
-  const vehicle::Scenario base = vehicle::load_scenario(o.scenario);
-  LevelPile lp;
-  lp.scenario = feedback_scenario(base, o.approach, o.max_time);
-  const PileProfile placed = scenario_pile_profile(lp.scenario);
   Progress progress("pile " + preset.name, 1.5 * options.pile.max_time, verbose);
-  lp.pile = build_scenario_pile(dev, lp.scenario, placed, preset, options, &progress);
-  progress.finish(std::to_string(lp.pile.particles.size()) + " particles");
-  for (const auto& q : scan_scenario_pile(lp.pile, placed, preset).points)
-    lp.surface.emplace_back(q.x(), q.y());
-  if (lp.surface.empty()) throw Error("the pile's laser scan found no surface; the cycle cannot find the pile");
-  // hits come in ray order; the surface is a function of x
-  std::sort(lp.surface.begin(), lp.surface.end());
-  return lp;
+  CyclePile cycle = build_cycle_pile(dev, vehicle::load_scenario(o.scenario), o.approach,
+                                     o.max_time, preset, options, &progress);
+  progress.finish(std::to_string(cycle.pile.particles.size()) + " particles");
+  return cycle;
 }
 
 // the samples this process runs: those with i mod count = index
@@ -145,13 +131,13 @@ std::vector<CycleResult> run_share(Device& dev, const SweepOptions& o, const Fid
   options.pile_cache.note = [](const std::string& line) {
     std::cerr << "talus sweep: " << line << "\n";
   };
-  const LevelPile lp = build_level_pile(dev, o, preset, options, verbose);
+  const CyclePile cycle = build_level_pile(dev, o, preset, options, verbose);
   std::vector<CycleResult> results;
   for (int i = index; i < o.samples; i += count) {
     const double s = sample_s(i, o.samples);
     vehicle::SensorLog trace;
-    results.push_back(run_feedback_cycle(dev, lp.scenario, preset, lp.pile, lp.surface, options, s,
-                                         o.traces ? &trace : nullptr));
+    results.push_back(
+        run_feedback_cycle(dev, cycle, preset, options, s, o.traces ? &trace : nullptr));
     if (o.traces) {
       const auto path = std::filesystem::path(o.out) / preset.name / ("cycle-" + std::to_string(i) + ".csv");
       write_file_atomically(path.string(), vehicle::sensor_csv(trace.samples()));

@@ -21,42 +21,88 @@ vehicle::Scenario feedback_scenario(const vehicle::Scenario& scenario, double ap
   return s;
 }
 
-CycleResult run_feedback_cycle(Device& dev, const vehicle::Scenario& scenario, const FidelityPreset& preset,
-                               const PileBuild& pile, const std::vector<std::pair<double, double>>& surface,
-                               const DiggingOptions& options, double s, vehicle::SensorLog* trace) {
-  DiggingSimulation sim(dev, scenario, preset, pile, options);
-  const vehicle::WheelLoader& loader = sim.loader();
-  // where the bucket reaches the pile: the first scanned point higher than half a grain
-  double toe = scenario.pile_toe_x;
-  for (const auto& [x, z] : surface) {
-    if (z > 0.5 * preset.diameter) {
-      toe = x;
-      break;
-    }
+CyclePile build_cycle_pile(Device& dev, const vehicle::Scenario& base, double approach,
+                           double max_time, const FidelityPreset& preset,
+                           const DiggingOptions& options, Progress* progress) {
+  CyclePile c;
+  c.scenario = feedback_scenario(base, approach, max_time);
+  const PileProfile placed = scenario_pile_profile(c.scenario);
+  c.pile = build_scenario_pile(dev, c.scenario, placed, preset, options, progress);
+  for (const auto& q : scan_scenario_pile(c.pile, placed, preset).points)
+    c.surface.emplace_back(q.x(), q.y());
+  if (c.surface.empty())
+    throw Error("the pile's laser scan found no surface; the cycle cannot find the pile");
+  // hits come in ray order; the surface is a function of x
+  std::sort(c.surface.begin(), c.surface.end());
+  return c;
+}
+
+namespace {
+// where the bucket reaches the pile: the first scanned point higher than half a grain
+double cycle_toe(const CyclePile& cycle, const FidelityPreset& preset) {
+  for (const auto& [x, z] : cycle.surface) {
+    if (z > 0.5 * preset.diameter) return x;
   }
+  return cycle.scenario.pile_toe_x;
+}
+
+// the cycle's speeds and force scale from the machine (paper §7.1)
+vehicle::CycleSettings cycle_settings(const vehicle::WheelLoader& loader) {
   vehicle::CycleSettings settings;
   settings.boom_force_scale = loader.lift_cylinders().size() * loader.lift_spec().force_push;
   settings.lift_max_speed = loader.lift_spec().max_speed;
   settings.tilt_max_speed = loader.tilt_spec().max_speed;
-  const double start_x = vehicle::read_sensors(loader, 0.0).x_vehicle;
-  vehicle::FeedbackCycle cycle(vehicle::gains_on_search_line(s), settings, surface, toe, start_x);
+  return settings;
+}
+}  // namespace
 
-  // the cycle, step by step, until the machine is back at its start or the time is up
-  while (!cycle.done() && !sim.done()) {
-    const vehicle::CycleTargets c = cycle.update(vehicle::read_sensors(loader, sim.time()));
-    if (cycle.done()) break;
-    sim.step(c.drive, c.lift, c.tilt);
-  }
+LoadingCycle::LoadingCycle(Device& dev, const CyclePile& cycle, const FidelityPreset& preset,
+                           const DiggingOptions& options, const vehicle::FeedbackGains& gains)
+    : sim_(dev, cycle.scenario, preset, cycle.pile, options),
+      cycle_(gains, cycle_settings(sim_.loader()), cycle.surface, cycle_toe(cycle, preset),
+             vehicle::read_sensors(sim_.loader(), 0.0).x_vehicle) {
+  // the phase at the start, before the first step
+  cycle_.advance(reading());
+}
+
+vehicle::SensorSample LoadingCycle::reading() const {
+  return vehicle::read_sensors(sim_.loader(), sim_.time());
+}
+
+void LoadingCycle::step_with(const vehicle::CycleTargets& c) {
+  sim_.step(c.drive, c.lift, c.tilt);
+  cycle_.advance(reading());
+}
+
+void LoadingCycle::step() { step_with(cycle_.targets(reading())); }
+
+void LoadingCycle::step_fill(const vehicle::CycleTargets& fill) {
+  if (cycle_.phase() != vehicle::CyclePhase::Fill)
+    throw Error(std::string("the loading cycle is in its ") + vehicle::phase_name(cycle_.phase()) +
+                " phase, not the fill: only the fill takes the caller's targets; step with the "
+                "cycle's own");
+  step_with(fill);
+}
+
+CycleResult LoadingCycle::result(double s) const {
   CycleResult r;
   r.s = s;
-  r.completed = cycle.done();
-  r.cycle_time_s = r.completed ? cycle.phase_start(vehicle::CyclePhase::Done) : sim.time();
-  r.loaded_mass_kg = sim.loaded_mass();
-  r.work_J = sim.log().work();
-  r.fill_start_s = cycle.phase_start(vehicle::CyclePhase::Fill);
-  r.breakout_s = cycle.phase_start(vehicle::CyclePhase::Hold);
-  if (trace) *trace = sim.log();
+  r.completed = cycle_.done();
+  r.cycle_time_s = r.completed ? cycle_.phase_start(vehicle::CyclePhase::Done) : sim_.time();
+  r.loaded_mass_kg = sim_.loaded_mass();
+  r.work_J = sim_.log().work();
+  r.fill_start_s = cycle_.phase_start(vehicle::CyclePhase::Fill);
+  r.breakout_s = cycle_.phase_start(vehicle::CyclePhase::Hold);
   return r;
+}
+
+CycleResult run_feedback_cycle(Device& dev, const CyclePile& cycle, const FidelityPreset& preset,
+                               const DiggingOptions& options, double s, vehicle::SensorLog* trace) {
+  LoadingCycle run(dev, cycle, preset, options, vehicle::gains_on_search_line(s));
+  // the cycle, step by step, until the machine is back at its start or the time is up
+  while (!run.done()) run.step();
+  if (trace) *trace = run.simulation().log();
+  return run.result(s);
 }
 
 SweepOptimum best_productivity(const std::vector<CycleResult>& results) {

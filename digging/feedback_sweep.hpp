@@ -5,6 +5,7 @@
 // MPI ranks, or shards for a Slurm job array): a cycle needs nothing but its own inputs.
 #pragma once
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "digging/digging.hpp"
@@ -27,12 +28,61 @@ struct CycleResult {
 // 5 m from the pile) and given `max_time` seconds for the cycle
 vehicle::Scenario feedback_scenario(const vehicle::Scenario& scenario, double approach, double max_time);
 
-// one loading cycle with the controller at search parameter s, on a pile built for `scenario`
-// (feedback_scenario) and scanned (`surface`, the laser scan's (x, z) points); with `trace`, the
-// cycle's 100 Hz sensor log is copied there (to see why a fill ended where it did)
-CycleResult run_feedback_cycle(Device& dev, const vehicle::Scenario& scenario, const FidelityPreset& preset,
-                               const PileBuild& pile, const std::vector<std::pair<double, double>>& surface,
-                               const DiggingOptions& options, double s, vehicle::SensorLog* trace = nullptr);
+// the pile of a loading cycle: the cycle's scenario, its pile built (or read from the pile cache)
+// and its laser scan before loading, as (x, z) points with x increasing (the controller's surface)
+struct CyclePile {
+  vehicle::Scenario scenario;
+  PileBuild pile;
+  std::vector<std::pair<double, double>> surface;
+};
+// `base`'s pile at the preset, placed by feedback_scenario(base, approach, max_time); talus::Error
+// when the scan finds no surface
+CyclePile build_cycle_pile(Device& dev, const vehicle::Scenario& base, double approach,
+                           double max_time, const FidelityPreset& preset,
+                           const DiggingOptions& options, Progress* progress);
+
+// one loading cycle stepped by the caller: the dig on the cycle's pile and the cycle's phases
+// (vehicle/force_feedback.hpp). The approach, hold and retreat drive themselves; the fill is the
+// force-feedback controller's at `gains`, or the caller's targets (a learning agent, a controller
+// of one's own). The phase is the one the sensors after the last step call for, as a controller
+// reads it before choosing its next targets.
+class LoadingCycle {
+ public:
+  // `cycle` from build_cycle_pile; the pile is copied into the dig, so `cycle` need not outlive it
+  LoadingCycle(Device& dev, const CyclePile& cycle, const FidelityPreset& preset,
+               const DiggingOptions& options, const vehicle::FeedbackGains& gains);
+  // it holds a DiggingSimulation, which stays where it was built
+  LoadingCycle(const LoadingCycle&) = delete;
+  LoadingCycle& operator=(const LoadingCycle&) = delete;
+
+  vehicle::CyclePhase phase() const { return cycle_.phase(); }
+  // back at the start, or the cycle's time limit reached (completed() tells which)
+  bool done() const { return cycle_.done() || sim_.done(); }
+  bool completed() const { return cycle_.done(); }
+  const vehicle::FeedbackCycle& cycle() const { return cycle_; }
+  // one step with the phase's own targets (the controller's in the fill)
+  void step();
+  // one step of the fill with the caller's targets [m/s]; talus::Error outside the fill
+  void step_fill(const vehicle::CycleTargets& fill);
+  // the paper's measures so far: M now, T (the return to the start, or the time so far), W, when
+  // the fill began and ended (-1 before), at search parameter `s` (only recorded)
+  CycleResult result(double s) const;
+  const DiggingSimulation& simulation() const { return sim_; }
+
+ private:
+  // the sensors the cycle reads after each step: the machine's own (what the controller sees)
+  vehicle::SensorSample reading() const;
+  void step_with(const vehicle::CycleTargets& c);
+
+  DiggingSimulation sim_;
+  vehicle::FeedbackCycle cycle_;
+};
+
+// one loading cycle with the controller at search parameter s on the cycle's pile; with `trace`,
+// the cycle's 100 Hz sensor log is copied there (to see why a fill ended where it did)
+CycleResult run_feedback_cycle(Device& dev, const CyclePile& cycle, const FidelityPreset& preset,
+                               const DiggingOptions& options, double s,
+                               vehicle::SensorLog* trace = nullptr);
 
 // the sweep's best productivity M/T and where it is
 struct SweepOptimum {

@@ -11,11 +11,13 @@
 #include <utility>
 
 #include "digging/digging.hpp"
+#include "digging/feedback_sweep.hpp"
 #include "host/data_files.hpp"
 #include "host/device.hpp"
 #include "host/progress.hpp"
 #include "terrain/pile.hpp"
 #include "vehicle/effect.hpp"
+#include "vehicle/force_feedback.hpp"
 #include "vehicle/scenario.hpp"
 #include "vehicle/sensors.hpp"
 #include "vehicle/wheel_loader.hpp"
@@ -140,14 +142,17 @@ FidelityPreset options_level(const SimulationOptions& options) {
 
 }  // namespace
 
-// the run behind the facade: a dig (pile scenarios) or the machine alone on flat ground, each
-// stepped through the same loop as `talus run` (digging/digging.hpp, sim2real's replay)
+// the run behind the facade: a dig (pile scenarios), the paper's loading cycle on a pile, or the
+// machine alone on flat ground, each stepped through the same loop as `talus run` (digging/
+// digging.hpp, sim2real's replay) or `talus sweep` (digging/feedback_sweep.hpp)
 struct Simulation::Impl {
   vehicle::Scenario scenario;
   FidelityPreset preset;
-  // a pile: the device and the coupled dig on it
+  // a pile: the device and either the coupled dig on it or the loading cycle around such a dig
   std::unique_ptr<Device> device;
-  std::unique_ptr<DiggingSimulation> dig;
+  std::unique_ptr<DiggingSimulation> replay;
+  std::unique_ptr<LoadingCycle> cycle;
+  double cycle_s = 0.0;
   // the machine alone: its own steps, the empty effect set (the identity) and the 100 Hz log
   std::unique_ptr<vehicle::WheelLoader> loader;
   vehicle::EffectSet no_effects;
@@ -157,9 +162,19 @@ struct Simulation::Impl {
   long steps_done = 0;
   bool pile_from_cache = false;
 
+  // the dig now, whichever owns it (nullptr for the machine alone)
+  const DiggingSimulation* dig() const {
+    if (cycle) return &cycle->simulation();
+    return replay.get();
+  }
+
   void step(const Targets& targets) {
-    if (dig) {
-      dig->step(targets.drive, targets.lift, targets.tilt);
+    if (cycle) {
+      cycle->step_fill({targets.drive, targets.lift, targets.tilt});
+      return;
+    }
+    if (replay) {
+      replay->step(targets.drive, targets.lift, targets.tilt);
       return;
     }
     // the clock counts steps, as the run loop's does, so every run samples the same instants
@@ -171,16 +186,37 @@ struct Simulation::Impl {
     ++steps_done;
     time = t_end;
   }
-  double now() const { return dig ? dig->time() : time; }
-  const vehicle::SensorSample& reading() const { return dig ? dig->sensors() : sensors; }
-  const vehicle::SensorLog& sensor_log() const { return dig ? dig->log() : log; }
+  double now() const { return dig() ? dig()->time() : time; }
+  const vehicle::SensorSample& reading() const { return dig() ? dig()->sensors() : sensors; }
+  const vehicle::SensorLog& sensor_log() const { return dig() ? dig()->log() : log; }
 };
+
+namespace {
+// the loading cycle's options, InputError naming the option
+void check_cycle_options(const SimulationOptions& options, const vehicle::Scenario& scenario) {
+  if (!scenario.pile)
+    throw InputError("SimulationOptions::loading_cycle: scenario '" + options.scenario +
+                     "' has no pile; the loading cycle digs in one: give fb35, hd27 or rd21");
+  if (!(options.cycle_approach > 0.0 && options.cycle_approach <= 100.0))
+    throw InputError(
+        "SimulationOptions::cycle_approach: " + std::to_string(options.cycle_approach) +
+        " m; give the distance to the pile in (0, 100] m (the paper's is 5 m)");
+  if (!(options.cycle_max_time > 0.0 && options.cycle_max_time <= 3600.0))
+    throw InputError(
+        "SimulationOptions::cycle_max_time: " + std::to_string(options.cycle_max_time) +
+        " s; give the cycle's time limit in (0, 3600] s");
+  if (!(options.cycle_s >= 0.0 && options.cycle_s <= 1.0))
+    throw InputError("SimulationOptions::cycle_s: " + std::to_string(options.cycle_s) +
+                     "; give the point on the controller's search line in [0, 1]");
+}
+}  // namespace
 
 Simulation::Simulation(const SimulationOptions& options) : impl_(std::make_unique<Impl>()) {
   Impl& m = *impl_;
   m.scenario = load_options_scenario(options);
   // the level is checked for every scenario, though only a pile uses it (as talus run does)
   m.preset = options_level(options);
+  if (options.loading_cycle) check_cycle_options(options, m.scenario);
   if (m.scenario.pile) {
     // the pile built and settled at the level, then the machine settled in front of it
     DiggingOptions dig_options;
@@ -191,15 +227,27 @@ Simulation::Simulation(const SimulationOptions& options) : impl_(std::make_uniqu
       std::cerr << "talus: " << line << "\n";
     };
     m.device = std::make_unique<Device>();
-    const PileProfile placed = scenario_pile_profile(m.scenario);
-    PileBuild pile;
-    {
-      Progress progress("pile " + m.preset.name, 1.5 * dig_options.pile.max_time, options.progress);
-      pile = build_scenario_pile(*m.device, m.scenario, placed, m.preset, dig_options, &progress);
+    Progress progress("pile " + m.preset.name, 1.5 * dig_options.pile.max_time, options.progress);
+    if (options.loading_cycle) {
+      // the cycle's pile, placed and scanned as `talus sweep` does
+      const CyclePile pile =
+          build_cycle_pile(*m.device, m.scenario, options.cycle_approach, options.cycle_max_time,
+                           m.preset, dig_options, &progress);
+      progress.finish(std::to_string(pile.pile.particles.size()) + " particles");
+      m.scenario = pile.scenario;
+      m.pile_from_cache = pile.pile.from_cache;
+      m.cycle_s = options.cycle_s;
+      m.cycle = std::make_unique<LoadingCycle>(*m.device, pile, m.preset, dig_options,
+                                               vehicle::gains_on_search_line(options.cycle_s));
+    } else {
+      const PileProfile placed = scenario_pile_profile(m.scenario);
+      const PileBuild pile =
+          build_scenario_pile(*m.device, m.scenario, placed, m.preset, dig_options, &progress);
       progress.finish(std::to_string(pile.particles.size()) + " particles");
+      m.pile_from_cache = pile.from_cache;
+      m.replay =
+          std::make_unique<DiggingSimulation>(*m.device, m.scenario, m.preset, pile, dig_options);
     }
-    m.pile_from_cache = pile.from_cache;
-    m.dig = std::make_unique<DiggingSimulation>(*m.device, m.scenario, m.preset, pile, dig_options);
   } else {
     // the machine alone, with a payload it can hold on its wheels
     m.loader = std::make_unique<vehicle::WheelLoader>(vehicle::machine_file(m.scenario),
@@ -213,29 +261,69 @@ Simulation::~Simulation() = default;
 Simulation::Simulation(Simulation&& other) noexcept = default;
 Simulation& Simulation::operator=(Simulation&& other) noexcept = default;
 
-void Simulation::step() { step(scenario_targets()); }
+void Simulation::step() {
+  if (impl_->cycle) {
+    impl_->cycle->step();
+    return;
+  }
+  step(scenario_targets());
+}
 
 void Simulation::step(const Targets& targets) { impl_->step(targets); }
 
 Targets Simulation::scenario_targets() const {
   const double t = impl_->now();
+  if (impl_->cycle) {
+    const LoadingCycle& c = *impl_->cycle;
+    const vehicle::CycleTargets own =
+        c.cycle().targets(vehicle::read_sensors(c.simulation().loader(), t));
+    return {own.drive, own.lift, own.tilt};
+  }
   const vehicle::Scenario& sc = impl_->scenario;
   return {sc.drive(t), sc.lift(t), sc.tilt(t)};
+}
+
+Targets Simulation::top_speeds() const {
+  const vehicle::WheelLoader& loader = impl_->dig() ? impl_->dig()->loader() : *impl_->loader;
+  return {loader.top_speed(), loader.lift_spec().max_speed, loader.tilt_spec().max_speed};
 }
 
 double Simulation::time() const { return impl_->now(); }
 
 double Simulation::timestep() const {
-  return impl_->dig ? impl_->preset.dt : impl_->scenario.timestep;
+  return impl_->dig() ? impl_->preset.dt : impl_->scenario.timestep;
 }
 
 double Simulation::duration() const { return impl_->scenario.duration; }
 
 bool Simulation::done() const {
-  if (impl_->dig) return impl_->dig->done();
+  if (impl_->cycle) return impl_->cycle->done();
+  if (impl_->replay) return impl_->replay->done();
   // the step count the run loop takes (talus run), so done() agrees with it
   return impl_->steps_done >= std::llround(impl_->scenario.duration / impl_->scenario.timestep);
 }
+
+std::string Simulation::cycle_phase() const {
+  return impl_->cycle ? vehicle::phase_name(impl_->cycle->phase()) : std::string();
+}
+
+CycleSummary Simulation::cycle_summary() const {
+  if (!impl_->cycle)
+    throw Error("Simulation::cycle_summary: this run replays scenario '" + impl_->scenario.name +
+                "'; set SimulationOptions::loading_cycle for the paper's loading cycle");
+  const CycleResult r = impl_->cycle->result(impl_->cycle_s);
+  CycleSummary c;
+  c.loaded_mass = r.loaded_mass_kg;
+  c.cycle_time = r.cycle_time_s;
+  c.work = r.work_J;
+  c.completed = r.completed;
+  c.broke_out = impl_->cycle->cycle().broke_out();
+  c.fill_start = r.fill_start_s;
+  c.fill_end = r.breakout_s;
+  return c;
+}
+
+double Simulation::work() const { return impl_->sensor_log().work(); }
 
 SensorReading Simulation::sensors() const { return to_reading(impl_->reading()); }
 
@@ -273,19 +361,19 @@ const std::vector<std::string>& Simulation::channel_units() {
 bool Simulation::pile_from_cache() const { return impl_->pile_from_cache; }
 
 double Simulation::loaded_mass() const {
-  return impl_->dig ? impl_->dig->loaded_mass() : impl_->scenario.payload;
+  return impl_->dig() ? impl_->dig()->loaded_mass() : impl_->scenario.payload;
 }
 
-bool Simulation::has_particles() const { return impl_->dig != nullptr; }
+bool Simulation::has_particles() const { return impl_->dig() != nullptr; }
 
 std::size_t Simulation::particle_count() const {
-  return impl_->dig ? impl_->dig->particle_count() : 0;
+  return impl_->dig() ? impl_->dig()->particle_count() : 0;
 }
 
 ParticleState Simulation::particles() const {
   ParticleState state;
-  if (!impl_->dig) return state;
-  const Particles p = impl_->dig->particles();
+  if (!impl_->dig()) return state;
+  const Particles p = impl_->dig()->particles();
   const std::size_t n = p.size();
   state.position.reserve(3 * n);
   state.velocity.reserve(3 * n);
@@ -303,7 +391,7 @@ ParticleState Simulation::particles() const {
 
 std::string Simulation::scenario_name() const { return impl_->scenario.name; }
 
-std::string Simulation::level() const { return impl_->dig ? impl_->preset.name : "vehicle"; }
+std::string Simulation::level() const { return impl_->dig() ? impl_->preset.name : "vehicle"; }
 
 std::string Simulation::device() const {
   return impl_->device ? impl_->device->description() : std::string();

@@ -55,6 +55,20 @@ struct SimulationOptions {
   /// states: settled piles"). A build with uncommitted changes ("-dirty") never uses it; a folder
   /// that cannot be written is a line on stderr, and the pile is built all the same
   bool pile_cache = true;
+  /// run the paper's loading cycle (§7, docs/sweep.md) on the scenario's pile instead of replaying
+  /// the scenario's inputs: the machine starts cycle_approach metres in front of the pile, drives
+  /// up to it at 8 km/h with the bucket flat, fills (by the force-feedback controller at cycle_s,
+  /// or by the caller's targets), holds 0.5 s once the bucket breaks out, and reverses to its
+  /// start while lifting and tilting. The scenario must have a pile; its pile position, start and
+  /// duration are the cycle's
+  bool loading_cycle = false;
+  /// the loading cycle's distance from the bucket's tip to the pile at the start [m] (paper: 5 m)
+  double cycle_approach = 5.0;
+  /// the loading cycle's time limit [s]: duration() of a cycle
+  double cycle_max_time = 40.0;
+  /// the force-feedback controller's point on the paper's search line, s in [0, 1]: what fills
+  /// the bucket when a cycle is stepped with step() (paper §7.1; the sweep of `talus sweep`)
+  double cycle_s = 0.5;
 };
 
 /// \brief the operator's commands for one step: target speeds, clipped to the machine's maxima.
@@ -86,6 +100,20 @@ struct SensorReading {
   double power = 0.0;  ///< f_traction v_drive + f_lift (d/dt) d_lift + f_tilt (d/dt) d_tilt [W]
 };
 
+/// \brief the paper's measures of a loading cycle (§7): what `talus sweep` reports per sample.
+struct CycleSummary {
+  double loaded_mass = 0.0;  ///< M: the soil in the bucket now [kg]
+  /// T: from the start to the machine's return to its starting point [s]; the time so far while
+  /// the cycle has not returned
+  double cycle_time = 0.0;
+  double work = 0.0;  ///< W: the work of the cycle so far [J] (the sensor log's power, integrated)
+  bool completed = false;  ///< whether the machine is back at its start
+  bool broke_out =
+      false;  ///< whether the fill ended by the bucket breaking out (not its time limit)
+  double fill_start = -1.0;  ///< when the bucket reached the pile and the fill began [s]; -1 before
+  double fill_end = -1.0;    ///< when the fill ended (breakout or its 15 s limit) [s]; -1 before
+};
+
 /// \brief the particles as flat arrays: particle i's vector at [3i, 3i + 3), its radius at [i].
 struct ParticleState {
   std::vector<double> position;          ///< x, y, z of each particle's centre [m]
@@ -104,8 +132,13 @@ struct ParticleState {
 /// talus::Error) for bad options or data files, naming the option or the file and field and how to
 /// fix it; talus::Error for a failure of the simulation (an OpenCL error, a non-finite state).
 ///
-/// Not in this version: saving and restoring a state, model extensions (`talus run --effect`),
-/// Python bindings (docs/embedding.md, "Not yet").
+/// With SimulationOptions::loading_cycle the run is the paper's loading cycle (§7) instead of
+/// the scenario's replay: cycle_phase() says where it is, step() drives every phase itself (the
+/// force-feedback controller fills), and step(targets) commands the fill, as a learning agent or
+/// a controller of one's own does (the Python package's Gymnasium environment, docs/python.md).
+///
+/// Not in this version: saving and restoring a state, model extensions (`talus run --effect`)
+/// (docs/embedding.md, "Not yet").
 class Simulation {
  public:
   /// loads the scenario and builds what it needs (see the class)
@@ -118,12 +151,17 @@ class Simulation {
   Simulation(const Simulation&) = delete;
   Simulation& operator=(const Simulation&) = delete;
 
-  /// one timestep with the scenario's own target speeds at time()
+  /// one timestep with the scenario's own target speeds at time(); in a loading cycle, the
+  /// cycle's own (the force-feedback controller's in the fill)
   void step();
-  /// one timestep with the caller's target speeds instead of the scenario's
+  /// one timestep with the caller's target speeds instead of the scenario's; in a loading cycle
+  /// only in its fill phase (talus::Error in the others: step() drives them)
   void step(const Targets& targets);
-  /// the scenario's target speeds at time(): what step() uses
+  /// the target speeds step() uses now: the scenario's at time(), or the loading cycle's
   Targets scenario_targets() const;
+  /// the machine's top speeds, the largest targets it follows: drive [m/s] and the lift and tilt
+  /// cylinders' stroke speeds [m/s] (data/machines)
+  Targets top_speeds() const;
 
   /// simulated time since the start [s]: steps taken times timestep()
   double time() const;
@@ -131,8 +169,17 @@ class Simulation {
   double timestep() const;
   /// the scenario's duration [s]; stepping may go on past it, the inputs holding their last value
   double duration() const;
-  /// whether time() has reached duration()
+  /// whether time() has reached duration(); a loading cycle also ends when the machine is back
+  /// at its start
   bool done() const;
+
+  /// the loading cycle's phase: "approach", "fill", "hold", "retreat" or "done"; empty when the
+  /// run replays a scenario
+  std::string cycle_phase() const;
+  /// the loading cycle's measures so far (talus::Error when the run replays a scenario)
+  CycleSummary cycle_summary() const;
+  /// the work since the start [J]: the logged power integrated over every step so far
+  double work() const;
 
   /// what the sensors read now, after the last step
   SensorReading sensors() const;

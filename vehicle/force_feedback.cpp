@@ -64,18 +64,25 @@ void FeedbackCycle::enter(CyclePhase p, double t) {
 
 CycleTargets FeedbackCycle::update(const SensorSample& s) {
   // phase changes first, from the state after the last step
+  advance(s);
+  return targets(s);
+}
+
+void FeedbackCycle::advance(const SensorSample& s) {
   const double height = surface_at(s.bucket_tip_x);
   if (phase_ == CyclePhase::Approach && s.bucket_tip_x >= toe_x_) enter(CyclePhase::Fill, s.t);
   if (phase_ == CyclePhase::Fill) {
     if (s.bucket_tip_z < height - settings_.breakout_margin) buried_ = true;
-    const bool broke_out = buried_ && s.bucket_tip_z > height + settings_.breakout_margin;
-    if (broke_out || s.t - phase_start(CyclePhase::Fill) > settings_.max_fill_time) enter(CyclePhase::Hold, s.t);
+    broke_out_ = buried_ && s.bucket_tip_z > height + settings_.breakout_margin;
+    if (broke_out_ || s.t - phase_start(CyclePhase::Fill) > settings_.max_fill_time)
+      enter(CyclePhase::Hold, s.t);
   }
   if (phase_ == CyclePhase::Hold && s.t - phase_start(CyclePhase::Hold) >= settings_.hold_time)
     enter(CyclePhase::Retreat, s.t);
   if (phase_ == CyclePhase::Retreat && s.x_vehicle <= start_x_) enter(CyclePhase::Done, s.t);
+}
 
-  // the targets of the phase
+CycleTargets FeedbackCycle::targets(const SensorSample& s) const {
   CycleTargets c;
   switch (phase_) {
     case CyclePhase::Approach:

@@ -59,10 +59,17 @@ class FeedbackCycle {
   FeedbackCycle(const FeedbackGains& gains, const CycleSettings& settings, std::vector<std::pair<double, double>> surface,
                 double toe_x, double start_x);
 
-  // the targets for the next step, from the sensors after the last one
+  // the targets for the next step, from the sensors after the last one: advance, then targets
   CycleTargets update(const SensorSample& s);
+  // the phase changes the sensors after the last step call for (a caller that commands the fill
+  // itself advances the cycle, then asks for the targets of the other phases)
+  void advance(const SensorSample& s);
+  // the phase's targets for these sensors: the force-feedback controller's in the fill
+  CycleTargets targets(const SensorSample& s) const;
   CyclePhase phase() const { return phase_; }
   bool done() const { return phase_ == CyclePhase::Done; }
+  // whether the fill ended by the bucket breaking out of the pile (not by its time limit)
+  bool broke_out() const { return broke_out_; }
   // when each phase began [s] (-1 when not reached)
   double phase_start(CyclePhase p) const { return starts_[static_cast<int>(p)]; }
   // the pile's initial surface height at x [m] (linear between scan points, 0 before the first)
@@ -77,7 +84,7 @@ class FeedbackCycle {
   double toe_x_, start_x_;
   CyclePhase phase_ = CyclePhase::Approach;
   double starts_[5] = {0.0, -1.0, -1.0, -1.0, -1.0};
-  bool buried_ = false;
+  bool buried_ = false, broke_out_ = false;
 };
 
 }  // namespace talus::vehicle

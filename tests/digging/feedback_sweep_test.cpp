@@ -57,24 +57,52 @@ TEST(FeedbackSweep, FeedbackScenarioStartsFiveMetresFromThePile) {
 // finds the pile by the voxels' laser scan, and a one-particle aggregate once left the vehicle's
 // direct solver cycling here (issue 14)
 TEST(FeedbackSweep, ACycleOnTheTypeGTerrainCompletesAndFills) {
-  const vehicle::Scenario sc = feedback_scenario(vehicle::load_scenario("fb35"), 5.0, 40.0);
   const FidelityPreset& g400 = level_preset("G400");
   const DiggingOptions options;
-  const PileProfile placed = scenario_pile_profile(sc);
-  const PileBuild pile =
-      build_scenario_pile(test::shared_device(), sc, placed, g400, options, nullptr);
-  std::vector<std::pair<double, double>> surface;
-  for (const auto& q : scan_scenario_pile(pile, placed, g400).points)
-    surface.emplace_back(q.x(), q.y());
-  std::sort(surface.begin(), surface.end());
-  ASSERT_GT(surface.back().second, 1.5);  // the scan sees the pile, not bare ground
-  const CycleResult r =
-      run_feedback_cycle(test::shared_device(), sc, g400, pile, surface, options, 0.0);
+  const CyclePile cycle = build_cycle_pile(test::shared_device(), vehicle::load_scenario("fb35"),
+                                           5.0, 40.0, g400, options, nullptr);
+  ASSERT_GT(cycle.surface.back().second, 1.5);  // the scan sees the pile, not bare ground
+  const CycleResult r = run_feedback_cycle(test::shared_device(), cycle, g400, options, 0.0);
   std::printf(
       "[ measured ] FB35-G400 force-feedback cycle at s = 0: %.0f kg in %.1f s, work %.0f kJ\n",
       r.loaded_mass_kg, r.cycle_time_s, 1e-3 * r.work_J);
   EXPECT_TRUE(r.completed);
   EXPECT_GT(r.loaded_mass_kg, 500.0);
+}
+
+// the caller commands the fill (what an agent does): given the controller's own targets it gives
+// the controller's cycle bit for bit, and outside the fill it is refused
+TEST(FeedbackSweep, ACallerCommandingTheFillWithTheControllersTargetsGivesTheSameCycle) {
+  const FidelityPreset& g400 = level_preset("G400");
+  const DiggingOptions options;
+  const CyclePile cycle = build_cycle_pile(test::shared_device(), vehicle::load_scenario("fb35"),
+                                           5.0, 40.0, g400, options, nullptr);
+  const double s = 0.7;
+  const CycleResult own = run_feedback_cycle(test::shared_device(), cycle, g400, options, s);
+
+  LoadingCycle run(test::shared_device(), cycle, g400, options, vehicle::gains_on_search_line(s));
+  ASSERT_EQ(run.phase(), vehicle::CyclePhase::Approach);
+  EXPECT_THROW(run.step_fill({}), Error);
+  int fill_steps = 0;
+  while (!run.done()) {
+    if (run.phase() != vehicle::CyclePhase::Fill) {
+      run.step();
+      continue;
+    }
+    // the controller's law, computed here from the machine's sensors as a caller would
+    const vehicle::SensorSample now =
+        vehicle::read_sensors(run.simulation().loader(), run.simulation().time());
+    run.step_fill(run.cycle().targets(now));
+    ++fill_steps;
+  }
+  const CycleResult mine = run.result(s);
+  EXPECT_GT(fill_steps, 10);
+  EXPECT_TRUE(mine.completed);
+  EXPECT_EQ(mine.loaded_mass_kg, own.loaded_mass_kg);
+  EXPECT_EQ(mine.cycle_time_s, own.cycle_time_s);
+  EXPECT_EQ(mine.work_J, own.work_J);
+  EXPECT_EQ(mine.breakout_s, own.breakout_s);
+  EXPECT_EQ(run.cycle().broke_out(), own.breakout_s - own.fill_start_s <= 15.0);
 }
 
 }  // namespace

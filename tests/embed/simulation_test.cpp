@@ -15,6 +15,8 @@
 #include <utility>
 #include <vector>
 
+#include "digging/feedback_sweep.hpp"
+#include "tests/solvers/dem_test_util.hpp"
 #include "vehicle/sensor_channels.hpp"
 
 namespace talus {
@@ -268,6 +270,81 @@ TEST(Simulation, DataDirIsSearchedForScenarioAndMachine) {
   o.data_dir.clear();
   EXPECT_THROW(Simulation{o}, InputError);
   fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace talus
+
+namespace talus {
+namespace {
+
+// the loading cycle through the facade equals `talus sweep`'s cycle on the same pile (G400: a
+// cycle in about a second), and its phases run in the paper's order
+TEST(Simulation, LoadingCycleIsTheSweepsCycle) {
+  SimulationOptions options;
+  options.scenario = "fb35";
+  options.level = "G400";
+  options.loading_cycle = true;
+  options.cycle_s = 0.7;
+  Simulation sim(options);
+  EXPECT_EQ(sim.cycle_phase(), "approach");
+  EXPECT_DOUBLE_EQ(sim.duration(), options.cycle_max_time);
+  std::vector<std::string> phases = {sim.cycle_phase()};
+  while (!sim.done()) {
+    sim.step();
+    if (sim.cycle_phase() != phases.back()) phases.push_back(sim.cycle_phase());
+  }
+  EXPECT_EQ(phases, (std::vector<std::string>{"approach", "fill", "hold", "retreat", "done"}));
+  const CycleSummary c = sim.cycle_summary();
+  EXPECT_TRUE(c.completed);
+  EXPECT_TRUE(c.broke_out);
+  EXPECT_LT(c.fill_start, c.fill_end);
+  EXPECT_EQ(c.work, sim.work());
+
+  // the same cycle below the facade, on the pile the sweep builds
+  const FidelityPreset& g400 = level_preset("G400");
+  const DiggingOptions dig;
+  const CyclePile pile =
+      build_cycle_pile(test::shared_device(), vehicle::load_scenario("fb35"),
+                       options.cycle_approach, options.cycle_max_time, g400, dig, nullptr);
+  const CycleResult r = run_feedback_cycle(test::shared_device(), pile, g400, dig, 0.7);
+  EXPECT_EQ(c.loaded_mass, r.loaded_mass_kg);
+  EXPECT_EQ(c.cycle_time, r.cycle_time_s);
+  EXPECT_EQ(c.work, r.work_J);
+}
+
+// the caller commands the fill only; a replay has no cycle; bad cycle options name the option
+TEST(Simulation, LoadingCycleTakesTheCallersTargetsOnlyInTheFill) {
+  SimulationOptions options;
+  options.scenario = "fb35";
+  options.level = "G400";
+  options.loading_cycle = true;
+  Simulation sim(options);
+  EXPECT_THROW(sim.step(Targets{1.0, 0.0, 0.0}), Error);
+  while (sim.cycle_phase() == "approach") sim.step();
+  ASSERT_EQ(sim.cycle_phase(), "fill");
+  const Targets top = sim.top_speeds();
+  EXPECT_GT(top.drive, 0.0);
+  EXPECT_GT(top.lift, 0.0);
+  EXPECT_GT(top.tilt, 0.0);
+  const double d_lift = sim.sensors().d_lift;
+  for (int k = 0; k < 10; ++k) sim.step(Targets{0.5, top.lift, 0.0});
+  EXPECT_GT(sim.sensors().d_lift, d_lift + 0.2 * top.lift * 10 * sim.timestep());
+
+  SimulationOptions replay;
+  replay.scenario = "flat-lift";
+  EXPECT_THROW(Simulation(replay).cycle_summary(), Error);
+  EXPECT_EQ(Simulation(replay).cycle_phase(), "");
+  replay.loading_cycle = true;
+  EXPECT_THROW(Simulation{replay}, InputError);
+  options.cycle_s = -0.1;
+  try {
+    Simulation bad(options);
+    ADD_FAILURE() << "cycle_s -0.1 was taken";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("SimulationOptions::cycle_s"), std::string::npos)
+        << e.what();
+  }
 }
 
 }  // namespace

@@ -36,6 +36,8 @@ LAYERS = [
     # the two front ends, which may not include each other: the `talus` command-line tool, one file per
     # subcommand, and the embedding facade (talus/talus.hpp) for programs that run talus inside themselves
     ["apps", "embed"],
+    # the Python package: the facade bound with pybind11 (python/bindings.cpp includes embed/talus.hpp)
+    ["python"],
 ]
 
 # folders of one layer that may include each other, as (including, included); none today

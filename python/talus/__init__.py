@@ -1,0 +1,57 @@
+"""talus: a wheel loader digging in granular terrain (docs/python.md).
+
+The simulator is the C++ library's embedding facade (embed/talus.hpp), bound as ``talus._talus``:
+
+>>> import talus
+>>> sim = talus.Simulation(scenario="hd27", level="D400")
+>>> while not sim.done:
+...     sim.step()
+>>> sim.loaded_mass                      # kg in the bucket
+>>> sim.sensor_log()                     # (samples, 14) array, columns talus.CHANNELS
+
+The Gymnasium environment for bucket filling is ``talus.envs.BucketFillingEnv`` (registered as
+``talus/BucketFilling-v0`` when Gymnasium is installed).
+"""
+import os
+
+from ._talus import (CycleSummary, Error, InputError, SimulationOptions, Targets)
+from ._talus import Simulation as _Simulation
+
+__all__ = ["Simulation", "SimulationOptions", "Targets", "CycleSummary", "Error", "InputError",
+           "CHANNELS", "UNITS", "DATA_DIR"]
+
+# the package's own data (machines, scenarios, piles): the installed wheel carries a copy, the
+# build tree links the repository's; $TALUS_DATA_DIR still comes first (embed/talus.hpp)
+DATA_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), "data")
+
+
+class Simulation(_Simulation):
+    """A scenario's run, stepped by the caller (embed/talus.hpp, talus::Simulation).
+
+    ``Simulation(scenario="hd27", level="D400", seed=1, ...)`` takes the fields of
+    SimulationOptions as keywords; ``Simulation(options)`` a SimulationOptions. The data folder
+    defaults to the package's own.
+    """
+
+    def __init__(self, options=None, **kwargs):
+        if options is not None:
+            if kwargs:
+                raise TypeError("talus.Simulation: give a SimulationOptions or keywords, not both")
+            if not options.data_dir:
+                options.data_dir = DATA_DIR
+            super().__init__(options)
+        else:
+            kwargs.setdefault("data_dir", DATA_DIR)
+            super().__init__(**kwargs)
+
+
+# the run contract's channels (SPEC §2.4) and their SI units, the columns of sensor_log()
+CHANNELS = tuple(_Simulation.channel_names)
+UNITS = tuple(_Simulation.channel_units)
+
+try:  # the environment's registration, when Gymnasium is there
+    import gymnasium as _gymnasium
+except ImportError:  # pragma: no cover - the bindings work without it
+    _gymnasium = None
+if _gymnasium is not None and "talus/BucketFilling-v0" not in _gymnasium.registry:
+    _gymnasium.register(id="talus/BucketFilling-v0", entry_point="talus.envs:BucketFillingEnv")
