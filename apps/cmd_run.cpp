@@ -117,12 +117,24 @@ void run_vehicle_only(const RunOptions& o, const vehicle::Scenario& sc, vehicle:
               << realtime_factor << "\n";
 }
 
-// a ParaView collection of the snapshots with their times (File > Open particles.pvd)
-std::string pvd_collection(const std::vector<std::pair<double, std::string>>& snapshots) {
+// one snapshot: its time and its files, the particles' and the machine's
+struct Snapshot {
+  double t = 0.0;
+  std::string particles, machine;
+};
+
+// a ParaView collection of the snapshots with their times (File > Open particles.pvd): part 0 the
+// particles, part 1 the machine, so each time step opens as one multiblock of both
+std::string pvd_collection(const std::vector<Snapshot>& snapshots) {
   std::ostringstream s;
+  s.precision(10);
   s << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n";
-  for (const auto& [t, file] : snapshots)
-    s << "    <DataSet timestep=\"" << t << "\" group=\"\" part=\"0\" file=\"" << file << "\"/>\n";
+  for (const Snapshot& snap : snapshots) {
+    s << "    <DataSet timestep=\"" << snap.t
+      << "\" group=\"\" part=\"0\" name=\"particles\" file=\"" << snap.particles << "\"/>\n";
+    s << "    <DataSet timestep=\"" << snap.t << "\" group=\"\" part=\"1\" name=\"machine\" file=\""
+      << snap.machine << "\"/>\n";
+  }
   s << "  </Collection>\n</VTKFile>\n";
   return s.str();
 }
@@ -151,7 +163,9 @@ void write_render(const std::string& path, const Particles& particles,
   if (terrain) scene.meshes.push_back(terrain_mesh(*terrain, scene.particle_colour));
   scene.ground_height = 0.0;
   const Camera camera = side_camera(view.lo, view.hi, double(kImageWidth) / kImageHeight);
-  render_particles(scene, camera, kImageWidth, kImageHeight).write_png(path);
+  Image picture = render_particles(scene, camera, kImageWidth, kImageHeight);
+  draw_scale_bar(picture, camera.view_height / kImageHeight);
+  picture.write_png(path);
 }
 
 // the dig's options from the flags: the pile's seed and formwork, the studies' rolling
@@ -174,7 +188,8 @@ DiggingOptions digging_options(const RunOptions& o) {
   return options;
 }
 
-// particle snapshots every `every` steps into DIR/snapshots, and their ParaView collection
+// particle and machine snapshots every `every` steps into DIR/snapshots, and their ParaView
+// collection
 class Snapshots {
  public:
   Snapshots(const std::filesystem::path& dir, int every) : dir_(dir), every_(every) {
@@ -184,9 +199,12 @@ class Snapshots {
   // after step k (0: the start)
   void after_step(int k, double t, const DiggingSimulation& sim) {
     if (!on() || k % every_ != 0) return;
-    const std::string name = "snapshots/particles_" + std::to_string(taken_.size()) + ".vtp";
-    write_file_atomically((dir_ / name).string(), particles_vtp(sim.particles()));
-    taken_.emplace_back(t, name);
+    const std::string k_name = std::to_string(taken_.size());
+    const Snapshot snap{t, "snapshots/particles_" + k_name + ".vtp",
+                        "snapshots/machine_" + k_name + ".vtp"};
+    write_file_atomically((dir_ / snap.particles).string(), particles_vtp(sim.particles()));
+    write_file_atomically((dir_ / snap.machine).string(), machine_vtp(sim.loader()));
+    taken_.push_back(snap);
   }
   // DIR/particles.pvd
   void finish() const {
@@ -196,7 +214,7 @@ class Snapshots {
  private:
   std::filesystem::path dir_;
   int every_;
-  std::vector<std::pair<double, std::string>> taken_;
+  std::vector<Snapshot> taken_;
 };
 
 // what summary.json tells beyond the contract: the level and its study settings, timing, the

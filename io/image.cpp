@@ -1,5 +1,6 @@
 #include "io/image.hpp"
 
+#include <cairo.h>
 #include <png.h>
 
 #include <algorithm>
@@ -7,6 +8,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <numeric>
+#include <string>
 
 #include "host/error.hpp"
 #include "host/files.hpp"
@@ -32,6 +34,86 @@ void Image::disc(double cx, double cy, double radius, uint8_t r, uint8_t g, uint
       double dx = x + 0.5 - cx, dy = y + 0.5 - cy;
       if (dx * dx + dy * dy <= radius * radius) set(x, y, r, g, b);
     }
+}
+
+double scale_bar_length(int width_px, double metres_per_px) {
+  const double most = 0.2 * width_px * metres_per_px;  // [m]
+  const double decade = std::pow(10.0, std::floor(std::log10(most)));
+  for (const double step : {5.0, 2.0, 1.0})
+    if (step * decade <= most) return step * decade;
+  return decade;
+}
+
+namespace {
+// a length as people write it on a drawing: "2 m", "50 cm", "5 mm"
+std::string length_label(double metres) {
+  const auto whole = [](double v) {
+    return std::to_string(static_cast<long long>(std::llround(v)));
+  };
+  if (metres >= 1.0) return whole(metres) + " m";
+  if (metres >= 0.01) return whole(100.0 * metres) + " cm";
+  return whole(1000.0 * metres) + " mm";
+}
+}  // namespace
+
+void draw_scale_bar(Image& image, double metres_per_px) {
+  if (!(metres_per_px > 0.0) || !std::isfinite(metres_per_px))
+    throw InputError(
+        "scale bar: the picture's scale must be a positive number of metres per pixel");
+  const int w = image.width(), h = image.height();
+  if (w < 120 || h < 60)
+    throw InputError("scale bar: the picture is too small for one (at least 120 x 60 px)");
+  const double length_m = scale_bar_length(w, metres_per_px);
+  const double bar_px = length_m / metres_per_px;
+  // the picture into a Cairo surface (0xXXRRGGBB per pixel), drawn on, and back
+  cairo_surface_t* surface = cairo_image_surface_create(CAIRO_FORMAT_RGB24, w, h);
+  const int stride = cairo_image_surface_get_stride(surface);
+  auto* data = cairo_image_surface_get_data(surface);
+  cairo_surface_flush(surface);
+  for (int y = 0; y < h; ++y) {
+    auto* row = reinterpret_cast<uint32_t*>(data + static_cast<size_t>(y) * stride);
+    for (int x = 0; x < w; ++x) {
+      const uint8_t* p = image.pixel(x, y);
+      row[x] = (uint32_t(p[0]) << 16) | (uint32_t(p[1]) << 8) | uint32_t(p[2]);
+    }
+  }
+  cairo_surface_mark_dirty(surface);
+  cairo_t* cr = cairo_create(surface);
+  // sizes from the picture's height: the text a fortieth of it, at least 12 px
+  const double text_px = std::max(12.0, h / 40.0);
+  const double margin = text_px, x0 = margin + 0.5 * text_px, y0 = h - margin - 0.5 * text_px;
+  const std::string label = length_label(length_m);
+  cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
+  cairo_set_font_size(cr, text_px);
+  cairo_text_extents_t extents;
+  cairo_text_extents(cr, label.c_str(), &extents);
+  // the white plate behind bar and label
+  cairo_set_source_rgba(cr, 1.0, 1.0, 1.0, 0.85);
+  cairo_rectangle(cr, margin, y0 - 2.2 * text_px, bar_px + text_px, 2.2 * text_px + 0.5 * text_px);
+  cairo_fill(cr);
+  // the bar, its end ticks, and its length above its middle
+  cairo_set_source_rgb(cr, 0.0, 0.0, 0.0);
+  cairo_set_line_width(cr, std::max(2.0, text_px / 6.0));
+  cairo_move_to(cr, x0, y0);
+  cairo_line_to(cr, x0 + bar_px, y0);
+  for (const double x : {x0, x0 + bar_px}) {
+    cairo_move_to(cr, x, y0 - 0.4 * text_px);
+    cairo_line_to(cr, x, y0 + 0.25 * text_px);
+  }
+  cairo_stroke(cr);
+  cairo_move_to(cr, x0 + 0.5 * bar_px - 0.5 * extents.x_advance, y0 - 0.7 * text_px);
+  cairo_show_text(cr, label.c_str());
+  const bool drawn = cairo_status(cr) == CAIRO_STATUS_SUCCESS;
+  cairo_destroy(cr);
+  cairo_surface_flush(surface);
+  for (int y = 0; drawn && y < h; ++y) {
+    const auto* row = reinterpret_cast<const uint32_t*>(data + static_cast<size_t>(y) * stride);
+    for (int x = 0; x < w; ++x)
+      image.set(x, y, (row[x] >> 16) & 0xff, (row[x] >> 8) & 0xff, row[x] & 0xff);
+  }
+  cairo_surface_destroy(surface);
+  if (!drawn)
+    throw Error("scale bar: Cairo could not draw it (no fonts? apt-get install fonts-dejavu-core)");
 }
 
 void Image::write_png(const std::string& path) const {

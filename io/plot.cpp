@@ -30,7 +30,7 @@ using sim2real::TimeSeries;
 // ---- layout, in pixels ----------------------------------------------------------------------
 // every length below is a multiple of the text height, so labels never collide with ticks
 constexpr double kTextPx = 14.0;        // character height [px]: legible at 1000-1500 px widths
-constexpr double kLeftEm = 7.5;         // y tick labels (horizontal) and the y label
+constexpr double kLeftEm = 9.0;         // y tick labels (horizontal) and a y label of two lines
 constexpr double kRightEm = 2.0;        // room for the last x tick label
 constexpr double kBottomEm = 4.5;       // x tick labels and the x label
 constexpr double kTopEm = 0.8;          // above the legend
@@ -38,9 +38,18 @@ constexpr double kGapEm = 1.0;          // between stacked panels (they share th
 constexpr double kTitleEm = 2.2;        // a panel title above its panel
 constexpr double kLegendRowEm = 2.0;    // one legend row
 constexpr std::size_t kLegendColumns = 4;  // entries per legend row
-constexpr double kYLabelEm = 6.2;       // y label distance from the plot box [text heights]
+constexpr double kYLabelEm = 7.6;          // y label distance from the plot box [text heights]
+constexpr double kYLabelLineEm =
+    1.7;  // between the two lines of a split y label (glyphs stand 1.4 high)
 constexpr double kXLabelEm = 3.2;       // x label distance below the plot box [text heights]
 constexpr double kTitleDispEm = 0.8;    // panel title distance above the plot box
+// a character's mean advance in text heights: DejaVu Sans, pngcairo's font, averages about 0.55
+// for lower-case text; 0.6 errs on the long side, so an estimated fit is a real one
+constexpr double kCharWidthEm = 0.6;
+// a y label may fill this fraction of its panel's height; beyond it, it is split, then scaled
+constexpr double kYLabelFill = 0.92;
+// the smallest scale a y label is drawn at (10 px of 14: still legible)
+constexpr double kMinLabelScale = 0.7;
 
 // the data extent gets this fraction of margin on each side (y always; x for markers and
 // equal-aspect panels, whose points would otherwise sit half outside the box)
@@ -334,6 +343,27 @@ std::vector<std::pair<std::vector<PLFLT>, std::vector<PLFLT>>> pieces(const std:
   return out;
 }
 
+}  // namespace
+
+YLabelLines y_label_lines(const std::string& label, double panel_px) {
+  const auto length_px = [](const std::string& text) {
+    return kCharWidthEm * kTextPx * static_cast<double>(text.size());
+  };
+  const double room = kYLabelFill * panel_px;
+  YLabelLines out;
+  out.lines = {label};
+  // too long for the panel: the name, then its unit nearer the axis
+  const std::size_t unit = label.rfind(" [");
+  if (length_px(label) > room && unit != std::string::npos && unit > 0)
+    out.lines = {label.substr(0, unit), label.substr(unit + 1)};
+  double longest = 0.0;
+  for (const std::string& line : out.lines) longest = std::max(longest, length_px(line));
+  out.scale = longest > room && longest > 0.0 ? std::max(kMinLabelScale, room / longest) : 1.0;
+  return out;
+}
+
+namespace {
+
 void draw_panel(plstream& pls, const Figure& f, std::size_t index, const PanelGeometry& g,
                 int width_px, int height_px, const std::vector<Rgb>& colours) {
   const Panel& p = f.panels[index];
@@ -395,7 +425,14 @@ void draw_panel(plstream& pls, const Figure& f, std::size_t index, const PanelGe
   const std::string yopt = "bcnv" + my.options();
   pls.box(xopt.c_str(), mx.tick(), mx.minor(), yopt.c_str(), my.tick(), my.minor());
   pls.slabelfunc(nullptr, nullptr);
-  pls.mtex("l", kYLabelEm, 0.5, 0.5, literal(p.y_label).c_str());
+  // the y label, split and scaled to the panel's height so stacked panels' labels never meet
+  const YLabelLines y_label = y_label_lines(p.y_label, g.bottom - g.top);
+  pls.schr(0.0, y_label.scale);
+  for (std::size_t k = 0; k < y_label.lines.size(); ++k) {
+    const double disp = kYLabelEm - kYLabelLineEm * static_cast<double>(k);
+    pls.mtex("l", disp, 0.5, 0.5, literal(y_label.lines[k]).c_str());
+  }
+  pls.schr(0.0, 1.0);
   if (!p.title.empty()) pls.mtex("t", kTitleDispEm, 0.5, 0.5, literal(p.title).c_str());
   if (bottom_panel) pls.mtex("b", kXLabelEm, 0.5, 0.5, literal(f.x_label).c_str());
 }

@@ -87,6 +87,16 @@ struct Figure {
   void write_png(const std::string& path, int width_px, int height_px) const;
 };
 
+// a panel's y label as drawn: one line, or, when "name [unit]" is longer than the panel is high,
+// the name and the unit on two lines (the unit nearer the axis); `scale` (0.7 to 1) shrinks the
+// text further when a line is still too long. The length is estimated from the character count
+// (io/plot.cpp: kCharWidthEm)
+struct YLabelLines {
+  std::vector<std::string> lines;
+  double scale = 1.0;
+};
+YLabelLines y_label_lines(const std::string& label, double panel_px);
+
 // ---- figures of the sim-to-real comparison --------------------------------------------------
 
 // the size of the run figures talus writes (channels, trajectory, power; talus run and talus

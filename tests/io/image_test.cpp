@@ -7,6 +7,8 @@
 
 #include "io/image.hpp"
 
+#include "host/error.hpp"
+
 namespace talus {
 namespace {
 
@@ -40,6 +42,54 @@ TEST(Image, PngHasSignatureAndSize) {
   EXPECT_EQ(head[19], 7);
   EXPECT_EQ(head[23], 5);
   EXPECT_FALSE(std::filesystem::exists(path + ".tmp"));
+}
+
+}  // namespace
+}  // namespace talus
+
+namespace talus {
+namespace {
+
+// the bar's length: the longest 1, 2 or 5 × 10^k metres within a fifth of the picture's width
+TEST(ScaleBar, LengthIsARoundNumberWithinAFifthOfTheWidth) {
+  EXPECT_DOUBLE_EQ(scale_bar_length(1600, 0.00635), 2.0);  // a fifth spans 2.03 m
+  EXPECT_DOUBLE_EQ(scale_bar_length(1000, 0.001), 0.2);    // 0.2 m exactly
+  EXPECT_DOUBLE_EQ(scale_bar_length(1000, 0.0049), 0.5);   // 0.98 m
+  EXPECT_DOUBLE_EQ(scale_bar_length(1000, 0.06), 10.0);    // 12 m
+  EXPECT_NEAR(scale_bar_length(500, 1e-5), 1e-3, 1e-15);   // 1 mm
+}
+
+// drawn on a white picture at 1 cm per pixel: a black bar 1 m = 100 px long near the bottom-left
+// corner, its label above it, and nothing drawn in the rest of the picture
+TEST(ScaleBar, DrawsABarOfItsLengthWithItsLabel) {
+  Image image(800, 400);
+  draw_scale_bar(image, 0.01);
+  const auto dark = [&](int x, int y) {
+    const uint8_t* p = image.pixel(x, y);
+    return p[0] < 100 && p[1] < 100 && p[2] < 100;
+  };
+  // the longest horizontal run of dark pixels is the bar (line caps add nothing: butt ends)
+  int longest = 0, bar_row = -1;
+  for (int y = 0; y < 400; ++y) {
+    int run = 0;
+    for (int x = 0; x < 800; ++x) {
+      run = dark(x, y) ? run + 1 : 0;
+      if (run > longest) longest = run, bar_row = y;
+    }
+  }
+  EXPECT_NEAR(longest, 100, 3);
+  EXPECT_GT(bar_row, 300);
+  // the label: dark pixels above the bar's middle
+  int label = 0;
+  for (int y = bar_row - 30; y < bar_row - 5; ++y)
+    for (int x = 20; x < 140; ++x) label += dark(x, y) ? 1 : 0;
+  EXPECT_GT(label, 20);
+  // nothing in the upper half
+  for (int y = 0; y < 200; ++y)
+    for (int x = 0; x < 800; ++x) ASSERT_FALSE(dark(x, y)) << x << "," << y;
+  EXPECT_THROW(draw_scale_bar(image, 0.0), InputError);
+  Image tiny(60, 30);
+  EXPECT_THROW(draw_scale_bar(tiny, 0.01), InputError);
 }
 
 }  // namespace

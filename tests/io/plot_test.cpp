@@ -454,3 +454,29 @@ TEST_F(PlotTest, CommandWritesTheThreeFiguresAndRejectsBadInput) {
 
 }  // namespace
 }  // namespace talus
+
+namespace talus {
+namespace {
+
+// a y label that fits its panel stays one line; a longer "name [unit]" is split into the name
+// and the unit, and a line still too long is drawn smaller, never below 0.7
+TEST(PlotLayout, LongYLabelsAreSplitThenScaledToTheirPanel) {
+  const YLabelLines fits = y_label_lines("speed [m/s]", 400.0);
+  EXPECT_EQ(fits.lines, std::vector<std::string>{"speed [m/s]"});
+  EXPECT_DOUBLE_EQ(fits.scale, 1.0);
+  // 19 characters at 0.6 x 14 px: 160 px, more than a 116 px panel holds
+  const YLabelLines split = y_label_lines("traction force [kN]", 116.0);
+  EXPECT_EQ(split.lines, (std::vector<std::string>{"traction force", "[kN]"}));
+  // "traction force": 14 characters, 118 px, a little more than 0.92 x 116 px: drawn at 0.91
+  EXPECT_NEAR(split.scale, 0.92 * 116.0 / (0.6 * 14.0 * 14), 1e-12);
+  EXPECT_EQ(y_label_lines("lift force [kN]", 200.0).lines.size(), 1u);
+  const YLabelLines scaled = y_label_lines("traction force [kN]", 100.0);
+  EXPECT_EQ(scaled.lines.size(), 2u);
+  EXPECT_NEAR(scaled.scale, 0.92 * 100.0 / (0.6 * 14.0 * 14), 1e-12);
+  const YLabelLines floor = y_label_lines("a label without a unit that is far too long", 50.0);
+  EXPECT_EQ(floor.lines.size(), 1u);
+  EXPECT_DOUBLE_EQ(floor.scale, 0.7);
+}
+
+}  // namespace
+}  // namespace talus

@@ -1,6 +1,7 @@
 """Runs the Python package's tests (tests/python) for ctest: the build tree's package on the path,
 in a virtual environment at <build>/pyenv that sees Debian's numpy and pytest and holds Gymnasium
 from PyPI. Without PyPI the environment's tests skip, saying why; the bindings' tests still run.
+Exit 77 (ctest's skip) when pytest or NumPy is neither installed nor installable.
 
 usage: run_pytest.py BUILD_DIR SOURCE_DIR [pytest arguments]
 """
@@ -17,15 +18,26 @@ def main():
     # idempotent set-up: the environment once, Gymnasium into it when it is missing
     if not os.path.exists(python):
         venv.EnvBuilder(system_site_packages=True, with_pip=True).create(env_dir)
-    has_gym = subprocess.run([python, "-c", "import gymnasium"], capture_output=True).returncode == 0
-    if not has_gym:
+    # what the tests need: pytest and NumPy (Debian's, seen through the system site packages, or
+    # from PyPI for an interpreter without them), Gymnasium from PyPI; a missing Gymnasium skips
+    # the environment's tests, a missing pytest or NumPy skips the run (exit 77), saying why
+    for module, requirement, needed in (("pytest", "pytest>=7", True), ("numpy", "numpy>=1.21", True),
+                                        ("gymnasium", "gymnasium>=0.29", False)):
+        if subprocess.run([python, "-c", f"import {module}"], capture_output=True).returncode == 0:
+            continue
         r = subprocess.run([python, "-m", "pip", "install", "--quiet", "--disable-pip-version-check",
-                            "--timeout", "30", "gymnasium>=0.29"], capture_output=True, text=True)
+                            "--timeout", "30", requirement], capture_output=True, text=True)
         if r.returncode != 0:
-            print("run_pytest: could not install gymnasium from PyPI (no network?); the environment's "
-                  "tests will skip:\n" + r.stderr[-600:], file=sys.stderr)
+            why = f"run_pytest: could not install {requirement} from PyPI (no network?)"
+            if needed:
+                print(f"{why}; apt-get install python3-pytest python3-numpy; skipped:\n{r.stderr[-600:]}",
+                      file=sys.stderr)
+                return 77
+            print(f"{why}; the tests that need it will skip:\n{r.stderr[-600:]}", file=sys.stderr)
     env = dict(os.environ)
     env["PYTHONPATH"] = os.path.join(build, "python") + os.pathsep + env.get("PYTHONPATH", "")
+    # the built tool, for the tests that read what `talus run` writes
+    env["TALUS_BUILD_DIR"] = build
     cmd = [python, "-m", "pytest", "-q", "-rs", "-p", "no:cacheprovider", os.path.join(source, "tests", "python")]
     return subprocess.run(cmd + sys.argv[3:], env=env).returncode
 
