@@ -71,7 +71,9 @@ vehicle::SensorSample LoadingCycle::reading() const {
 
 void LoadingCycle::step_with(const vehicle::CycleTargets& c) {
   sim_.step(c.drive, c.lift, c.tilt);
-  cycle_.advance(reading());
+  // the cycle reads the sensors only while it has time left (as the sweep always did: a cycle
+  // at its time limit ends in the phase it was in)
+  if (!sim_.done()) cycle_.advance(reading());
 }
 
 void LoadingCycle::step() { step_with(cycle_.targets(reading())); }

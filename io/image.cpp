@@ -38,7 +38,8 @@ void Image::disc(double cx, double cy, double radius, uint8_t r, uint8_t g, uint
 
 double scale_bar_length(int width_px, double metres_per_px) {
   const double most = 0.2 * width_px * metres_per_px;  // [m]
-  const double decade = std::pow(10.0, std::floor(std::log10(most)));
+  // a hair above the exact decade, so 0.2 m at a fifth gives 0.2, not 0.1, after rounding
+  const double decade = std::pow(10.0, std::floor(std::log10(most) + 1e-9));
   for (const double step : {5.0, 2.0, 1.0})
     if (step * decade <= most) return step * decade;
   return decade;
@@ -52,7 +53,8 @@ std::string length_label(double metres) {
   };
   if (metres >= 1.0) return whole(metres) + " m";
   if (metres >= 0.01) return whole(100.0 * metres) + " cm";
-  return whole(1000.0 * metres) + " mm";
+  if (metres >= 0.001) return whole(1000.0 * metres) + " mm";
+  return whole(1e6 * metres) + " \u00b5m";
 }
 }  // namespace
 
@@ -67,6 +69,11 @@ void draw_scale_bar(Image& image, double metres_per_px) {
   const double bar_px = length_m / metres_per_px;
   // the picture into a Cairo surface (0xXXRRGGBB per pixel), drawn on, and back
   cairo_surface_t* surface = cairo_image_surface_create(CAIRO_FORMAT_RGB24, w, h);
+  if (cairo_surface_status(surface) != CAIRO_STATUS_SUCCESS) {
+    cairo_surface_destroy(surface);
+    throw Error("scale bar: Cairo could not make a " + std::to_string(w) + " x " +
+                std::to_string(h) + " surface (out of memory?)");
+  }
   const int stride = cairo_image_surface_get_stride(surface);
   auto* data = cairo_image_surface_get_data(surface);
   cairo_surface_flush(surface);

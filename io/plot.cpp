@@ -429,7 +429,8 @@ void draw_panel(plstream& pls, const Figure& f, std::size_t index, const PanelGe
   const YLabelLines y_label = y_label_lines(p.y_label, g.bottom - g.top);
   pls.schr(0.0, y_label.scale);
   for (std::size_t k = 0; k < y_label.lines.size(); ++k) {
-    const double disp = kYLabelEm - kYLabelLineEm * static_cast<double>(k);
+    // mtex measures its displacement in the current (scaled) character height
+    const double disp = (kYLabelEm - kYLabelLineEm * static_cast<double>(k)) / y_label.scale;
     pls.mtex("l", disp, 0.5, 0.5, literal(y_label.lines[k]).c_str());
   }
   pls.schr(0.0, 1.0);

@@ -60,10 +60,12 @@ talus::SimulationOptions options_from(const py::kwargs& kwargs) {
 PYBIND11_MODULE(_talus, m) {
   m.doc() = "talus: a wheel loader digging in gravel (the C++ facade, embed/talus.hpp)";
 
-  // the library's errors: InputError (bad options or data files) before Error (the simulation)
+  // the library's errors: InputError (bad options or data files) is a talus.Error, as in C++, and
+  // a ValueError; translated before Error, its base. Module-lifetime objects, as pybind11 shows
   static py::exception<talus::Error> error(m, "Error", PyExc_RuntimeError);
-  static py::exception<talus::InputError> input_error(m, "InputError", PyExc_ValueError);
-  py::register_exception_translator([](std::exception_ptr p) {
+  static py::exception<talus::InputError> input_error(
+      m, "InputError", py::make_tuple(py::handle(error), py::handle(PyExc_ValueError)));
+  py::register_local_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);
     } catch (const talus::InputError& e) {

@@ -26,10 +26,10 @@ install_packages() {
 }
 
 configure_and_build() {
-  local werror=OFF
-  [ "${CI:-}" = "true" ] && werror=ON
+  # warnings are errors in every build these scripts make, CI's and a person's alike: the same
+  # flags, so switching between the two does not rebuild everything
   # compile_commands.json for scripts/lint's clang-tidy
-  cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release -DTALUS_WERROR=$werror \
+  cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release -DTALUS_WERROR=ON \
     -DCMAKE_EXPORT_COMPILE_COMMANDS=ON >/dev/null
   cmake --build "$build" -j "$(nproc)"
 }

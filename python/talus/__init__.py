@@ -24,6 +24,10 @@ __all__ = ["Simulation", "SimulationOptions", "Targets", "CycleSummary", "Error"
 # build tree links the repository's; $TALUS_DATA_DIR still comes first (embed/talus.hpp)
 DATA_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), "data")
 
+# SimulationOptions' fields (embed/talus.hpp)
+_OPTION_FIELDS = ("scenario", "level", "seed", "progress", "data_dir", "pile_cache", "loading_cycle",
+                  "cycle_approach", "cycle_max_time", "cycle_s")
+
 
 class Simulation(_Simulation):
     """A scenario's run, stepped by the caller (embed/talus.hpp, talus::Simulation).
@@ -38,7 +42,12 @@ class Simulation(_Simulation):
             if kwargs:
                 raise TypeError("talus.Simulation: give a SimulationOptions or keywords, not both")
             if not options.data_dir:
-                options.data_dir = DATA_DIR
+                # a copy with the package's data folder; the caller's options stay as they were
+                own = SimulationOptions()
+                for name in _OPTION_FIELDS:
+                    setattr(own, name, getattr(options, name))
+                own.data_dir = DATA_DIR
+                options = own
             super().__init__(options)
         else:
             kwargs.setdefault("data_dir", DATA_DIR)
@@ -49,9 +58,9 @@ class Simulation(_Simulation):
 CHANNELS = tuple(_Simulation.channel_names)
 UNITS = tuple(_Simulation.channel_units)
 
-try:  # the environment's registration, when Gymnasium is there
+try:  # the environment's registration, when Gymnasium is there and imports
     import gymnasium as _gymnasium
-except ImportError:  # pragma: no cover - the bindings work without it
+except Exception:  # pragma: no cover - the bindings work without it
     _gymnasium = None
 if _gymnasium is not None and "talus/BucketFilling-v0" not in _gymnasium.registry:
     _gymnasium.register(id="talus/BucketFilling-v0", entry_point="talus.envs:BucketFillingEnv")

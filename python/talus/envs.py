@@ -71,6 +71,7 @@ class BucketFillingEnv(gym.Env):
 
     # the simulation at the start of the fill, on pile `seed`
     def _start(self, seed):
+        self.sim = None  # the previous episode's device memory goes first
         self.sim = Simulation(scenario=self.scenario, level=self.level, seed=seed, loading_cycle=True,
                               cycle_approach=self.approach, cycle_max_time=self.max_cycle_time,
                               progress=self.progress)
@@ -123,9 +124,11 @@ class BucketFillingEnv(gym.Env):
         truncated = (over and not broke_out) or (self.sim.done and not terminated)
         info = self._info()
         info["broke_out"] = broke_out
+        # the observation at the end of the fill, before the rest of the cycle drives on
+        observation = self._observation()
         if (terminated or truncated) and self.complete_cycle:
             info["cycle"] = self._finish_cycle()
-        return self._observation(), float(reward), bool(terminated), bool(truncated), info
+        return observation, float(reward), bool(terminated), bool(truncated), info
 
     # the rest of the loading cycle with its own targets (hold, retreat), and the paper's measures
     def _finish_cycle(self):

@@ -71,7 +71,9 @@ std::vector<T> values_of(const std::string& bytes) {
 // particles.vtp: the header says binary appended data with UInt64 byte counts, and each array's
 // bytes are the particles' values as float32, fresh random particles every run
 TEST(Output, ParticlesVtpHoldsTheParticlesInBinary) {
-  std::mt19937_64 rng(std::random_device{}());
+  const std::uint64_t seed = std::random_device{}();
+  SCOPED_TRACE("random seed " + std::to_string(seed));  // a failure names the inputs to replay it
+  std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(-5.0, 5.0);
   Particles p;
   for (int i = 0; i < 37; ++i) {

@@ -69,6 +69,11 @@ def test_errors_name_the_option_and_are_python_exceptions():
     with pytest.raises(talus.InputError, match="scenario 'nope'"):
         talus.Simulation(scenario="nope")
     assert issubclass(talus.InputError, ValueError) and issubclass(talus.Error, RuntimeError)
+    assert issubclass(talus.InputError, talus.Error)  # as talus::InputError is a talus::Error
+    options = talus.SimulationOptions()
+    options.scenario = "flat-lift"
+    talus.Simulation(options)
+    assert options.data_dir == ""  # the caller's options are not changed
     with pytest.raises(talus.InputError, match="level"):
         talus.Simulation(scenario="hd27", level="D37")
     with pytest.raises(talus.InputError, match="cycle_s"):

@@ -1,0 +1,39 @@
+#!/usr/bin/env bash
+# Fuzzes talus's file loaders with libFuzzer (docs/reliability.md, "Fuzzing"): builds the fuzz
+# targets with clang, the address and undefined-behaviour sanitizers in build-fuzz/, runs each
+# for SECONDS (default 600) from the saved corpus, then merges what found new coverage back into
+# fuzz/corpus/TARGET (libFuzzer's -merge keeps a minimal set). A finding leaves its input as
+# build-fuzz/findings/TARGET/crash-* and the script exits 1.
+#
+# usage: fuzz/run.sh [SECONDS] [TARGET...]     (targets: scenario machine pile run)
+set -euo pipefail
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+seconds=${1:-600}
+shift || true
+targets=("$@")
+[ ${#targets[@]} -eq 0 ] && targets=(scenario machine pile run)
+build="$root/build-fuzz"
+
+cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang \
+  -DCMAKE_CXX_COMPILER=clang++ -DTALUS_FUZZ=ON -DTALUS_BUILD_TESTS=OFF -DTALUS_BUILD_BENCH=OFF \
+  -DTALUS_PYTHON=OFF >/dev/null
+cmake --build "$build" -j "$(nproc)" --target "${targets[@]/#/fuzz_}"
+
+status=0
+for t in "${targets[@]}"; do
+  work="$build/corpus/$t" findings="$build/findings/$t"
+  mkdir -p "$work" "$findings"
+  # fuzz from the saved corpus into the working one; the log's last lines carry the counts
+  if ! "$build/fuzz/fuzz_$t" -max_total_time="$seconds" -dict="$root/fuzz/json.dict" -print_final_stats=1 \
+      -artifact_prefix="$findings/" -timeout=20 -rss_limit_mb=4096 "$work" "$root/fuzz/corpus/$t" \
+      > "$build/fuzz_$t.log" 2>&1; then
+    echo "fuzz $t: a finding, see $build/fuzz_$t.log and $findings/" >&2
+    status=1
+  fi
+  runs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$build/fuzz_$t.log" | grep -o '[0-9]*$' || echo "?")
+  # keep what found new coverage: a minimal set merged into the repository's corpus
+  "$build/fuzz/fuzz_$t" -merge=1 "$root/fuzz/corpus/$t" "$work" > "$build/merge_$t.log" 2>&1 || true
+  echo "fuzz $t: $runs executions in $seconds s, corpus $(ls "$root/fuzz/corpus/$t" | wc -l) files," \
+       "findings $(ls "$findings" | wc -l)"
+done
+exit $status
