@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Fuzzes talus's file loaders with libFuzzer (docs/reliability.md, "Fuzzing"): builds the fuzz
 # targets with clang, the address and undefined-behaviour sanitizers in build-fuzz/, runs each
-# for SECONDS (default 600) from the saved corpus, then merges what found new coverage back into
-# fuzz/corpus/TARGET (libFuzzer's -merge keeps a minimal set). A finding leaves its input as
-# build-fuzz/findings/TARGET/crash-* and the script exits 1.
+# for SECONDS (default 600) from the saved corpus, then replaces fuzz/corpus/TARGET with a minimal
+# set covering the old corpus and the new inputs (libFuzzer's -merge into an empty folder). A
+# finding stops that target's run, leaves its input as build-fuzz/findings/TARGET/crash-* and
+# makes the script exit 1; fix the loader, keep the input in fuzz/regressions/TARGET, rerun.
 #
 # usage: fuzz/run.sh [SECONDS] [TARGET...]     (targets: scenario machine pile run)
 set -euo pipefail
@@ -24,16 +25,22 @@ for t in "${targets[@]}"; do
   work="$build/corpus/$t" findings="$build/findings/$t"
   mkdir -p "$work" "$findings"
   # fuzz from the saved corpus into the working one; the log's last lines carry the counts
+  started=$(date +%s)
   if ! "$build/fuzz/fuzz_$t" -max_total_time="$seconds" -dict="$root/fuzz/json.dict" -print_final_stats=1 \
       -artifact_prefix="$findings/" -timeout=20 -rss_limit_mb=4096 "$work" "$root/fuzz/corpus/$t" \
       > "$build/fuzz_$t.log" 2>&1; then
     echo "fuzz $t: a finding, see $build/fuzz_$t.log and $findings/" >&2
     status=1
   fi
+  elapsed=$(( $(date +%s) - started ))
   runs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$build/fuzz_$t.log" | grep -o '[0-9]*$' || echo "?")
-  # keep what found new coverage: a minimal set merged into the repository's corpus
-  "$build/fuzz/fuzz_$t" -merge=1 "$root/fuzz/corpus/$t" "$work" > "$build/merge_$t.log" 2>&1 || true
-  echo "fuzz $t: $runs executions in $seconds s, corpus $(ls "$root/fuzz/corpus/$t" | wc -l) files," \
-       "findings $(ls "$findings" | wc -l)"
+  # the repository's corpus becomes a minimal set covering what it had and what was found
+  merged="$build/merged/$t"
+  rm -rf "$merged" && mkdir -p "$merged"
+  if "$build/fuzz/fuzz_$t" -merge=1 "$merged" "$root/fuzz/corpus/$t" "$work" > "$build/merge_$t.log" 2>&1; then
+    rm -rf "$root/fuzz/corpus/$t" && cp -r "$merged" "$root/fuzz/corpus/$t"
+  fi
+  echo "fuzz $t: $runs executions in $elapsed s, corpus $(ls "$root/fuzz/corpus/$t" | wc -l) files" \
+       "($(du -sk "$root/fuzz/corpus/$t" | cut -f1) kB), findings $(ls "$findings" | wc -l)"
 done
 exit $status

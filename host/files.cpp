@@ -68,4 +68,19 @@ void write_json(const std::string& path, const nlohmann::json& j) {
   write_file_atomically(path, j.dump(2) + "\n");
 }
 
+nlohmann::json read_json_file(const std::string& path, const std::string& why_needed) {
+  std::ifstream in(path);
+  if (!in)
+    throw InputError(path + ": cannot open the file (" + why_needed + "); check the name or path");
+  try {
+    return nlohmann::json::parse(in);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw InputError(path + ": not valid JSON (" + e.what() +
+                     "); fix the syntax at the byte given");
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(path + ": not readable as JSON (" + e.what() +
+                     "); write numbers within ±1.8e308");
+  }
+}
+
 }  // namespace talus

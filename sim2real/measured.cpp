@@ -20,14 +20,8 @@ constexpr double kPeriodTolerance = 1e-6;
 
 // reads one JSON object, or InputError naming the file
 nlohmann::json read_object(const fs::path& file) {
-  std::ifstream in(file);
-  if (!in) throw InputError(file.string() + ": cannot open; a measured run needs " + kMetadataFile);
-  nlohmann::json j;
-  try {
-    in >> j;
-  } catch (const nlohmann::json::parse_error& e) {
-    throw InputError(file.string() + ": not valid JSON: " + e.what());
-  }
+  const nlohmann::json j =
+      read_json_file(file.string(), std::string("a measured run needs ") + kMetadataFile);
   if (!j.is_object()) throw InputError(file.string() + ": must be a JSON object");
   return j;
 }

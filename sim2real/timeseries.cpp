@@ -173,17 +173,10 @@ void save_timeseries(const fs::path& file, const TimeSeries& series) {
 }
 
 RunSummary load_summary(const fs::path& file) {
-  std::ifstream in(file);
-  if (!in)
-    throw InputError(file.string() +
-                     ": cannot open the run summary; summary.json is written last, so a " +
-                     "folder without it holds a run that did not finish (rerun it)");
-  nlohmann::json j;
-  try {
-    in >> j;
-  } catch (const nlohmann::json::parse_error& e) {
-    throw InputError(file.string() + ": not valid JSON: " + e.what());
-  }
+  const nlohmann::json j = read_json_file(
+      file.string(),
+      "the run summary; summary.json is written last, so a folder without it holds a run that did "
+      "not finish: rerun it");
   if (!j.is_object()) throw InputError(file.string() + ": the summary must be a JSON object");
 
   // numbers: required ones must exist; all must be finite

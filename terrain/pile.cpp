@@ -8,6 +8,7 @@
 
 #include "host/data_files.hpp"
 #include "host/error.hpp"
+#include "host/files.hpp"
 
 namespace talus {
 
@@ -35,14 +36,7 @@ double PileProfile::cross_section() const {
 }
 
 PileProfile load_pile_profile(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path + ": cannot open the pile profile file");
-  nlohmann::json j;
-  try {
-    in >> j;
-  } catch (const nlohmann::json::exception& e) {
-    throw InputError(path + ": not valid JSON (" + std::string(e.what()) + ")");
-  }
+  const nlohmann::json j = read_json_file(path, "the pile profile");
   auto field = [&](const char* name) -> const nlohmann::json& {
     if (!j.contains(name))
       throw InputError(path + ": missing field '" + name + "'; see data/piles/default.json");

@@ -6,17 +6,12 @@
 
 #include "host/data_files.hpp"
 #include "host/error.hpp"
+#include "host/files.hpp"
 
 namespace talus::vehicle {
 
-DataFile::DataFile(const std::string& path) : path_(path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path + ": cannot open the file; check the name or path");
-  try {
-    root_ = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::parse_error& e) {
-    throw InputError(path + ": not valid JSON (" + e.what() + "); fix the syntax at the byte given");
-  }
+DataFile::DataFile(const std::string& path)
+    : path_(path), root_(read_json_file(path, "a talus data file")) {
   if (!root_.is_object()) fail("(top level)", "is not a JSON object", "wrap the file's fields in { }");
 }
 
