@@ -44,12 +44,16 @@ talus::SimulationOptions options_from(const py::kwargs& kwargs) {
   py::object o = py::cast(&options, py::return_value_policy::reference);
   for (const auto& [key, value] : kwargs) {
     const std::string name = py::str(key);
-    if (!py::hasattr(o, name.c_str()) || name.rfind("__", 0) == 0)
-      throw py::type_error(
-          "talus.Simulation: unknown option '" + name +
-          "'; the options are scenario, level, seed, progress, data_dir, pile_cache, "
-          "loading_cycle, "
-          "cycle_approach, cycle_max_time, cycle_s (help(talus.SimulationOptions))");
+    if (!py::hasattr(o, name.c_str()) || name.rfind("_", 0) == 0) {
+      // the known options, read from the class itself
+      std::string known;
+      for (const auto& attribute : py::reinterpret_steal<py::list>(PyObject_Dir(o.ptr()))) {
+        const std::string a = py::str(attribute);
+        if (a.rfind("_", 0) != 0) known += (known.empty() ? "" : ", ") + a;
+      }
+      throw py::type_error("talus.Simulation: unknown option '" + name + "'; the options are " +
+                           known + " (help(talus.SimulationOptions))");
+    }
     o.attr(name.c_str()) = value;
   }
   return options;
