@@ -126,6 +126,17 @@ def main():
     ap.add_argument("--plot", help="a PNG of load, pitch and particle checks over time")
     args = ap.parse_args()
 
+    # the run's length and outputs, checked before minutes of simulation
+    if not (np.isfinite(args.minutes) and 0.0 < args.minutes <= 600.0):
+        print(f"soak.py: --minutes {args.minutes}: give simulated minutes in (0, 600]", file=sys.stderr)
+        return 2
+    try:
+        for path, option in ((args.json, "--json"), (args.plot, "--plot")):
+            if path:
+                talus.check_output_path(path, option)
+    except talus.InputError as e:
+        print(f"soak.py: {e}", file=sys.stderr)
+        return 2
     if args.scenario in ("load-carry", "flat-lift"):
         return machine_alone(args)
     if not args.level.startswith("D"):

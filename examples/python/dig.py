@@ -22,6 +22,7 @@ def main():
     args = ap.parse_args()
 
     try:
+        talus.check_output_path(args.out, "--out", folder=True)
         sim = talus.Simulation(scenario=args.scenario, level=args.level, seed=args.seed, progress=True)
     except talus.InputError as e:
         print(f"dig.py: {e}", file=sys.stderr)

@@ -18,15 +18,29 @@ from ._talus import (CycleSummary, Error, InputError, SimulationOptions, Targets
 from ._talus import Simulation as _Simulation
 
 __all__ = ["Simulation", "SimulationOptions", "Targets", "CycleSummary", "Error", "InputError",
-           "CHANNELS", "UNITS", "DATA_DIR"]
+           "CHANNELS", "UNITS", "DATA_DIR", "check_output_path"]
 
 # the package's own data (machines, scenarios, piles): the installed wheel carries a copy, the
 # build tree links the repository's; $TALUS_DATA_DIR still comes first (embed/talus.hpp)
 DATA_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), "data")
 
-# SimulationOptions' fields (embed/talus.hpp)
-_OPTION_FIELDS = ("scenario", "level", "seed", "progress", "data_dir", "pile_cache", "loading_cycle",
-                  "cycle_approach", "cycle_max_time", "cycle_s")
+# SimulationOptions' fields (embed/talus.hpp), as the binding declares them
+_OPTION_FIELDS = tuple(name for name in dir(SimulationOptions) if not name.startswith("_"))
+
+
+def check_output_path(path, option, folder=False):
+    """Checks before a long run that `path` (a file, or with `folder` a folder) can be written:
+    its folder is created and a probe file written and removed. InputError naming `option` and
+    the path otherwise, as the command-line tool checks its outputs (docs/reliability.md)."""
+    directory = path if folder else (os.path.dirname(os.path.abspath(path)) or ".")
+    probe = os.path.join(directory, f".talus-probe-{os.getpid()}")
+    try:
+        os.makedirs(directory, exist_ok=True)
+        with open(probe, "w"):
+            pass
+        os.remove(probe)
+    except OSError as e:
+        raise InputError(f"{option} {path}: cannot write there ({e.strerror}); give a writable path") from None
 
 
 class Simulation(_Simulation):

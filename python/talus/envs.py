@@ -54,6 +54,12 @@ class BucketFillingEnv(gym.Env):
                              "render; write the particles with Simulation.particles() instead")
         if len(pile_seeds) == 0:
             raise ValueError("BucketFillingEnv: pile_seeds is empty; give at least one pile seed")
+        # the reward's weights [t/s, t/kJ] and the cycle's distances and times, finite and in range
+        for name, value, low in (("time_cost", time_cost, 0.0), ("work_cost", work_cost, 0.0),
+                                 ("approach", approach, 1e-9), ("max_cycle_time", max_cycle_time, 1e-9)):
+            if not (np.isfinite(value) and value >= low):
+                raise ValueError(f"BucketFillingEnv: {name} {value!r}: give a finite number "
+                                 f"{'above 0' if low > 0 else 'of 0 or more'}")
         self.level = level
         self.scenario = scenario
         self.pile_seeds = tuple(int(s) for s in pile_seeds)

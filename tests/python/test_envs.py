@@ -91,3 +91,11 @@ def test_the_vectorised_form_steps_several_fills_in_one_process():
         obs, rewards, terminated, truncated, infos = envs.step(np.tile([0.3, 0.2, 0.2], (2, 1)).astype(np.float32))
     assert rewards.shape == (2,) and np.all(np.isfinite(obs))
     envs.close()
+
+
+def test_bad_parameters_are_refused_at_construction_naming_them():
+    for kwargs, name in (({"time_cost": float("nan")}, "time_cost"), ({"work_cost": -1.0}, "work_cost"),
+                         ({"approach": 0.0}, "approach"), ({"max_cycle_time": float("inf")}, "max_cycle_time"),
+                         ({"pile_seeds": ()}, "pile_seeds")):
+        with pytest.raises(ValueError, match=name):
+            BucketFillingEnv(level=LEVEL, **kwargs)

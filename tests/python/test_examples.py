@@ -29,6 +29,15 @@ def test_the_dig_example_refuses_a_bad_level(tmp_path):
     assert r.returncode == 2 and "level" in r.stderr
 
 
+def test_unwritable_outputs_are_refused_before_the_run():
+    for script, args in (("dig.py", ["--out", "/proc/talus-nope"]),
+                         ("sweep.py", ["--csv", "/proc/talus-nope/s.csv"]),
+                         ("random_rollout.py", ["--out", "/proc/talus-nope/r.png"])):
+        r = subprocess.run([sys.executable, os.path.join(EXAMPLES, script), "--level", "G400", *args],
+                           capture_output=True, text=True, timeout=60)
+        assert r.returncode == 2 and "cannot write there" in r.stderr, script + ": " + r.stderr
+
+
 def test_the_sweep_example_prints_each_point_and_the_best(tmp_path):
     csv = tmp_path / "sweep.csv"
     out = run("sweep.py", "--level", "G400", "--samples", "2", "--csv", str(csv))

@@ -32,3 +32,11 @@ def test_a_type_g_level_is_refused(tmp_path):
     r = subprocess.run([sys.executable, SOAK, "--level", "G400", "--minutes", "0.1"], capture_output=True,
                        text=True)
     assert r.returncode == 2 and "type-D" in r.stderr
+
+
+def test_bad_length_and_unwritable_outputs_are_refused_before_the_soak():
+    for args, says in ((["--minutes", "nan"], "--minutes"), (["--minutes", "0"], "--minutes"),
+                       (["--json", "/proc/talus-nope/s.json"], "--json"),
+                       (["--plot", "/proc/talus-nope/s.png"], "--plot")):
+        r = subprocess.run([sys.executable, SOAK, *args], capture_output=True, text=True, timeout=60)
+        assert r.returncode == 2 and says in r.stderr, r.stderr
