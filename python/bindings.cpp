@@ -44,12 +44,12 @@ talus::SimulationOptions options_from(const py::kwargs& kwargs) {
   py::object o = py::cast(&options, py::return_value_policy::reference);
   for (const auto& [key, value] : kwargs) {
     const std::string name = py::str(key);
-    if (!py::hasattr(o, name.c_str()) || name.rfind("_", 0) == 0) {
+    if (!py::hasattr(o, name.c_str()) || (!name.empty() && name[0] == '_')) {
       // the known options, read from the class itself
       std::string known;
       for (const auto& attribute : py::reinterpret_steal<py::list>(PyObject_Dir(o.ptr()))) {
         const std::string a = py::str(attribute);
-        if (a.rfind("_", 0) != 0) known += (known.empty() ? "" : ", ") + a;
+        if (!a.empty() && a[0] != '_') known += (known.empty() ? "" : ", ") + a;
       }
       throw py::type_error("talus.Simulation: unknown option '" + name + "'; the options are " +
                            known + " (help(talus.SimulationOptions))");
