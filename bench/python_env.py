@@ -75,12 +75,7 @@ def main():
     if args.repeats < 1:
         print("python_env.py: --repeats must be at least 1", file=sys.stderr)
         return 2
-    if args.json:
-        try:
-            talus.check_output_path(args.json, "--json")
-        except talus.InputError as e:
-            print(f"python_env.py: {e}", file=sys.stderr)
-            return 2
+    talus.check_output_arguments(ap, files=[("--json", args.json)])
     results = {"machine": talus.Simulation(scenario="fb35", level="G400").device, "levels": {}}
     for level in args.levels.split(","):
         # one warm-up (the pile cache, the kernels), then the repeats interleaved

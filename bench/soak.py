@@ -130,13 +130,7 @@ def main():
     if not (np.isfinite(args.minutes) and 0.0 < args.minutes <= 600.0):
         print(f"soak.py: --minutes {args.minutes}: give simulated minutes in (0, 600]", file=sys.stderr)
         return 2
-    try:
-        for path, option in ((args.json, "--json"), (args.plot, "--plot")):
-            if path:
-                talus.check_output_path(path, option)
-    except talus.InputError as e:
-        print(f"soak.py: {e}", file=sys.stderr)
-        return 2
+    talus.check_output_arguments(ap, files=[("--json", args.json), ("--plot", args.plot)])
     if args.scenario in ("load-carry", "flat-lift"):
         return machine_alone(args)
     if not args.level.startswith("D"):

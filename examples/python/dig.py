@@ -21,8 +21,8 @@ def main():
     ap.add_argument("--out", required=True, help="output folder (channels.csv, particles.npz)")
     args = ap.parse_args()
 
+    talus.check_output_arguments(ap, folders=[("--out", args.out)])
     try:
-        talus.check_output_path(args.out, "--out", folder=True)
         sim = talus.Simulation(scenario=args.scenario, level=args.level, seed=args.seed, progress=True)
     except talus.InputError as e:
         print(f"dig.py: {e}", file=sys.stderr)

@@ -23,11 +23,7 @@ def main():
     ap.add_argument("--out", required=True, help="the plot (PNG)")
     args = ap.parse_args()
 
-    try:
-        talus.check_output_path(args.out, "--out")
-    except talus.InputError as e:
-        print(f"random_rollout.py: {e}", file=sys.stderr)
-        return 2
+    talus.check_output_arguments(ap, files=[("--out", args.out)])
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt

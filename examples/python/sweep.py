@@ -23,12 +23,7 @@ def main():
     if args.samples < 2:
         print("sweep.py: --samples must be at least 2", file=sys.stderr)
         return 2
-    if args.csv:
-        try:
-            talus.check_output_path(args.csv, "--csv")
-        except talus.InputError as e:
-            print(f"sweep.py: {e}", file=sys.stderr)
-            return 2
+    talus.check_output_arguments(ap, files=[("--csv", args.csv)])
 
     rows = []
     print(f"{'s':>5} {'M [kg]':>8} {'T [s]':>6} {'W [kJ]':>7} {'M/T [kg/s]':>10} {'M/W [kg/kJ]':>11} breakout")

@@ -18,7 +18,7 @@ from ._talus import (CycleSummary, Error, InputError, SimulationOptions, Targets
 from ._talus import Simulation as _Simulation
 
 __all__ = ["Simulation", "SimulationOptions", "Targets", "CycleSummary", "Error", "InputError",
-           "CHANNELS", "UNITS", "DATA_DIR", "check_output_path"]
+           "CHANNELS", "UNITS", "DATA_DIR", "check_output_path", "check_output_arguments"]
 
 # the package's own data (machines, scenarios, piles): the installed wheel carries a copy, the
 # build tree links the repository's; $TALUS_DATA_DIR still comes first (embed/talus.hpp)
@@ -41,6 +41,19 @@ def check_output_path(path, option, folder=False):
         os.remove(probe)
     except OSError as e:
         raise InputError(f"{option} {path}: cannot write there ({e.strerror}); give a writable path") from None
+
+
+def check_output_arguments(parser, files=(), folders=()):
+    """A script's output options, (option, path) pairs, checked with check_output_path before it
+    simulates; a path of None is skipped; a refusal ends the script through parser.error (exit 2)."""
+    for pairs, folder in ((files, False), (folders, True)):
+        for option, path in pairs:
+            if path is None:
+                continue
+            try:
+                check_output_path(path, option, folder=folder)
+            except InputError as e:
+                parser.error(str(e))
 
 
 class Simulation(_Simulation):
