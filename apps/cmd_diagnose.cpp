@@ -34,6 +34,7 @@ struct DiagnoseArgs {
   int validation = -1;
   unsigned pile_seed = 1;
   bool quiet = false;
+  bool discover = false;
 };
 
 void diagnose_command(const DiagnoseArgs& a) {
@@ -47,6 +48,7 @@ void diagnose_command(const DiagnoseArgs& a) {
   options.max_effects = a.max_effects;
   options.validation_runs = a.validation;
   options.plugins = vehicle::load_effect_plugins(a.plugins);
+  options.discover = a.discover;
   if (!a.out.empty()) make_output_dir(a.out);
   check_output_file(a.json, "--json");
   const bool piles = std::any_of(runs.begin(), runs.end(), [](const MeasuredRun& r) { return measured_scenario(r).pile; });
@@ -107,6 +109,10 @@ void add_diagnose_command(CLI::App& app) {
   cmd->add_option("--effect-plugin", a->plugins, "a shared library whose effects join the candidates (repeatable)")
       ->expected(1)->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   cmd->add_option("--pile-seed", a->pile_seed, "random seed of the simulated pile's particles")->capture_default_str();
+  cmd->add_flag(
+      "--discover", a->discover,
+      "fit a learned correction (a sparse model of the residual, docs/discovery.md) even when the "
+      "candidates leave nothing beyond noise; by default it is fitted only when they do");
   cmd->add_flag("--quiet", a->quiet, "no progress on stderr");
   cmd->callback([a] { diagnose_command(*a); });
 }

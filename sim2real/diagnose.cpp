@@ -23,6 +23,12 @@ constexpr std::size_t kPowerChannel = static_cast<std::size_t>(Channel::power);
 constexpr double kLogScaleRatio = 10.0;
 // the fit stops when a step in the normalised box is below this (0.1 % of the range)
 constexpr double kFitTolerance = 1e-3;
+// the discovery tries the sensor readings with the largest excess of their own, at most this many
+constexpr std::size_t kDiscoverySensorTargets = 3;
+// a channel counts as touched by a correction when its excess falls by this much per run
+constexpr double kDiscoveryChannelCut = 0.2;
+// the refinement's first step, in its box normalised to [0, 1]: a tenth of the box
+constexpr double kDiscoveryRefineStep = 0.1;
 
 std::size_t channel_index(const std::string& name) {
   for (std::size_t c = 1; c < kChannelCount; ++c)
@@ -272,6 +278,153 @@ class Search {
     return dr.added;
   }
 
+  // discovery: a learned correction per target, fitted on the calibration runs against the current
+  // model, simulated on every run; the best added when it explains enough of what is left
+  void discover() {
+    d_.discovery_ran = true;
+    // the sensor channels whose own excess is beyond noise on the calibration runs, largest first
+    std::vector<std::pair<double, std::string>> own;
+    for (std::size_t c = 1; c < kChannelCount; ++c) {
+      if (c == kPowerChannel) continue;  // power follows the other readings
+      std::vector<double> e;
+      for (std::size_t i : d_.calibration) e.push_back(current_residuals_[i].excess_of({c}));
+      if (mean_of(e) >= kSignificantExcess) own.emplace_back(mean_of(e), kChannelNames[c]);
+    }
+    std::sort(own.begin(), own.end(), std::greater<>());
+    std::vector<std::string> channels;
+    for (std::size_t k = 0; k < own.size() && k < kDiscoverySensorTargets; ++k)
+      channels.push_back(own[k].second);
+    std::vector<const MeasuredRun*> measured;
+    std::vector<const Run*> simulated;
+    for (std::size_t i : d_.calibration) {
+      measured.push_back(&runs_[i]);
+      simulated.push_back(&current_runs_[i]);
+    }
+    say("discovery: " + std::to_string(3 + channels.size()) +
+        " targets (the drive, lift and tilt speeds" +
+        (channels.empty() ? std::string() : ", the readings with an excess of their own") + ")");
+    // the machine of the first calibration run (every run of one diagnosis replays one machine)
+    const vehicle::MachineDescription machine =
+        vehicle::parse_machine(vehicle::machine_file(replays_[d_.calibration.front()]->scenario()));
+    for (const DiscoveryTarget& target : discovery_targets(channels)) {
+      DiscoveredCorrection c = fit_correction(
+          target, regression_data(target, measured, simulated, command_limit(target, machine)));
+      if (c.terms.empty()) {
+        say("  " + target.label() + ": no sparse model cuts the held-out residual (mean square " +
+            format_number(c.cv_mse_none) + ")");
+        d_.discovery_tried.push_back(c);
+        continue;
+      }
+      say("  " + target.label() + ": " + c.expression);
+      evaluate(c);
+      say("    explains " + format_number(100.0 * c.explained) + " % of the excess on the " +
+          c.explained_on + " runs");
+      d_.discovery_tried.push_back(c);
+    }
+    // the best refined on the simulations: the regression fits the measured state, which the
+    // simulation reaches only approximately, so its coefficients are a start, not the optimum
+    auto best_of = [&]() {
+      const DiscoveredCorrection* best = nullptr;
+      for (const auto& c : d_.discovery_tried)
+        if (c.simulated && (!best || c.explained > best->explained)) best = &c;
+      return best;
+    };
+    if (const DiscoveredCorrection* best = best_of(); best && best->explained > 0.0) {
+      DiscoveredCorrection refined = refine(*best);
+      if (refined.explained > best->explained) {
+        say("  refined: " + refined.expression + ", explains " +
+            format_number(100.0 * refined.explained) + " %");
+        d_.discovery_tried.push_back(refined);
+      }
+    }
+    // the best simulated correction, if it explains enough
+    const DiscoveredCorrection* best = best_of();
+    if (!best || best->explained < kMinExplained) {
+      say("discovery: no correction explains " + format_number(100.0 * kMinExplained) +
+          " % of the excess left");
+      return;
+    }
+    d_.discovered = *best;
+    FittedEffect f;
+    f.candidate = {best->target.effect_name(), "", {}};
+    const auto effect = vehicle::make_effect(best->spec, options_.plugins);
+    f.effect = effect->to_json();
+    f.spec = best->spec;
+    f.parameters = static_cast<int>(best->terms.size());
+    f.excess_calibration = best->excess_calibration;
+    f.excess_validation = best->excess_validation;
+    f.explained = best->explained;
+    f.explained_on = best->explained_on;
+    f.score = best->score;
+    say("discovery: added " + best->expression);
+    add(f);
+  }
+
+  // the correction simulated on every run: its excess, the share it explains (counted as a
+  // candidate's) and the channels whose excess it lowers
+  void evaluate(DiscoveredCorrection& c) {
+    std::vector<Residuals> after(runs_.size());
+    for (std::size_t i = 0; i < runs_.size(); ++i)
+      after[i] = compute_residuals(simulate(i, vehicle::make_effect(c.spec, options_.plugins)),
+                                   runs_[i].run, sigma_[i]);
+    const bool disjoint = d_.validation != d_.calibration;
+    c.simulated = true;
+    c.excess_calibration = mean_excess(after, d_.calibration);
+    c.excess_validation = mean_excess(after, d_.validation);
+    if (current_val_ >= kSignificantExcess || !disjoint) {
+      c.explained = current_val_ > 0.0 ? (current_val_ - c.excess_validation) / current_val_ : 0.0;
+      c.explained_on = "validation";
+    } else {
+      c.explained = c.excess_validation < kSignificantExcess && current_cal_ > 0.0
+                        ? (current_cal_ - c.excess_calibration) / current_cal_
+                        : 0.0;
+      c.explained_on = "calibration";
+    }
+    c.score = c.explained_on == "validation" ? c.excess_validation : c.excess_calibration;
+    c.channels.clear();
+    for (std::size_t ch = 1; ch < kChannelCount; ++ch) {
+      double before = 0.0, with = 0.0;
+      for (std::size_t i = 0; i < runs_.size(); ++i) {
+        before += current_residuals_[i].excess_of({ch});
+        with += after[i].excess_of({ch});
+      }
+      if (before - with >= kDiscoveryChannelCut * static_cast<double>(runs_.size()))
+        c.channels.emplace_back(kChannelNames[ch]);
+    }
+  }
+
+  // the coefficients refitted by the likelihood of the calibration runs' simulations (BOBYQA, as a
+  // candidate's fit), each in a box of ±max(3 intervals, its own size) around the regression's
+  // value
+  DiscoveredCorrection refine(const DiscoveredCorrection& start) {
+    DiscoveredCorrection c = start;
+    std::vector<double> span(c.terms.size());
+    for (std::size_t k = 0; k < span.size(); ++k)
+      span[k] = std::max(3.0 * c.terms[k].half_width, std::abs(c.terms[k].coefficient));
+    auto at = [&](const std::vector<double>& x) {
+      DiscoveredCorrection trial = start;
+      for (std::size_t k = 0; k < span.size(); ++k)
+        trial.terms[k].coefficient = start.terms[k].coefficient + (2.0 * x[k] - 1.0) * span[k];
+      describe_correction(trial);
+      return trial;
+    };
+    auto log_ratio = [&](const std::vector<double>& x) {
+      const DiscoveredCorrection trial = at(x);
+      std::vector<double> l;
+      for (std::size_t i : d_.calibration) {
+        const Run r = simulate(i, vehicle::make_effect(trial.spec, options_.plugins));
+        l.push_back(compute_residuals(r, runs_[i].run, sigma_[i]).log_ratio);
+      }
+      return mean_of(l);
+    };
+    std::vector<double> x(span.size(), 0.5);
+    minimise(log_ratio, x, kDiscoveryRefineStep, kFitEvaluations);
+    c = at(x);
+    c.refined = true;
+    evaluate(c);
+    return c;
+  }
+
   // after: the runs with the effects found (the last round's simulations)
   Diagnosis finish() {
     d_.simulated_after = current_runs_;
@@ -467,6 +620,8 @@ Diagnosis diagnose(const std::vector<MeasuredRun>& runs, const DiagnoseOptions& 
   for (int round = 0; round < options.max_effects && search.worst_run() >= kSignificantExcess; ++round) {
     if (!search.round(round + 1, candidates)) break;
   }
+  // discovery: when what is left is beyond noise, or when asked
+  if (options.discover || search.worst_run() >= kSignificantExcess) search.discover();
   // the model with what was found, against the data
   Diagnosis d = search.finish();
   d.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -519,7 +674,23 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
     if (d.scan_rms_m[i]) r["scan_rms_m"] = *d.scan_rms_m[i];
     runs.push_back(r);
   }
+  // the correction discovered, with the error over the held-out runs before and after the model
+  json discovered = nullptr;
+  if (d.discovered) {
+    discovered = correction_json(*d.discovered);
+    std::vector<TableRow> before, after;
+    for (std::size_t i : d.validation) {
+      if (i < d.error_before.size()) before.push_back(d.error_before[i]);
+      if (i < d.error_after.size()) after.push_back(d.error_after[i]);
+    }
+    discovered["error_before_held_out"] = row_json(mean_row(before, "mean over held-out runs"));
+    discovered["error_after_held_out"] = row_json(mean_row(after, "mean over held-out runs"));
+  }
+  json tried = json::array();
+  for (const auto& c : d.discovery_tried) tried.push_back(correction_json(c));
   return {{"effects_found", found},
+          {"discovered", discovered},
+          {"discovery", {{"ran", d.discovery_ran}, {"tried", tried}}},
           {"error_before", table_json(d.error_before)},
           {"error_after", table_json(d.error_after)},
           {"unexplained", d.unexplained},

@@ -26,13 +26,20 @@
 // every run's excess is within noise, nothing qualifies, or max_effects are added. "Unexplained"
 // means some run keeps an excess beyond noise at the end. Candidates with more than two
 // parameters are not fitted (the report says so); all built-ins have one.
+// Discovery (issue 17, sim2real/discovery.hpp): when an excess beyond noise remains after the
+// rounds (or when asked), a sparse learned correction is fitted per target on the calibration
+// runs, each simulated on all runs, and the best is added when it removes at least kMinExplained
+// of the excess left (on the held-out runs, as a candidate's share); else the diagnosis stays
+// "unexplained" with the residual's signature.
 #pragma once
 #include <cstddef>
 #include <functional>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "sim2real/discovery.hpp"
 #include "sim2real/measured.hpp"
 #include "sim2real/replay.hpp"
 #include "sim2real/residuals.hpp"
@@ -77,6 +84,8 @@ struct DiagnoseOptions {
   // when there are two or more runs; with one run the fit is validated on the run it was fitted to
   int validation_runs = -1;
   vehicle::EffectPlugins plugins;  // their effects join the candidates
+  // run the discovery even when the candidates leave nothing beyond noise
+  bool discover = false;
 };
 
 struct FittedEffect {
@@ -113,6 +122,11 @@ struct Diagnosis {
   double excess_before = 0.0, excess_after = 0.0;  // mean per run, all runs
   bool unexplained = false;               // some run keeps an excess beyond noise
   std::vector<std::optional<double>> scan_rms_m;   // per run (pile scenarios)
+  // discovery: whether it ran, every target's correction (simulated ones with their shares), and
+  // the one added (also the last of `found`), if any
+  bool discovery_ran = false;
+  std::vector<DiscoveredCorrection> discovery_tried;
+  std::optional<DiscoveredCorrection> discovered;
   int simulations = 0;
   double wall_s = 0.0;
 };
@@ -125,7 +139,9 @@ Diagnosis diagnose(const std::vector<MeasuredRun>& runs, const DiagnoseOptions& 
 TableRow mean_row(const std::vector<TableRow>& rows, const std::string& name);
 
 // the JSON of `talus diagnose --json`: effects_found [{name, params}], error_before, error_after
-// (E_x .. E_W and mean, averaged over runs, with per-run rows), unexplained, and the details
+// (E_x .. E_W and mean, averaged over runs, with per-run rows), unexplained, discovered (null, or
+// the correction added: expression, coefficients with intervals, features, held_out_error_cut,
+// and error_before/error_after over the held-out runs), and the details
 nlohmann::json diagnosis_json(const Diagnosis& d);
 
 }  // namespace talus::sim2real

@@ -1,6 +1,7 @@
 #include "sim2real/report.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <iomanip>
 #include <sstream>
 
@@ -62,6 +63,36 @@ std::string diagnosis_report(const Diagnosis& d, const std::vector<MeasuredRun>&
       report << "- " << f.spec << " (explains " << std::setprecision(3) << 100.0 * f.explained
              << " % of the excess of the " << f.explained_on << " runs)\n";
     report << (d.unexplained ? "\nAn excess beyond noise remains: UNEXPLAINED in part.\n" : "\nWhat remains is within noise.\n");
+  }
+  // what the discovery fitted beyond the candidates
+  if (d.discovery_ran) {
+    report << "\n## Discovery (a term outside the candidates)\n\n";
+    if (d.discovered) {
+      report << "Added: " << d.discovered->expression << "\n(`--effect " << d.discovered->spec
+             << "`; explains " << std::setprecision(3) << 100.0 * d.discovered->explained
+             << " % of the excess of the " << d.discovered->explained_on
+             << " runs; channels it moves: ";
+      for (std::size_t k = 0; k < d.discovered->channels.size(); ++k)
+        report << (k ? ", " : "") << d.discovered->channels[k];
+      report << ")\n";
+    } else {
+      report << "Nothing added: no sparse correction explains " << int(100 * kMinExplained)
+             << " % of the excess left.\n";
+    }
+    report << "\n| target | correction | held-out MSE cut | explains |\n|---|---|---|---|\n";
+    for (const auto& c : d.discovery_tried) {
+      report << "| " << c.target.label() << " | " << (c.terms.empty() ? "(none)" : c.expression)
+             << " | "
+             << (c.terms.empty() || !(c.cv_mse_none > 0.0)
+                     ? std::string("-")
+                     : std::to_string(int(std::lround(100.0 * (1.0 - c.cv_mse / c.cv_mse_none)))) +
+                           " %")
+             << " | "
+             << (c.simulated ? std::to_string(int(std::lround(100.0 * c.explained))) + " % (" +
+                                   c.explained_on + ")"
+                             : "-")
+             << " |\n";
+    }
   }
   report << "\nExcess per run: before " << std::setprecision(3) << d.excess_before << ", after " << d.excess_after
          << " (noise alone leaves less than " << kSignificantExcess << "); " << d.simulations << " simulations in "

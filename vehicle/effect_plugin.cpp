@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "host/error.hpp"
+#include "vehicle/learned_correction.hpp"
 
 namespace talus::vehicle {
 
@@ -262,7 +263,8 @@ std::unique_ptr<Effect> EffectPlugin::make(const std::string& effect) const {
 
 EffectPlugins load_effect_plugins(const std::vector<std::string>& files) {
   EffectPlugins plugins;
-  const std::vector<std::string> builtins = builtin_effect_names();
+  std::vector<std::string> builtins = builtin_effect_names();
+  for (const auto& l : learned_effect_names()) builtins.push_back(l);
   for (const auto& file : files) {
     auto plugin = EffectPlugin::load(file);
     for (const auto& name : plugin->effect_names()) {
@@ -285,12 +287,15 @@ std::unique_ptr<Effect> make_effect(const std::string& spec, const EffectPlugins
   std::unique_ptr<Effect> effect;
   for (const auto& b : builtin_effect_names())
     if (b == name) effect = make_builtin_effect(name);
+  for (const auto& l : learned_effect_names())
+    if (l == name) effect = make_learned_effect(name);
   for (const auto& p : plugins)
     if (!effect && p->has(name)) effect = p->make(name);
   if (!effect && name == "soil_cohesion") effect = make_builtin_effect(name);  // its "not yet"
   if (!effect) {
     std::string list;
     for (const auto& b : builtin_effect_names()) list += (list.empty() ? "" : ", ") + b;
+    for (const auto& l : learned_effect_names()) list += ", " + l;
     for (const auto& p : plugins)
       for (const auto& n : p->effect_names()) list += ", " + n + " (" + p->file() + ")";
     throw InputError("--effect '" + spec + "': no effect named '" + name + "'; known effects: " + list +

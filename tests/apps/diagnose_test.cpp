@@ -151,11 +151,25 @@ TEST(DiagnoseTest, AnEffectOutsideTheCandidatesIsUnexplainedOrAClearlyWorseFit) 
   const auto j = diagnose(base);
   // the effect shows (else the test would test nothing)
   ASSERT_GE(j["excess_before"].get<double>(), 0.5) << context;
-  // never a confident wrong answer: it says unexplained, or what it adds fits clearly worse than a
-  // candidate that is the cause (which cuts the mean error by 30 % or more)
+  // never a confident wrong answer: a candidate it adds fits clearly worse than a candidate that is
+  // the cause (which cuts the mean error by 30 % or more), or it says unexplained. The discovery
+  // (issue 17) may find a term instead: a correction of the cylinders the relief valve slows,
+  // which then explains half of the held-out excess or more
   const double before = j["error_before"]["mean"], after = j["error_after"]["mean"];
-  EXPECT_TRUE(j["unexplained"].get<bool>() || after > 0.7 * before)
-      << context << ": found " << j["effects_found"].dump() << ", mean error " << before << " -> " << after;
+  bool candidate = false;
+  for (const auto& f : j["effects_found"])
+    candidate = candidate || f["name"].get<std::string>().rfind("learned_", 0) != 0;
+  if (candidate || j["discovered"].is_null()) {
+    EXPECT_TRUE(j["unexplained"].get<bool>() || after > 0.7 * before)
+        << context << ": found " << j["effects_found"].dump() << ", mean error " << before << " -> "
+        << after;
+  }
+  if (!j["discovered"].is_null()) {
+    const std::string target = j["discovered"]["target"];
+    EXPECT_TRUE(target == "lift speed" || target == "tilt speed")
+        << context << ": " << j["discovered"].dump();
+    EXPECT_GE(j["discovered"]["held_out_error_cut"].get<double>(), 0.5) << context;
+  }
   fs::remove_all(base);
 }
 

@@ -1,0 +1,369 @@
+#include "sim2real/discovery.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+#include "host/error.hpp"
+#include "vehicle/scenario.hpp"
+
+namespace talus::sim2real {
+
+namespace {
+
+using vehicle::CorrectionInputs;
+using vehicle::CorrectionKind;
+
+// a two-sided 95 % interval of a normal estimate
+constexpr double kZ95 = 1.959964;
+// ridge added to the scaled normal equations, relative to their mean diagonal: keeps collinear
+// features (a constant and a sign that is +1 most of the time) solvable without changing a
+// well-posed fit beyond rounding
+constexpr double kRidge = 1e-10;
+// a held-out error below this share of the residual's own mean square is an exact fit
+constexpr double kExactFit = 1e-12;
+// the residual's lag-one autocorrelation is capped here, so n_eff stays positive
+constexpr double kMaxAutocorrelation = 0.99;
+
+std::size_t channel_column(const std::string& name) {
+  for (std::size_t c = 1; c < kChannelCount; ++c)
+    if (name == kChannelNames[c]) return c;
+  throw Error("discovery: no channel '" + name + "'");
+}
+
+// the central difference of f over ±kRateHalfWindow samples around row j
+double central_rate(const std::vector<double>& t, const std::vector<double>& f, std::size_t j) {
+  return (f[j + kRateHalfWindow] - f[j - kRateHalfWindow]) /
+         (t[j + kRateHalfWindow] - t[j - kRateHalfWindow]);
+}
+
+// f at time s, linear, the first value before the first time (as a delay line at rest)
+double value_at(const std::vector<double>& t, const std::vector<double>& f, double s) {
+  if (s <= t.front()) return f.front();
+  if (s >= t.back()) return f.back();
+  const std::size_t i =
+      static_cast<std::size_t>(std::upper_bound(t.begin(), t.end(), s) - t.begin());
+  const double w = (s - t[i - 1]) / (t[i] - t[i - 1]);
+  return f[i - 1] + w * (f[i] - f[i - 1]);
+}
+
+std::string format(double v, int digits = 3) {
+  char text[40];
+  std::snprintf(text, sizeof text, "%.*g", digits, v);
+  return text;
+}
+
+// least squares on the columns `support` of x (zero elsewhere), through the normal equations with a
+// ridge relative to their mean diagonal
+Eigen::VectorXd solve_on(const Eigen::MatrixXd& x, const Eigen::VectorXd& y,
+                         const std::vector<Eigen::Index>& support) {
+  Eigen::VectorXd c = Eigen::VectorXd::Zero(x.cols());
+  if (support.empty()) return c;
+  const Eigen::MatrixXd a = x(Eigen::all, support);
+  Eigen::MatrixXd normal = a.transpose() * a;
+  const double ridge =
+      kRidge * std::max(normal.diagonal().mean(), std::numeric_limits<double>::min());
+  normal.diagonal().array() += ridge;
+  const Eigen::VectorXd b = normal.ldlt().solve(a.transpose() * y);
+  for (std::size_t i = 0; i < support.size(); ++i) c[support[i]] = b[static_cast<Eigen::Index>(i)];
+  return c;
+}
+
+// the residual sum of squares of least squares on `support`, from the Gram matrix g = XᵀX, b = Xᵀy
+// and yy = yᵀy: yy − b_Sᵀ g_SS⁻¹ b_S
+double rss_on(const Eigen::MatrixXd& g, const Eigen::VectorXd& b, double yy,
+              const std::vector<Eigen::Index>& support) {
+  if (support.empty()) return yy;
+  Eigen::MatrixXd gs = g(support, support);
+  gs.diagonal().array() +=
+      kRidge * std::max(gs.diagonal().mean(), std::numeric_limits<double>::min());
+  const Eigen::VectorXd bs = b(support);
+  return yy - bs.dot(gs.ldlt().solve(bs));
+}
+
+// mean-square prediction error of the held-out blocks for models of 1 .. kMaxTerms terms (index
+// m − 1), each block predicted by the path fitted on the others
+std::vector<double> cross_validated_mse(const Eigen::MatrixXd& x, const Eigen::VectorXd& y,
+                                        const std::vector<int>& fold) {
+  std::vector<double> sse(kMaxTerms, 0.0);
+  for (int k = 0; k < kFolds; ++k) {
+    std::vector<Eigen::Index> train, test;
+    for (Eigen::Index r = 0; r < x.rows(); ++r) (fold[r] == k ? test : train).push_back(r);
+    if (test.empty()) continue;
+    if (train.empty())
+      return std::vector<double>(kMaxTerms, std::numeric_limits<double>::infinity());
+    const Eigen::MatrixXd xt = x(train, Eigen::all);
+    const Eigen::VectorXd yt = y(train);
+    const auto path = elimination_path(xt, yt);
+    for (int m = 1; m <= kMaxTerms && m < static_cast<int>(path.size()); ++m) {
+      const Eigen::VectorXd c = solve_on(xt, yt, path[m]);
+      sse[m - 1] += (y(test) - x(test, Eigen::all) * c).squaredNorm();
+    }
+  }
+  for (double& v : sse) v /= static_cast<double>(std::max<Eigen::Index>(1, x.rows()));
+  return sse;
+}
+
+}  // namespace
+
+std::string DiscoveryTarget::label() const {
+  return kind == CorrectionKind::actuator ? target + " speed" : target + " reading";
+}
+std::string DiscoveryTarget::effect_name() const {
+  return kind == CorrectionKind::actuator ? "learned_actuator_correction"
+                                          : "learned_sensor_correction";
+}
+std::string DiscoveryTarget::option() const {
+  return (kind == CorrectionKind::actuator ? "actuator=" : "channel=") + target;
+}
+
+std::vector<DiscoveryTarget> discovery_targets(const std::vector<std::string>& sensor_channels) {
+  std::vector<DiscoveryTarget> out;
+  for (const char* a : {"drive", "lift", "tilt"}) out.push_back({CorrectionKind::actuator, a});
+  for (const auto& c : sensor_channels) {
+    channel_column(c);  // a known channel
+    out.push_back({CorrectionKind::sensor, c});
+  }
+  return out;
+}
+
+double command_limit(const DiscoveryTarget& target, const vehicle::MachineDescription& machine) {
+  if (target.kind == CorrectionKind::sensor) return std::numeric_limits<double>::infinity();
+  if (target.target == "drive") return machine.driveline.top_speed;
+  for (const auto& c : machine.cylinders)
+    if (c.role == target.target) return c.max_speed;
+  throw InputError(machine.source + ": no " + target.target + " cylinder, so no " + target.label() +
+                   " to correct");
+}
+
+RegressionData regression_data(const DiscoveryTarget& target,
+                               const std::vector<const MeasuredRun*>& measured,
+                               const std::vector<const Run*>& simulated, double limit) {
+  if (measured.size() != simulated.size())
+    throw Error("discovery: measured and simulated runs differ in number");
+  const auto& features = vehicle::correction_features(target.kind);
+  std::vector<std::vector<double>> rows;
+  std::vector<double> ys;
+  RegressionData data;
+  for (std::size_t i = 0; i < measured.size(); ++i) {
+    const TimeSeries& m = measured[i]->run.series;
+    const std::vector<double>& t = m[Channel::t];
+    // the simulation at the measured times (InputError when it does not cover them)
+    const TimeSeries s = resample(simulated[i]->series, t);
+    const std::size_t n = t.size();
+    if (n < 2 * kRateHalfWindow + 2) continue;
+    const double t0 = t.front(), span = t.back() - t.front();
+    const MeasuredMetadata& meta = measured[i]->meta;
+    const Series2& inputs = target.target == "drive"  ? meta.drive
+                            : target.target == "lift" ? meta.lift
+                                                      : meta.tilt;
+    const vehicle::PiecewiseLinear command(
+        target.kind == CorrectionKind::actuator ? inputs : Series2{{0.0, 0.0}});
+    // an actuator's force and the power through the lag the correction reads them with
+    const Channel force_channel = target.target == "drive"  ? Channel::f_traction
+                                  : target.target == "lift" ? Channel::f_lift
+                                                            : Channel::f_tilt;
+    std::vector<double> force = m[force_channel], power = m[Channel::power];
+    for (std::size_t j = 1; j < n; ++j) {
+      force[j] = vehicle::lag_step(force[j - 1], m[force_channel][j], t[j] - t[j - 1]);
+      power[j] = vehicle::lag_step(power[j - 1], m[Channel::power][j], t[j] - t[j - 1]);
+    }
+    for (std::size_t j = kRateHalfWindow; j + kRateHalfWindow < n; ++j) {
+      CorrectionInputs in;
+      double y = 0.0;
+      if (target.kind == CorrectionKind::actuator) {
+        // the command from the operator's inputs; the state as measured
+        in.a = command(t[j]);
+        for (std::size_t d = 0; d < vehicle::kCorrectionDelays.size(); ++d)
+          in.a_delayed[d] = command(
+              std::max(t[j] - vehicle::kCorrectionDelays[d], command.points().front().first));
+        in.force = force[j];
+        in.power = power[j];
+        if (target.target == "drive") {
+          y = m[Channel::v_drive][j] - s[Channel::v_drive][j];
+        } else {
+          const Channel stroke = target.target == "lift" ? Channel::d_lift : Channel::d_tilt;
+          y = central_rate(t, m[stroke], j) - central_rate(t, s[stroke], j);
+        }
+        // on the command's scale: the baseline's speed is clip(u), the correction's target u + Δu
+        y += std::clamp(in.a, -limit, limit) - in.a;
+      } else {
+        // the simulated reading stands for the truth the sensor distorts
+        const std::size_t c = channel_column(target.target);
+        const std::vector<double>& truth = s.columns[c];
+        in.a = truth[j];
+        in.rate = (truth[j] - truth[j - 1]) / (t[j] - t[j - 1]);
+        in.force = s[Channel::f_lift][j];
+        in.power = s[Channel::power][j];
+        for (std::size_t d = 0; d < vehicle::kCorrectionDelays.size(); ++d)
+          in.a_delayed[d] = value_at(t, truth, t[j] - vehicle::kCorrectionDelays[d]);
+        y = m.columns[c][j] - truth[j];
+      }
+      std::vector<double> row(features.size());
+      for (std::size_t k = 0; k < features.size(); ++k) row[k] = features[k].value(in);
+      rows.push_back(std::move(row));
+      ys.push_back(y);
+      data.fold.push_back(std::min(kFolds - 1, static_cast<int>(kFolds * (t[j] - t0) / span)));
+      data.run.push_back(static_cast<int>(i));
+    }
+  }
+  data.features.resize(static_cast<Eigen::Index>(rows.size()),
+                       static_cast<Eigen::Index>(features.size()));
+  data.residual.resize(static_cast<Eigen::Index>(rows.size()));
+  for (std::size_t r = 0; r < rows.size(); ++r) {
+    for (std::size_t k = 0; k < features.size(); ++k) data.features(r, k) = rows[r][k];
+    data.residual[r] = ys[r];
+  }
+  return data;
+}
+
+std::vector<std::vector<Eigen::Index>> elimination_path(const Eigen::MatrixXd& x,
+                                                        const Eigen::VectorXd& y) {
+  const Eigen::Index p = x.cols();
+  // features scaled to unit RMS, so the ridge treats them alike (a feature zero throughout stays
+  // out)
+  Eigen::VectorXd scale(p);
+  std::vector<Eigen::Index> support;
+  for (Eigen::Index k = 0; k < p; ++k) {
+    scale[k] = std::sqrt(x.col(k).squaredNorm() /
+                         static_cast<double>(std::max<Eigen::Index>(1, x.rows())));
+    if (scale[k] > 0.0) support.push_back(k);
+    if (!(scale[k] > 0.0)) scale[k] = 1.0;
+  }
+  const Eigen::MatrixXd z = x * scale.cwiseInverse().asDiagonal();
+  const Eigen::MatrixXd g = z.transpose() * z;
+  const Eigen::VectorXd b = z.transpose() * y;
+  const double yy = y.squaredNorm();
+  // drop, one at a time, the term whose loss raises the residual least
+  std::vector<std::vector<Eigen::Index>> path(support.size() + 1);
+  path[support.size()] = support;
+  while (!support.empty()) {
+    std::size_t weakest = 0;
+    double least = std::numeric_limits<double>::infinity();
+    for (std::size_t i = 0; i < support.size(); ++i) {
+      std::vector<Eigen::Index> without = support;
+      without.erase(without.begin() + static_cast<std::ptrdiff_t>(i));
+      const double rss = rss_on(g, b, yy, without);
+      if (rss < least) {
+        least = rss;
+        weakest = i;
+      }
+    }
+    support.erase(support.begin() + static_cast<std::ptrdiff_t>(weakest));
+    path[support.size()] = support;
+  }
+  return path;
+}
+
+DiscoveredCorrection fit_correction(const DiscoveryTarget& target, const RegressionData& data) {
+  DiscoveredCorrection out;
+  out.target = target;
+  out.samples = static_cast<int>(data.residual.size());
+  const Eigen::MatrixXd& x = data.features;
+  const Eigen::VectorXd& y = data.residual;
+  if (y.size() == 0) return out;
+  out.cv_mse_none = y.squaredNorm() / y.size();
+  // the held-out error of 1 .. kMaxTerms terms; the fewest within kOneSeRule of the least
+  const std::vector<double> cv = cross_validated_mse(x, y, data.fold);
+  const double least = *std::min_element(cv.begin(), cv.end());
+  int terms = 1;
+  // (the floor: noise-free data leaves rounding alone, which no factor of the least tells apart)
+  const double good_enough = std::max(kOneSeRule * least, kExactFit * out.cv_mse_none);
+  while (terms < kMaxTerms && cv[terms - 1] > good_enough) ++terms;
+  out.cv_mse = cv[terms - 1];
+  if (!(out.cv_mse <= (1.0 - kMinRegressionGain) * out.cv_mse_none)) return out;
+
+  // ordinary least squares on the support, with 95 % intervals inflated for autocorrelation; a
+  // term whose interval holds zero is dropped (the least significant first) and the rest refitted
+  const auto path = elimination_path(x, y);
+  if (static_cast<std::size_t>(terms) >= path.size()) return out;
+  std::vector<Eigen::Index> support = path[terms];
+  Eigen::VectorXd c, half;
+  while (!support.empty()) {
+    const Eigen::MatrixXd a = x(Eigen::all, support);
+    c = solve_on(x, y, support)(support);
+    const Eigen::VectorXd r = y - a * c;
+    double lag = 0.0, var = 0.0;
+    for (Eigen::Index i = 0; i < r.size(); ++i) {
+      var += r[i] * r[i];
+      if (i > 0 && data.run[i] == data.run[i - 1]) lag += r[i] * r[i - 1];
+    }
+    const double rho = var > 0.0 ? std::clamp(lag / var, 0.0, kMaxAutocorrelation) : 0.0;
+    const double dof =
+        std::max<double>(1.0, static_cast<double>(r.size()) - static_cast<double>(support.size()));
+    const double sigma2 = var / dof * (1.0 + rho) / (1.0 - rho);
+    const Eigen::MatrixXd cov = sigma2 * (a.transpose() * a).inverse();
+    half = kZ95 * cov.diagonal().cwiseMax(0.0).cwiseSqrt();
+    Eigen::Index weakest = 0;
+    const double significance = (c.cwiseAbs().cwiseQuotient(half)).minCoeff(&weakest);
+    if (significance >= 1.0) break;
+    support.erase(support.begin() + weakest);
+  }
+  if (support.empty()) return out;
+
+  const auto& features = vehicle::correction_features(target.kind);
+  const vehicle::CorrectionSymbols symbols =
+      vehicle::correction_symbols(target.kind, target.target);
+  for (std::size_t i = 0; i < support.size(); ++i) {
+    const auto& f = features[support[i]];
+    DiscoveredTerm term;
+    term.feature = f.name;
+    term.expression = vehicle::correction_expression(f, symbols);
+    const std::string feature_unit = vehicle::correction_unit(f, symbols);
+    term.unit =
+        feature_unit == "1" ? symbols.a_unit : "(" + symbols.a_unit + ")/(" + feature_unit + ")";
+    term.coefficient = c[static_cast<Eigen::Index>(i)];
+    term.half_width = half[static_cast<Eigen::Index>(i)];
+    out.terms.push_back(term);
+  }
+  describe_correction(out);
+  return out;
+}
+
+void describe_correction(DiscoveredCorrection& c) {
+  const vehicle::CorrectionSymbols symbols =
+      vehicle::correction_symbols(c.target.kind, c.target.target);
+  c.spec = c.target.effect_name() + ":" + c.target.option();
+  c.expression = "Δ" + symbols.a + " [" + symbols.a_unit + "] =";
+  for (std::size_t i = 0; i < c.terms.size(); ++i) {
+    const DiscoveredTerm& term = c.terms[i];
+    char value[40];
+    std::snprintf(value, sizeof value, "%.17g", term.coefficient);
+    c.spec += "," + term.feature + "=" + value;
+    c.expression += (i == 0 ? " " : " + ") + format(term.coefficient) + " (±" +
+                    format(term.half_width, 2) + ") " + term.unit +
+                    (term.feature == "one" ? "" : " · " + term.expression);
+  }
+}
+
+nlohmann::json correction_json(const DiscoveredCorrection& c) {
+  nlohmann::json terms = nlohmann::json::array();
+  for (const auto& t : c.terms)
+    terms.push_back({{"feature", t.feature},
+                     {"expression", t.expression},
+                     {"unit", t.unit},
+                     {"coefficient", t.coefficient},
+                     {"ci95", {t.coefficient - t.half_width, t.coefficient + t.half_width}}});
+  nlohmann::json dictionary = nlohmann::json::array();
+  const vehicle::CorrectionSymbols symbols =
+      vehicle::correction_symbols(c.target.kind, c.target.target);
+  for (const auto& f : vehicle::correction_features(c.target.kind))
+    dictionary.push_back(
+        {{"feature", f.name}, {"expression", vehicle::correction_expression(f, symbols)}});
+  nlohmann::json j = {
+      {"target", c.target.label()}, {"effect", c.spec},       {"expression", c.expression},
+      {"coefficients", terms},      {"features", dictionary}, {"terms", c.terms.size()},
+      {"samples", c.samples},       {"cv_mse", c.cv_mse},     {"cv_mse_none", c.cv_mse_none},
+      {"simulated", c.simulated},   {"refined", c.refined}};
+  if (c.simulated) {
+    j["excess_calibration"] = c.excess_calibration;
+    j["excess_validation"] = c.excess_validation;
+    j["held_out_error_cut"] = c.explained;
+    j["explained_on"] = c.explained_on;
+    j["channels"] = c.channels;
+  }
+  return j;
+}
+
+}  // namespace talus::sim2real

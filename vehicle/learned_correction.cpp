@@ -1,0 +1,327 @@
+// The learned corrections' dictionaries and the two effects that run them (docs/discovery.md).
+#include "vehicle/learned_correction.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <utility>
+
+#include "host/error.hpp"
+#include "vehicle/sensor_channels.hpp"
+
+namespace talus::vehicle {
+
+namespace {
+
+// below this commanded speed sign(u) ramps linearly to zero [m/s], as cylinder_friction's: a tenth
+// of the slowest commands in the scenarios, so moving actuators see ±1 and a held one 0
+constexpr double kSignRampSpeed = 1e-3;
+
+double ramp_sign(double a) { return std::clamp(a / kSignRampSpeed, -1.0, 1.0); }
+
+// the actuator dictionary: offsets, the command and its sign and square (dead bands, speed-
+// dependent losses), the force alone and with the command (leakage with pressure, friction), the
+// power, delayed differences (a lag) and a force-scaled one (a delay that grows with load). Not
+// the actuator's own achieved speed: the regression would learn the tautology "the correction is
+// the measured speed minus the command", which in the simulation feeds the previous speed back as
+// the command and stalls the actuator
+const std::vector<CorrectionFeature> kActuatorFeatures = {
+    {"one", "1", "1", [](const CorrectionInputs&) { return 1.0; }},
+    {"command", "{a}", "{a}", [](const CorrectionInputs& x) { return x.a; }},
+    {"sign_command", "sign({a})", "1", [](const CorrectionInputs& x) { return ramp_sign(x.a); }},
+    {"command_squared", "{a}·|{a}|", "{a}^2",
+     [](const CorrectionInputs& x) { return x.a * std::abs(x.a); }},
+    {"force", "{F}", "N", [](const CorrectionInputs& x) { return x.force; }},
+    {"force_sign_command", "{F}·sign({a})", "N",
+     [](const CorrectionInputs& x) { return x.force * ramp_sign(x.a); }},
+    {"abs_force_command", "|{F}|·{a}", "N·{a}",
+     [](const CorrectionInputs& x) { return std::abs(x.force) * x.a; }},
+    {"power", "{P}", "W", [](const CorrectionInputs& x) { return x.power; }},
+    {"delay_01", "{a}(t−0.1 s) − {a}", "{a}",
+     [](const CorrectionInputs& x) { return x.a_delayed[0] - x.a; }},
+    {"delay_02", "{a}(t−0.2 s) − {a}", "{a}",
+     [](const CorrectionInputs& x) { return x.a_delayed[1] - x.a; }},
+    {"delay_04", "{a}(t−0.4 s) − {a}", "{a}",
+     [](const CorrectionInputs& x) { return x.a_delayed[2] - x.a; }},
+    {"abs_force_delay_02", "|{F}|·({a}(t−0.2 s) − {a})", "N·{a}",
+     [](const CorrectionInputs& x) { return std::abs(x.force) * (x.a_delayed[1] - x.a); }},
+};
+
+// the sensor dictionary: an offset, a gain, a square law, a load-dependent gain (the lift force
+// carries the load), the rate (a first-order sensor lag reads x − τ ẋ), the lift force alone and
+// delayed differences (a transport delay)
+const std::vector<CorrectionFeature> kSensorFeatures = {
+    {"one", "1", "1", [](const CorrectionInputs&) { return 1.0; }},
+    {"reading", "{a}", "{a}", [](const CorrectionInputs& x) { return x.a; }},
+    {"reading_squared", "{a}·|{a}|", "{a}^2",
+     [](const CorrectionInputs& x) { return x.a * std::abs(x.a); }},
+    {"abs_force_reading", "|{F}|·{a}", "N·{a}",
+     [](const CorrectionInputs& x) { return std::abs(x.force) * x.a; }},
+    {"rate", "{v}", "{v}", [](const CorrectionInputs& x) { return x.rate; }},
+    {"force", "{F}", "N", [](const CorrectionInputs& x) { return x.force; }},
+    {"delay_01", "{a}(t−0.1 s) − {a}", "{a}",
+     [](const CorrectionInputs& x) { return x.a_delayed[0] - x.a; }},
+    {"delay_02", "{a}(t−0.2 s) − {a}", "{a}",
+     [](const CorrectionInputs& x) { return x.a_delayed[1] - x.a; }},
+    {"delay_04", "{a}(t−0.4 s) − {a}", "{a}",
+     [](const CorrectionInputs& x) { return x.a_delayed[2] - x.a; }},
+};
+
+// every "{key}" in text replaced by its value
+std::string substitute(std::string text,
+                       const std::vector<std::pair<std::string, std::string>>& values) {
+  for (const auto& [key, value] : values) {
+    for (std::size_t at = text.find(key); at != std::string::npos;
+         at = text.find(key, at + value.size()))
+      text.replace(at, key.size(), value);
+  }
+  return text;
+}
+
+// the unit of a coefficient: the correction's unit per the feature's
+std::string coefficient_unit(const std::string& correction_unit, const std::string& feature_unit) {
+  if (feature_unit == "1") return correction_unit;
+  return "(" + correction_unit + ")/(" + feature_unit + ")";
+}
+
+// the value of a series pushed in time order at an earlier time, linear between pushes and the
+// first value before the first push (the machine is at rest before a run)
+class DelayLine {
+ public:
+  void clear() { past_.clear(); }
+  // forgets what no delay reaches any more: keeps one entry at or before t − the longest delay
+  void push(double t, double value) {
+    past_.emplace_back(t, value);
+    while (past_.size() > 1 && past_[1].first <= t - kCorrectionDelays.back()) past_.pop_front();
+  }
+  double at(double when) const {
+    if (past_.empty()) return 0.0;
+    if (when <= past_.front().first) return past_.front().second;
+    for (std::size_t i = 1; i < past_.size(); ++i) {
+      const auto& [t1, v1] = past_[i];
+      if (when <= t1) {
+        const auto& [t0, v0] = past_[i - 1];
+        return v0 + (when - t0) / (t1 - t0) * (v1 - v0);
+      }
+    }
+    return past_.back().second;
+  }
+
+ private:
+  std::deque<std::pair<double, double>> past_;
+};
+
+// Σ c_k φ_k over the nonzero coefficients
+double correction_of(const std::vector<CorrectionFeature>& features, const std::vector<double>& c,
+                     const CorrectionInputs& x) {
+  double sum = 0.0;
+  for (std::size_t k = 0; k < features.size(); ++k)
+    if (c[k] != 0.0) sum += c[k] * features[k].value(x);
+  return sum;
+}
+
+// the common part of both effects: one parameter per dictionary feature, reported when nonzero
+class LearnedCorrection : public Effect {
+ public:
+  LearnedCorrection(const char* name, const char* summary, CorrectionKind kind)
+      : Effect(name, summary), features_(correction_features(kind)) {}
+
+  nlohmann::json to_json() const override {
+    nlohmann::json params = nlohmann::json::object();
+    for (const auto& o : options()) params[o.name] = o.value;
+    for (const auto& p : parameters())
+      if (p.value != 0.0) params[p.name] = p.value;
+    return {{"name", name()}, {"params", params}};
+  }
+
+ protected:
+  // one coefficient per feature, zero, in the units of `symbols`
+  void declare_coefficients(const CorrectionSymbols& symbols) {
+    for (const auto& f : features_) {
+      coefficient_index_.push_back(
+          add_parameter({f.name, 0.0, -kMaxCorrectionCoefficient, kMaxCorrectionCoefficient,
+                         coefficient_unit(symbols.a_unit, correction_unit(f, symbols)),
+                         "coefficient of " + correction_expression(f, symbols)}));
+    }
+  }
+  void redefine_units(const CorrectionSymbols& symbols) {
+    for (std::size_t k = 0; k < features_.size(); ++k)
+      redefine_parameter(coefficient_index_[k], -kMaxCorrectionCoefficient,
+                         kMaxCorrectionCoefficient,
+                         coefficient_unit(symbols.a_unit, correction_unit(features_[k], symbols)));
+  }
+  // the correction at x (the coefficients read once per call: a handful of features)
+  double correction(const CorrectionInputs& x) const {
+    std::vector<double> c(features_.size());
+    for (std::size_t k = 0; k < c.size(); ++k) c[k] = value(coefficient_index_[k]);
+    return correction_of(features_, c, x);
+  }
+  // the inputs' delayed values from the delay line, after pushing (t, a)
+  void delay(double t, CorrectionInputs& x) {
+    line_.push(t, x.a);
+    for (std::size_t i = 0; i < kCorrectionDelays.size(); ++i)
+      x.a_delayed[i] = line_.at(t - kCorrectionDelays[i]);
+  }
+  void clear_history() { line_.clear(); }
+
+ private:
+  const std::vector<CorrectionFeature>& features_;
+  std::vector<int> coefficient_index_;
+  DelayLine line_;
+};
+
+// --- learned_actuator_correction --------------------------------------------------------------
+class LearnedActuatorCorrection : public LearnedCorrection {
+ public:
+  LearnedActuatorCorrection()
+      : LearnedCorrection(
+            "learned_actuator_correction",
+            "a discovered correction of one actuator's speed: Σ c_k φ_k added to its target",
+            CorrectionKind::actuator) {
+    actuator_ = add_option({"actuator",
+                            "lift",
+                            {"drive", "lift", "tilt"},
+                            "the actuator whose target speed it corrects"});
+    declare_coefficients(correction_symbols(CorrectionKind::actuator, "lift"));
+  }
+  void changed() override {
+    redefine_units(correction_symbols(CorrectionKind::actuator, option_value(actuator_)));
+  }
+  void reset(const WheelLoader& loader) override {
+    (void)loader;
+    clear_history();
+    lagged_ = false;
+  }
+  void on_commands(const EffectContext& c, ActuatorCommands& u) override {
+    const std::string& which = option_value(actuator_);
+    double& target = which == "drive" ? u.drive : which == "lift" ? u.lift : u.tilt;
+    // the force and the power through the pressure lag (the first step starts it at the reading)
+    const double force = which == "drive"  ? c.previous.f_traction
+                         : which == "lift" ? c.previous.f_lift
+                                           : c.previous.f_tilt;
+    force_ = lagged_ ? lag_step(force_, force, c.h) : force;
+    power_ = lagged_ ? lag_step(power_, c.previous.power, c.h) : c.previous.power;
+    lagged_ = true;
+    CorrectionInputs x;
+    x.a = target;
+    x.force = force_;
+    x.power = power_;
+    delay(c.t, x);
+    target += correction(x);
+  }
+
+ private:
+  int actuator_ = 0;
+  bool lagged_ = false;
+  double force_ = 0.0, power_ = 0.0;  // N, W: through the lag
+};
+
+// --- learned_sensor_correction ----------------------------------------------------------------
+std::vector<std::string> correctable_channels() {
+  std::vector<std::string> names;
+  for (std::size_t c = 1; c < kChannelCount; ++c) names.emplace_back(kSensorChannels[c].name);
+  return names;
+}
+
+double SensorSample::*channel_field(const std::string& name) {
+  for (std::size_t c = 1; c < kChannelCount; ++c)
+    if (name == kSensorChannels[c].name) return kSensorChannels[c].field;
+  throw Error("learned_sensor_correction: no channel '" + name + "'");
+}
+
+class LearnedSensorCorrection : public LearnedCorrection {
+ public:
+  LearnedSensorCorrection()
+      : LearnedCorrection(
+            "learned_sensor_correction",
+            "a discovered correction of one sensor channel: Σ c_k φ_k added to its reading",
+            CorrectionKind::sensor) {
+    channel_ =
+        add_option({"channel", "f_lift", correctable_channels(), "the sensor channel it corrects"});
+    declare_coefficients(correction_symbols(CorrectionKind::sensor, "f_lift"));
+  }
+  void changed() override {
+    field_ = channel_field(option_value(channel_));
+    redefine_units(correction_symbols(CorrectionKind::sensor, option_value(channel_)));
+  }
+  void reset(const WheelLoader& loader) override {
+    (void)loader;
+    clear_history();
+    has_last_ = false;
+  }
+  void on_sensors(const EffectContext& c, SensorSample& s) override {
+    (void)c;
+    CorrectionInputs x;
+    x.a = s.*field_;
+    // the rate by a backward difference of the true readings the effect saw
+    x.rate = has_last_ && s.t > last_t_ ? (x.a - last_a_) / (s.t - last_t_) : 0.0;
+    x.force = s.f_lift;
+    x.power = s.power;
+    delay(s.t, x);
+    last_t_ = s.t;
+    last_a_ = x.a;
+    has_last_ = true;
+    s.*field_ += correction(x);
+  }
+  std::vector<Channel> sensor_channels() const override {
+    for (std::size_t c = 1; c < kChannelCount; ++c)
+      if (kSensorChannels[c].field == field_) return {static_cast<Channel>(c)};
+    return {};
+  }
+
+ private:
+  int channel_ = 0;
+  double SensorSample::*field_ = &SensorSample::f_lift;
+  bool has_last_ = false;
+  double last_t_ = 0.0, last_a_ = 0.0;
+};
+
+}  // namespace
+
+const std::vector<CorrectionFeature>& correction_features(CorrectionKind kind) {
+  return kind == CorrectionKind::actuator ? kActuatorFeatures : kSensorFeatures;
+}
+
+CorrectionSymbols correction_symbols(CorrectionKind kind, const std::string& target) {
+  CorrectionSymbols s;
+  if (kind == CorrectionKind::actuator) {
+    if (target != "drive" && target != "lift" && target != "tilt")
+      throw Error("learned correction: no actuator '" + target + "' (drive, lift, tilt)");
+    s.a = "u_" + target;
+    s.a_unit = "m/s";
+    s.force = target == "drive" ? "f_traction" : "f_" + target;
+    return s;
+  }
+  for (std::size_t c = 1; c < kChannelCount; ++c) {
+    if (target == kSensorChannels[c].name) {
+      s.a = target;
+      s.a_unit = kSensorChannels[c].unit;
+      s.rate = "d" + target + "/dt";
+      s.rate_unit = s.a_unit + "/s";
+      return s;
+    }
+  }
+  throw Error("learned correction: no sensor channel '" + target + "'");
+}
+
+std::string correction_expression(const CorrectionFeature& f, const CorrectionSymbols& s) {
+  return substitute(f.expression,
+                    {{"{a}", s.a}, {"{v}", s.rate}, {"{F}", s.force}, {"{P}", s.power}});
+}
+
+std::string correction_unit(const CorrectionFeature& f, const CorrectionSymbols& s) {
+  return substitute(f.unit, {{"{a}", s.a_unit}, {"{v}", s.rate_unit}});
+}
+
+std::vector<std::string> learned_effect_names() {
+  return {"learned_actuator_correction", "learned_sensor_correction"};
+}
+
+std::unique_ptr<Effect> make_learned_effect(const std::string& name) {
+  if (name == "learned_actuator_correction") return std::make_unique<LearnedActuatorCorrection>();
+  if (name == "learned_sensor_correction") return std::make_unique<LearnedSensorCorrection>();
+  throw InputError("no learned correction named '" + name +
+                   "'; they are learned_actuator_correction and " + "learned_sensor_correction");
+}
+
+}  // namespace talus::vehicle
