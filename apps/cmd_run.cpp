@@ -182,8 +182,8 @@ DiggingOptions digging_options(const RunOptions& o) {
   if (o.form_speed >= 0.0) options.pile.form_speed = o.form_speed;
   options.sweep = parse_sweep(o.sweep, "--sweep");
   options.pile_cache.enabled = o.pile_cache;
-  options.pile_cache.note = [](const std::string& line) {
-    std::cerr << "talus run: " << line << "\n";
+  options.pile_cache.note = [quiet = o.quiet](const std::string& line) {
+    if (!quiet) std::cerr << "talus run: " << line << "\n";
   };
   return options;
 }
@@ -324,9 +324,10 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
   const std::filesystem::path dir(o.out);
   const auto start = std::chrono::steady_clock::now();
   Device dev;
-  std::cerr << "talus run: " << sc.name << " at " << preset.name << " (D " << preset.diameter * 1e3
-            << " mm, h " << preset.dt * 1e3 << " ms, " << preset.iterations << " sweeps) on "
-            << dev.description() << "\n";
+  if (!o.quiet)
+    std::cerr << "talus run: " << sc.name << " at " << preset.name << " (D "
+              << preset.diameter * 1e3 << " mm, h " << preset.dt * 1e3 << " ms, "
+              << preset.iterations << " sweeps) on " << dev.description() << "\n";
 
   // the pile, settled, and its laser scan before loading (as the field tests measured it)
   PileBuild pile;
@@ -344,7 +345,8 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
 
   // the run, with snapshots at the interval and progress notes; the steps alone are timed for the
   // real-time factor (snapshots and notes, which download the particles, are not)
-  if (!effects.empty()) std::cerr << "talus run: effects: " << effects_note(effects) << "\n";
+  if (!effects.empty() && !o.quiet)
+    std::cerr << "talus run: effects: " << effects_note(effects) << "\n";
   DiggingSimulation sim(dev, sc, preset, pile, options, &effects);
   if (sim.multiscale())
     write_file_atomically((dir / "terrain_start.vts").string(),
@@ -391,10 +393,12 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
     write_file_atomically((dir / "terrain.vts").string(), terrain_vts(sim.terrain().voxels()));
     write_file_atomically((dir / "aggregate.csv").string(), aggregate_csv(sim.aggregate_log()));
   }
-  std::cerr << "talus run: " << sc.name << " " << preset.name << ": " << run.summary.loaded_mass_kg
-            << " kg loaded, work in the digging phase " << run.summary.work_J / 1e3
-            << " kJ, real-time factor " << run.summary.details["realtime_factor"].get<double>()
-            << "; results in " << o.out << "\n";
+  if (!o.quiet)
+    std::cerr << "talus run: " << sc.name << " " << preset.name << ": "
+              << run.summary.loaded_mass_kg << " kg loaded, work in the digging phase "
+              << run.summary.work_J / 1e3 << " kJ, real-time factor "
+              << run.summary.details["realtime_factor"].get<double>() << "; results in " << o.out
+              << "\n";
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 #include "sim2real/synthetic.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <random>
 #include <sstream>
@@ -76,6 +77,8 @@ void add_sensor_noise(TimeSeries& series, const std::map<std::string, double>& s
 vehicle::Scenario varied_inputs(vehicle::Scenario sc, double v, unsigned seed) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::array<double, 3> shifts{};  // drive, lift, tilt [s]
+  std::size_t which = 0;
   for (vehicle::PiecewiseLinear* series : {&sc.drive, &sc.lift, &sc.tilt}) {
     auto points = series->points();
     const double scale = 1.0 + v * u(rng);
@@ -92,6 +95,18 @@ vehicle::Scenario varied_inputs(vehicle::Scenario sc, double v, unsigned seed) {
       if (i > 0 && i + 1 < points.size()) points[i].first += shift;
     }
     *series = vehicle::PiecewiseLinear(points);
+    shifts[which++] = points.size() > 2 ? shift : 0.0;
+  }
+  // the digging phase moves with the commands that make it: it starts when the drive brings the
+  // bucket into the pile and ends with the boom's and the bucket's motion; kept inside the run
+  // and in order (a scenario without marks has none to move)
+  if (sc.dig_end > sc.dig_start) {
+    const double start = std::clamp(sc.dig_start + shifts[0], 0.0, sc.duration);
+    const double end = std::clamp(sc.dig_end + 0.5 * (shifts[1] + shifts[2]), 0.0, sc.duration);
+    if (end > start) {
+      sc.dig_start = start;
+      sc.dig_end = end;
+    }
   }
   return sc;
 }

@@ -34,8 +34,9 @@ inline constexpr double kTimingShiftPerVariation = 1.0;
 
 // one repetition of the scenario by an operator who varies: each target-speed series scaled by
 // 1 + v u and its inner breakpoints shifted by v u' kTimingShiftPerVariation (u, u' uniform in
-// [-1, 1], drawn per series from `seed`), kept inside (0, duration) and in order; v = 0 returns
-// the scenario's own inputs
+// [-1, 1], drawn per series from `seed`), kept inside (0, duration) and in order; the digging
+// phase's marks move with them (its start with the drive's shift, its end with the mean of the
+// lift's and the tilt's); v = 0 returns the scenario's own inputs
 vehicle::Scenario varied_inputs(vehicle::Scenario scenario, double v, unsigned seed);
 
 // the metadata of a measured run made from `scenario` (its machine, inputs and pile toe), the

@@ -1,6 +1,7 @@
 // `talus synth` end to end: field-like data that loads as a measured run, carries no trace of the
 // effects that made it, keeps its answer key outside, and is reproducible by its seeds.
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <gtest/gtest.h>
 
@@ -64,6 +65,26 @@ TEST(SynthTest, AnswerKeyInsideTheDataAndBadNoiseAreBadInput) {
   EXPECT_EQ(exit_code(common + " --noise f_lfit=100 2>/dev/null"), 2);
   EXPECT_EQ(exit_code(common + " --noise f_lift=-1 2>/dev/null"), 2);
   EXPECT_FALSE(fs::exists(base / "d" / "timeseries.csv"));  // nothing written for bad input
+}
+
+TEST(SynthTest, QuietIsQuietForADig) {
+  // a pile scenario (type G, about a second): nothing on stderr, not the run's lines naming the
+  // work folder synth deletes afterwards
+  const fs::path base =
+      fs::temp_directory_path() / ("talus_synth_quiet_" + std::to_string(::getpid()));
+  fs::remove_all(base);
+  fs::create_directories(base);
+  const std::string cmd = kTalus +
+                          " synth --scenario hd27 --fidelity G400 --noise default --vary-inputs "
+                          "0.1 --quiet --seed 3 --out " +
+                          (base / "d").string() + " 2> " + (base / "stderr.txt").string();
+  ASSERT_EQ(exit_code(cmd), 0) << cmd;
+  EXPECT_EQ(slurp(base / "stderr.txt"), "");
+  EXPECT_TRUE(fs::exists(base / "d" / "summary.json"));
+  for (const auto& entry : fs::directory_iterator(base))  // the work folder is gone
+    EXPECT_EQ(entry.path().filename().string().rfind("d.work-", 0), std::string::npos)
+        << entry.path();
+  fs::remove_all(base);
 }
 
 }  // namespace

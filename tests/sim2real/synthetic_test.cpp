@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <cmath>
 
 #include "host/error.hpp"
@@ -77,6 +79,40 @@ TEST(Synthetic, VariedInputsStayOrderedAndBounded) {
       for (std::size_t i = 0; i < q.size(); ++i) EXPECT_LE(std::abs(q[i].second), 1.3 * std::abs(p[i].second) + 1e-12);
     }
   }
+}
+
+// the digging phase moves with the commands: its start with the drive's inner breakpoints, its
+// end with the mean of the lift's and the tilt's, and stays in order inside the run
+TEST(Synthetic, VariedInputsShiftTheDigMarksWithTheCommands) {
+  const vehicle::Scenario sc = vehicle::load_scenario("hd27");
+  ASSERT_GT(sc.dig_end, sc.dig_start);
+  const vehicle::Scenario same = varied_inputs(sc, 0.0, 3);
+  EXPECT_EQ(same.dig_start, sc.dig_start);
+  EXPECT_EQ(same.dig_end, sc.dig_end);
+  int moved = 0;
+  for (unsigned seed = 1; seed <= 20; ++seed) {
+    const vehicle::Scenario v = varied_inputs(sc, 0.3, seed);
+    // the shift of a series: how far its second breakpoint moved
+    auto shift = [](const vehicle::PiecewiseLinear& a, const vehicle::PiecewiseLinear& b) {
+      return b.points()[1].first - a.points()[1].first;
+    };
+    const double start = std::clamp(sc.dig_start + shift(sc.drive, v.drive), 0.0, sc.duration);
+    const double end = std::clamp(
+        sc.dig_end + 0.5 * (shift(sc.lift, v.lift) + shift(sc.tilt, v.tilt)), 0.0, sc.duration);
+    if (end > start) {
+      EXPECT_NEAR(v.dig_start, start, 1e-12) << "seed " << seed;
+      EXPECT_NEAR(v.dig_end, end, 1e-12) << "seed " << seed;
+    }
+    EXPECT_LT(v.dig_start, v.dig_end);
+    EXPECT_GE(v.dig_start, 0.0);
+    EXPECT_LE(v.dig_end, sc.duration);
+    moved += v.dig_start != sc.dig_start;
+  }
+  EXPECT_GT(moved, 10);
+  // a scenario without marks keeps none
+  const vehicle::Scenario carry = varied_inputs(vehicle::load_scenario("load-carry"), 0.3, 5);
+  EXPECT_EQ(carry.dig_start, 0.0);
+  EXPECT_EQ(carry.dig_end, 0.0);
 }
 
 }  // namespace
