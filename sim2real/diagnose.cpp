@@ -21,6 +21,11 @@ namespace {
 constexpr std::size_t kPowerChannel = static_cast<std::size_t>(Channel::power);
 // a parameter whose range spans this ratio or more (and excludes zero) is searched in log scale
 constexpr double kLogScaleRatio = 10.0;
+// the scan's extra points towards zero on a range that starts at zero (scan_axis)
+constexpr int kNearZeroPoints = 3;
+// a fit of two or more parameters runs until its steps fall below the tolerance, within this many
+// simulations per parameter (a guard, not the stop: BOBYQA converges in tens)
+constexpr int kFitEvaluationsPerParameter = 100;
 // the fit stops when a step in the normalised box is below this (0.1 % of the range)
 constexpr double kFitTolerance = 1e-3;
 // the discovery tries the sensor readings with the largest excess of their own, at most this many
@@ -77,11 +82,60 @@ int parameter_count(const Candidate& c, const vehicle::EffectPlugins& plugins) {
   return static_cast<int>(e->parameters().size());
 }
 
-// the scan's values of one normalised parameter: cell centres of n equal cells
-std::vector<double> scan_axis(int n) {
-  std::vector<double> u(n);
-  for (int i = 0; i < n; ++i) u[i] = (i + 0.5) / n;
+// the scan's values of one normalised parameter: cell centres of n equal cells and, for a range
+// that starts at zero, kNearZeroPoints more towards zero, each a quarter of the one before (down to
+// 1/64 of the first cell's centre: 1e-3 of the range for 9 cells), so a true value near zero is
+// scanned near itself rather than at the first centre, which may already fit worse than nothing
+std::vector<double> scan_axis(int n, bool from_zero) {
+  std::vector<double> u;
+  if (from_zero) {
+    for (int j = kNearZeroPoints; j >= 1; --j) u.push_back((0.5 / n) / std::pow(4.0, j));
+  }
+  for (int i = 0; i < n; ++i) u.push_back((i + 0.5) / n);
   return u;
+}
+
+// the i-th point (from 1) of the Halton sequence in base b: a space-filling design in [0, 1]
+double halton(int i, int base) {
+  double f = 1.0, r = 0.0;
+  for (; i > 0; i /= base) {
+    f /= base;
+    r += f * (i % base);
+  }
+  return r;
+}
+
+// does parameter i of the candidate's effect range from zero (linearly: not log-scaled)?
+std::vector<bool> zero_based(const Candidate& c, const vehicle::EffectPlugins& plugins) {
+  auto e = vehicle::make_effect(c.effect, plugins);
+  if (!c.channel.empty()) e->set_text("channel", c.channel);
+  std::vector<bool> out;
+  for (const auto& p : e->parameters()) out.push_back(p.min == 0.0 && p.max > 0.0);
+  return out;
+}
+
+// the coarse scan's points of a candidate with k parameters: a line of kScanPoints for one, a grid
+// of kScanPointsPerAxis2 per axis for two (both with the near-zero points of zero-based ranges),
+// and for three or more kScanPoints per parameter of the Halton sequence (bases 2, 3, 5, ...),
+// which fills the box evenly without a grid's k-th power
+std::vector<std::vector<double>> scan_points(const std::vector<bool>& from_zero) {
+  const std::size_t k = from_zero.size();
+  std::vector<std::vector<double>> points;
+  if (k == 1) {
+    for (double u : scan_axis(kScanPoints, from_zero[0])) points.push_back({u});
+  } else if (k == 2) {
+    for (double u : scan_axis(kScanPointsPerAxis2, from_zero[0]))
+      for (double v : scan_axis(kScanPointsPerAxis2, from_zero[1])) points.push_back({u, v});
+  } else {
+    constexpr int kPrimes[] = {2, 3, 5, 7, 11, 13, 17, 19, 23, 29, 31, 37};
+    const std::size_t dims = std::min(k, std::size(kPrimes));
+    for (int i = 1; i <= kScanPoints * static_cast<int>(k); ++i) {
+      std::vector<double> x(k, 0.5);
+      for (std::size_t d = 0; d < dims; ++d) x[d] = halton(i, kPrimes[d]);
+      points.push_back(x);
+    }
+  }
+  return points;
 }
 
 // NLopt's C callback around a std::function; an exception stops the optimiser and is rethrown
@@ -132,6 +186,11 @@ double mean_of(const std::vector<double>& v) {
 
 }  // namespace
 
+std::vector<std::vector<double>> candidate_scan_points(const Candidate& c,
+                                                       const vehicle::EffectPlugins& plugins) {
+  return scan_points(zero_based(c, plugins));
+}
+
 std::string Candidate::label() const { return channel.empty() ? effect : effect + "[" + channel + "]"; }
 
 std::vector<Candidate> candidate_set(const vehicle::EffectPlugins& plugins) {
@@ -159,7 +218,8 @@ std::vector<Candidate> candidate_set(const vehicle::EffectPlugins& plugins) {
     }
   }
   for (const auto& plugin : plugins)
-    for (const auto& name : plugin->effect_names()) out.push_back({name, "", {}, false});
+    for (const auto& name : plugin->effect_names())
+      out.push_back({name, "", {}, plugin->make(name)->soil_only()});
   return out;
 }
 
@@ -258,21 +318,35 @@ class Search {
     const std::vector<const Candidate*> screened = screen(candidates, dr);
     say("round " + std::to_string(number) + ": " + std::to_string(screened.size()) + " candidates to scan, " +
         std::to_string(dr.screened_out.size()) + " screened out by their signature");
-    std::vector<Scanned> scanned = scan(screened);
+    std::vector<Scanned> scanned = scan(screened, dr);
     // 3. fit the best few; 4. validate them with the parameter penalty
     for (std::size_t j = 0; j < scanned.size() && j < static_cast<std::size_t>(kFitted); ++j) {
       if (!(scanned[j].score.excess < current_cal_)) break;  // no better than the model without it
-      dr.fitted.push_back(fit(scanned[j]));
+      try {
+        dr.fitted.push_back(fit(scanned[j]));
+      } catch (const std::exception& e) {
+        failed(dr, scanned[j].c->label(), e.what());
+      }
     }
     std::sort(dr.fitted.begin(), dr.fitted.end(), [](const auto& a, const auto& b) { return a.score < b.score; });
-    // 5. add the winner only when it explains enough of what is left
+    // 5. add the winner only when it explains enough of what is left; else the best pair, if it
+    // does
     if (!dr.fitted.empty() && dr.fitted[0].explained >= kMinExplained) {
       dr.added = true;
       add(dr.fitted[0]);
       say("round " + std::to_string(number) + ": added " + dr.fitted[0].spec);
+    } else if (search_pairs(candidates, dr);
+               !dr.pairs.empty() && dr.pairs[0].explained >= kMinExplained) {
+      dr.added = true;
+      add(dr.pairs[0].first);
+      add(dr.pairs[0].second);
+      current_cal_ = dr.pairs[0].excess_calibration;
+      current_val_ = dr.pairs[0].excess_validation;
+      say("round " + std::to_string(number) + ": added the pair " + dr.pairs[0].first.spec +
+          " and " + dr.pairs[0].second.spec);
     } else {
-      say("round " + std::to_string(number) + ": no candidate explains " + format_number(100.0 * kMinExplained) +
-          " % of the excess left; nothing added");
+      say("round " + std::to_string(number) + ": no candidate or pair explains " +
+          format_number(100.0 * kMinExplained) + " % of the excess left; nothing added");
     }
     d_.rounds.push_back(dr);
     return dr.added;
@@ -367,19 +441,12 @@ class Search {
     for (std::size_t i = 0; i < runs_.size(); ++i)
       after[i] = compute_residuals(simulate(i, vehicle::make_effect(c.spec, options_.plugins)),
                                    runs_[i].run, sigma_[i]);
-    const bool disjoint = d_.validation != d_.calibration;
     c.simulated = true;
     c.excess_calibration = mean_excess(after, d_.calibration);
     c.excess_validation = mean_excess(after, d_.validation);
-    if (current_val_ >= kSignificantExcess || !disjoint) {
-      c.explained = current_val_ > 0.0 ? (current_val_ - c.excess_validation) / current_val_ : 0.0;
-      c.explained_on = "validation";
-    } else {
-      c.explained = c.excess_validation < kSignificantExcess && current_cal_ > 0.0
-                        ? (current_cal_ - c.excess_calibration) / current_cal_
-                        : 0.0;
-      c.explained_on = "calibration";
-    }
+    const Share share = share_explained(c.excess_calibration, c.excess_validation);
+    c.explained = share.explained;
+    c.explained_on = share.on;
     c.score = c.explained_on == "validation" ? c.excess_validation : c.excess_calibration;
     c.channels.clear();
     for (std::size_t ch = 1; ch < kChannelCount; ++ch) {
@@ -447,6 +514,31 @@ class Search {
     if (note_) note_(line);
   }
 
+  // the share of the excess left that a model with these excesses removes: on the held-out runs;
+  // when they leave nothing beyond noise (the effect does not show in them), on the calibration
+  // runs, provided it keeps the held-out runs within noise. One rule for candidates, pairs and
+  // learned corrections
+  struct Share {
+    double explained = 0.0;
+    std::string on;
+  };
+  Share share_explained(double excess_calibration, double excess_validation) const {
+    const bool disjoint = d_.validation != d_.calibration;
+    if (current_val_ >= kSignificantExcess || !disjoint)
+      return {current_val_ > 0.0 ? (current_val_ - excess_validation) / current_val_ : 0.0,
+              "validation"};
+    return {excess_validation < kSignificantExcess && current_cal_ > 0.0
+                ? (current_cal_ - excess_calibration) / current_cal_
+                : 0.0,
+            "calibration"};
+  }
+
+  // a candidate whose simulation threw: reported in the round and the notes, then skipped
+  void failed(DiagnosisRound& dr, const std::string& label, const std::string& what) const {
+    dr.failed.push_back({label, what});
+    say("  " + label + ": its simulation failed (" + what + "); skipped");
+  }
+
   // run i simulated with the effects found so far plus, optionally, a candidate
   Run simulate(std::size_t i, std::unique_ptr<vehicle::Effect> extra) {
     vehicle::EffectSet set;
@@ -506,29 +598,30 @@ class Search {
   }
 
   // 2. the coarse scan on the calibration runs: each candidate's best grid point, best first
-  std::vector<Scanned> scan(const std::vector<const Candidate*>& screened) {
+  std::vector<Scanned> scan(const std::vector<const Candidate*>& screened, DiagnosisRound& dr) {
     std::vector<Scanned> scanned;
     for (const Candidate* c : screened) {
       const int k = parameter_count(*c, options_.plugins);
-      if (k == 0 || k > 2) {
-        say("  " + c->label() + ": " + std::to_string(k) + " parameters; only effects with 1 or 2 are fitted, skipped");
+      if (k == 0) {
+        say("  " + c->label() + ": no parameters to fit, skipped");
         continue;
       }
-      std::vector<std::vector<double>> points;
-      if (k == 1) {
-        for (double u : scan_axis(kScanPoints)) points.push_back({u});
-      } else {
-        for (double u : scan_axis(kScanPointsPerAxis2))
-          for (double v : scan_axis(kScanPointsPerAxis2)) points.push_back({u, v});
+      // a candidate whose simulation fails is reported and skipped, not the whole diagnosis
+      try {
+        const std::vector<std::vector<double>> points =
+            scan_points(zero_based(*c, options_.plugins));
+        Scanned best{c, points[0], Score{}, k};
+        for (const auto& x : points) {
+          const Score e = score_runs(d_.calibration, c, x);
+          if (e < best.score) best = {c, x, e, k};
+        }
+        say("  scan " + c->label() + ": best excess " + format_number(best.score.excess) +
+            " (now " + format_number(current_cal_) + ", " + std::to_string(points.size()) +
+            " points)");
+        scanned.push_back(best);
+      } catch (const std::exception& e) {
+        failed(dr, c->label(), e.what());
       }
-      Scanned best{c, points[0], Score{}, k};
-      for (const auto& x : points) {
-        const Score e = score_runs(d_.calibration, c, x);
-        if (e < best.score) best = {c, x, e, k};
-      }
-      say("  scan " + c->label() + ": best excess " + format_number(best.score.excess) + " (now " +
-          format_number(current_cal_) + ")");
-      scanned.push_back(best);
     }
     std::sort(scanned.begin(), scanned.end(), [](const auto& a, const auto& b) { return a.score < b.score; });
     return scanned;
@@ -541,8 +634,11 @@ class Search {
     const bool disjoint = d_.validation != d_.calibration;
     const double step = 0.5 / (s.parameters == 1 ? kScanPoints : kScanPointsPerAxis2);
     std::vector<double> x = s.x;
-    minimise([&](const std::vector<double>& y) { return score_runs(d_.calibration, s.c, y).log_ratio; }, x, step,
-             kFitEvaluations);
+    const int evaluations =
+        s.parameters == 1 ? kFitEvaluations : kFitEvaluationsPerParameter * s.parameters;
+    minimise(
+        [&](const std::vector<double>& y) { return score_runs(d_.calibration, s.c, y).log_ratio; },
+        x, step, evaluations);
     const Score fitted = score_runs(d_.calibration, s.c, x);
     if (fitted.excess <= s.score.excess) s.x = x;
     FittedEffect f;
@@ -551,20 +647,13 @@ class Search {
     f.effect = effect->to_json();
     f.spec = effect_spec(*effect);
     f.parameters = s.parameters;
+    f.x = s.x;
     f.excess_calibration = std::min(fitted.excess, s.score.excess);
     f.excess_validation = disjoint ? score_runs(d_.validation, s.c, s.x).excess : f.excess_calibration;
-    // the share it explains of what the held-out runs leave; when they leave nothing beyond
-    // noise (the effect does not show in them), the share of the calibration runs', provided
-    // it keeps the held-out runs within noise
-    if (current_val_ >= kSignificantExcess || !disjoint) {
-      f.explained = current_val_ > 0.0 ? (current_val_ - f.excess_validation) / current_val_ : 0.0;
-      f.explained_on = "validation";
-    } else {
-      f.explained = f.excess_validation < kSignificantExcess && current_cal_ > 0.0
-                        ? (current_cal_ - f.excess_calibration) / current_cal_
-                        : 0.0;
-      f.explained_on = "calibration";
-    }
+    // the share it explains of what is left
+    const Share share = share_explained(f.excess_calibration, f.excess_validation);
+    f.explained = share.explained;
+    f.explained_on = share.on;
     // the score ranks on the runs the share is counted on; a candidate that pushes held-out runs
     // beyond noise ranks last
     const bool harmless = f.explained_on == "validation" || f.excess_validation < kSignificantExcess;
@@ -575,6 +664,143 @@ class Search {
     say("  fit " + f.spec + ": excess calibration " + format_number(f.excess_calibration) + ", validation " +
         format_number(f.excess_validation) + " (explains " + format_number(100.0 * f.explained) + " % on the " +
         f.explained_on + " runs)");
+    return f;
+  }
+
+  // run i simulated with the effects found so far plus the candidates at their normalised values
+  Run simulate_with(std::size_t i,
+                    const std::vector<std::pair<const Candidate*, std::vector<double>>>& extras) {
+    vehicle::EffectSet set;
+    for (const auto& spec : found_specs_) set.add(vehicle::make_effect(spec, options_.plugins));
+    for (const auto& [c, x] : extras) set.add(make_candidate(*c, x, options_.plugins));
+    Run r = replays_[i]->simulate(set);
+    ++d_.simulations;
+    return r;
+  }
+
+  // the model's state (the effects found and every run's simulation), to try a candidate on it
+  struct Model {
+    std::vector<std::string> specs;
+    double cal = 0.0, val = 0.0;
+    std::vector<Run> runs;
+    std::vector<Residuals> residuals;
+  };
+  Model model() const {
+    return {found_specs_, current_cal_, current_val_, current_runs_, current_residuals_};
+  }
+  void restore(Model m) {
+    found_specs_ = std::move(m.specs);
+    current_cal_ = m.cal;
+    current_val_ = m.val;
+    current_runs_ = std::move(m.runs);
+    current_residuals_ = std::move(m.residuals);
+  }
+
+  // pairs (step 5): each of the best singles provisionally in the model, a second candidate
+  // searched on top of it, then both refitted jointly and validated against the excess before
+  // either; dr.pairs holds them, best score first
+  void search_pairs(const std::vector<Candidate>& candidates, DiagnosisRound& dr) {
+    const Model before = model();
+    const bool disjoint = d_.validation != d_.calibration;
+    std::vector<const FittedEffect*> firsts;
+    for (const auto& f : dr.fitted)
+      if (std::isfinite(f.score) && f.explained > 0.0 &&
+          static_cast<int>(firsts.size()) < kPairCandidates)
+        firsts.push_back(&f);
+    for (const FittedEffect* a : firsts) {
+      try {
+        // a provisionally in the model: the screen and the scan see what it leaves
+        found_specs_.push_back(a->spec);
+        for (std::size_t i = 0; i < runs_.size(); ++i) {
+          current_runs_[i] = simulate(i, nullptr);
+          current_residuals_[i] = compute_residuals(current_runs_[i], runs_[i].run, sigma_[i]);
+        }
+        current_cal_ = mean_excess(current_residuals_, d_.calibration);
+        current_val_ = mean_excess(current_residuals_, d_.validation);
+        say("pairs: " + a->candidate.label() + " taken provisionally (excess " +
+            format_number(current_cal_) + ")");
+        DiagnosisRound inner;
+        std::vector<const Candidate*> screened;
+        for (const Candidate* c : screen(candidates, inner))
+          if (c->label() != a->candidate.label()) screened.push_back(c);
+        std::vector<Scanned> scanned = scan(screened, inner);
+        for (const auto& f : inner.failed) dr.failed.push_back(f);
+        restore(before);
+        if (scanned.empty()) continue;
+        // both refitted together from their own values, on the calibration runs
+        const Candidate* ca = nullptr;
+        for (const auto& c : candidates)
+          if (c.label() == a->candidate.label()) ca = &c;
+        const Candidate* cb = scanned[0].c;
+        const std::size_t ka = a->x.size();
+        auto split = [&](const std::vector<double>& x) {
+          return std::vector<std::pair<const Candidate*, std::vector<double>>>{
+              {ca, std::vector<double>(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(ka))},
+              {cb, std::vector<double>(x.begin() + static_cast<std::ptrdiff_t>(ka), x.end())}};
+        };
+        auto score_pair = [&](const std::vector<std::size_t>& which, const std::vector<double>& x) {
+          std::vector<double> e, l;
+          for (std::size_t i : which) {
+            const Residuals res =
+                compute_residuals(simulate_with(i, split(x)), runs_[i].run, sigma_[i]);
+            e.push_back(res.excess);
+            l.push_back(res.log_ratio);
+          }
+          return Score{mean_of(e), mean_of(l)};
+        };
+        std::vector<double> x = a->x;
+        x.insert(x.end(), scanned[0].x.begin(), scanned[0].x.end());
+        const std::vector<double> start = x;
+        minimise(
+            [&](const std::vector<double>& y) { return score_pair(d_.calibration, y).log_ratio; },
+            x, 0.5 / kScanPointsPerAxis2, kFitEvaluationsPerParameter * static_cast<int>(x.size()));
+        if (score_pair(d_.calibration, start).excess < score_pair(d_.calibration, x).excess)
+          x = start;
+        // the pair as one model: its shares against the excess before either
+        FittedPair p;
+        const auto parts = split(x);
+        p.first = as_fitted(*ca, parts[0].second);
+        p.second = as_fitted(*cb, parts[1].second);
+        p.excess_calibration = score_pair(d_.calibration, x).excess;
+        p.excess_validation = disjoint ? score_pair(d_.validation, x).excess : p.excess_calibration;
+        const Share share = share_explained(p.excess_calibration, p.excess_validation);
+        p.explained = share.explained;
+        p.explained_on = share.on;
+        const bool harmless =
+            p.explained_on == "validation" || p.excess_validation < kSignificantExcess;
+        p.score = harmless ? (p.explained_on == "validation" ? p.excess_validation
+                                                             : p.excess_calibration) +
+                                 kParameterPenalty * static_cast<double>(x.size())
+                           : HUGE_VAL;
+        // each effect reports the pair's shares (they are added together or not at all)
+        for (FittedEffect* f : {&p.first, &p.second}) {
+          f->excess_calibration = p.excess_calibration;
+          f->excess_validation = p.excess_validation;
+          f->explained = p.explained;
+          f->explained_on = p.explained_on;
+          f->score = p.score;
+        }
+        say("  pair " + p.first.spec + " + " + p.second.spec + ": explains " +
+            format_number(100.0 * p.explained) + " % on the " + p.explained_on + " runs");
+        dr.pairs.push_back(p);
+      } catch (const std::exception& e) {
+        restore(before);
+        failed(dr, "pair with " + a->candidate.label(), e.what());
+      }
+    }
+    std::sort(dr.pairs.begin(), dr.pairs.end(),
+              [](const auto& a, const auto& b) { return a.score < b.score; });
+  }
+
+  // a candidate at normalised values as a FittedEffect (its spec, JSON and parameters)
+  FittedEffect as_fitted(const Candidate& c, const std::vector<double>& x) const {
+    FittedEffect f;
+    f.candidate = c;
+    const auto effect = make_candidate(c, x, options_.plugins);
+    f.effect = effect->to_json();
+    f.spec = effect_spec(*effect);
+    f.parameters = static_cast<int>(x.size());
+    f.x = x;
     return f;
   }
 
@@ -664,7 +890,24 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
   for (const auto& r : d.rounds) {
     json fitted = json::array();
     for (const auto& f : r.fitted) fitted.push_back(fitted_json(f));
-    rounds.push_back({{"excess_before", r.excess_before}, {"screened_out", r.screened_out}, {"fitted", fitted}, {"added", r.added}});
+    json failed = json::array();
+    for (const auto& [label, what] : r.failed)
+      failed.push_back({{"candidate", label}, {"error", what}});
+    json pairs = json::array();
+    for (const auto& p : r.pairs)
+      pairs.push_back({{"candidates", {p.first.candidate.label(), p.second.candidate.label()}},
+                       {"specs", {p.first.spec, p.second.spec}},
+                       {"excess_calibration", p.excess_calibration},
+                       {"excess_validation", p.excess_validation},
+                       {"explained", p.explained},
+                       {"explained_on", p.explained_on},
+                       {"score", p.score}});
+    rounds.push_back({{"excess_before", r.excess_before},
+                      {"screened_out", r.screened_out},
+                      {"failed", failed},
+                      {"fitted", fitted},
+                      {"pairs", pairs},
+                      {"added", r.added}});
   }
   json runs = json::array();
   for (std::size_t i = 0; i < d.runs.size(); ++i) {

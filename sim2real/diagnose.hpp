@@ -8,24 +8,29 @@
 //     the wheel-slip speed reading) can at most remove the excess of those channels; when that
 //     bound is below the share a winner must explain, or the channel it acts on shows no excess
 //     of its own, it is not simulated at all
-//  2. coarse scan: each remaining candidate at kScanPoints values across its range, on the
-//     calibration runs
+//  2. coarse scan: each remaining candidate at kScanPoints values across its range (and towards
+//     zero on a range that starts there), a 2-D grid for two parameters, a Halton design for three
+//     or more, on the calibration runs; a candidate whose simulation throws is reported and skipped
 //  3. fit: the best kFitted candidates' parameters from their best scan point with NLopt's BOBYQA
 //     (derivative free, bounded; Powell 2009) in a box normalised to [0, 1] (logarithmic for
-//     ranges spanning a decade or more), at most kFitEvaluations simulations each; the fit
+//     ranges spanning a decade or more), at most kFitEvaluations simulations for one parameter and
+//     until convergence for more (a guard of 100 per parameter); the fit
 //     maximises the likelihood (Residuals::log_ratio), the scan and the decisions use the excess
 //  4. validation: each fitted candidate on the held-out runs; its score is the validation excess
 //     plus kParameterPenalty per fitted parameter, so a richer effect must earn its parameters
 //     (the calibration excess when the held-out runs show nothing to explain, see 5)
 //  5. decision: the best-scoring candidate is added when it removes at least kMinExplained of the
-//     validation excess that is left, else the round adds nothing. Held-out runs that show no
+//     validation excess that is left. Else pairs: each of the kPairCandidates best singles is taken
+//     provisionally, a second candidate searched on top of it (screen, scan, fit), and the two
+//     refitted jointly from there and validated as one model (both effects' parameters
+//     penalised); the best pair is added when it removes kMinExplained together. Else the round
+//     adds nothing. Held-out runs that show no
 //     excess (an effect that needs a manoeuvre they lack) cannot confirm a candidate, only refute
 //     it: then the share explained is the calibration runs', if the candidate keeps the held-out
 //     runs within noise
 // Rounds repeat (each fits one more effect on top of those added, which keep their values) until
 // every run's excess is within noise, nothing qualifies, or max_effects are added. "Unexplained"
-// means some run keeps an excess beyond noise at the end. Candidates with more than two
-// parameters are not fitted (the report says so); all built-ins have one.
+// means some run keeps an excess beyond noise at the end.
 // Discovery (issue 17, sim2real/discovery.hpp): when an excess beyond noise remains after the
 // rounds (or when asked), a sparse learned correction is fitted per target on the calibration
 // runs, each simulated on all runs, and the best is added when it removes at least kMinExplained
@@ -37,6 +42,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "sim2real/discovery.hpp"
@@ -53,6 +59,8 @@ inline constexpr int kScanPoints = 9;
 inline constexpr int kScanPointsPerAxis2 = 5;
 // candidates fitted per round, and the simulations each fit may use
 inline constexpr int kFitted = 3;
+// singles each taken as the first of a pair when none explains enough alone
+inline constexpr int kPairCandidates = 2;
 inline constexpr int kFitEvaluations = 24;
 // a winner must remove this share of the excess left (on the validation runs)
 inline constexpr double kMinExplained = 0.5;
@@ -76,6 +84,12 @@ struct Candidate {
 
 // the built-in effects, channel-bound ones once per channel, then every effect of the plug-ins
 std::vector<Candidate> candidate_set(const vehicle::EffectPlugins& plugins);
+
+// the coarse scan's points of a candidate in its box normalised to [0, 1] per parameter (step 2
+// above): what a parameter's normalised value means is make_candidate's mapping, linear, or
+// logarithmic for ranges that exclude zero and span a decade
+std::vector<std::vector<double>> candidate_scan_points(const Candidate& c,
+                                                       const vehicle::EffectPlugins& plugins);
 
 struct DiagnoseOptions {
   ReplayOptions replay;
@@ -101,13 +115,28 @@ struct FittedEffect {
   std::string explained_on;
   double score = 0.0;          // excess_validation + penalty
   int simulations = 0;
+  std::vector<double> x;  // its parameters in the box normalised to [0, 1] (the fit's variables)
+};
+
+// two candidates fitted jointly (when no single one explains enough): the first taken
+// provisionally, the second searched on top of it, both refitted together and validated as one
+// model
+struct FittedPair {
+  FittedEffect first, second;  // each with the joint fit's values
+  double excess_calibration = 0.0, excess_validation = 0.0;
+  double explained = 0.0;  // share of the excess left before the pair that the pair removes
+  std::string explained_on;
+  double score = 0.0;  // as a single's, with both effects' parameters penalised
 };
 
 struct DiagnosisRound {
   double excess_before = 0.0;            // mean validation excess per run before the round
   std::vector<std::string> screened_out; // labels the signature screen skipped
+  // candidates whose simulation threw (label, message): reported and skipped
+  std::vector<std::pair<std::string, std::string>> failed;
   std::vector<FittedEffect> fitted;      // best score first
-  bool added = false;                    // fitted[0] was added
+  std::vector<FittedPair> pairs;         // when no single one explains enough; best score first
+  bool added = false;                    // fitted[0] was added, or pairs[0]'s two effects
 };
 
 struct Diagnosis {

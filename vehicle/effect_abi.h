@@ -1,6 +1,6 @@
-/* The C interface of effect plug-ins (docs/effects.md, "Plug-ins"): a shared library that adds model
- * extensions to talus without rebuilding it. Plain C, so a plug-in can be written in C, C++ or
- * anything that exports a C function; include this header and nothing else from talus.
+/* The C interface of effect plug-ins (docs/effects.md, "Plug-ins"): a shared library that adds
+ * model extensions to talus without rebuilding it. Plain C, so a plug-in can be written in C, C++
+ * or anything that exports a C function; include this header and nothing else from talus.
  *
  * The library exports one function, TALUS_EFFECT_ENTRY, returning a pointer to a static
  * talus_effect_plugin_info whose abi_version is TALUS_EFFECT_ABI_VERSION. talus (dlopen, dlsym)
@@ -11,7 +11,8 @@
  * instances. talus checks every value against the range before set_parameter, and calls, every
  * step, in this order: on_commands (the operator's target speeds -> what the actuators get),
  * on_step (force limits, the driveline's power limit, extra forces on bodies for this step),
- * on_sensors (what the sensors report). Any hook may be NULL. Hooks must not throw (C++) or
+ * on_sensors (what the sensors report); and once before a run with particles, on_soil (the soil's
+ * properties). Any hook may be NULL. Hooks must not throw (C++) or
  * keep pointers they are given beyond the call. Units: SI, as the channel contract (SPEC §2.4). */
 #ifndef TALUS_EFFECT_ABI_H
 #define TALUS_EFFECT_ABI_H
@@ -22,7 +23,7 @@
 extern "C" {
 #endif
 
-#define TALUS_EFFECT_ABI_VERSION 1u
+#define TALUS_EFFECT_ABI_VERSION 2u
 /* the name of the exported entry point */
 #define TALUS_EFFECT_ENTRY "talus_effect_plugin_entry"
 
@@ -69,6 +70,13 @@ typedef struct talus_step_controls {
   int (*add_wrench)(void* host, const char* body, const double force[3], const double torque[3]);
 } talus_step_controls;
 
+/* the soil's properties (vehicle/effect.hpp SoilProperties): what on_soil may change, once before a
+ * run with particles; the baseline gravel is dry and cohesionless. cohesion: the bulk tensile
+ * strength [Pa], finite and >= 0 */
+typedef struct talus_soil_properties {
+  double cohesion;
+} talus_soil_properties;
+
 typedef struct talus_effect_parameter {
   const char* name;     /* [a-z0-9_]+ */
   double value;         /* the default */
@@ -92,6 +100,9 @@ typedef struct talus_effect_type {
   void (*on_commands)(void* self, const talus_effect_context* context, talus_commands* commands);
   void (*on_step)(void* self, const talus_effect_context* context, talus_step_controls* controls);
   void (*on_sensors)(void* self, const talus_effect_context* context, talus_sensor_sample* sample);
+  /* once before a run with particles (since version 2); an effect with this hook alone acts on
+   * the soil only, so the diagnosis tries it on pile runs only */
+  void (*on_soil)(void* self, talus_soil_properties* soil);
 } talus_effect_type;
 
 typedef struct talus_effect_plugin_info {

@@ -151,6 +151,20 @@ class PluginEffect : public Effect {
     controls.set_tilt_force_range(s.tilt_force_min, s.tilt_force_max);
     controls.set_drive_power_limit(s.drive_power_limit);
   }
+  void on_soil(SoilProperties& soil) override {
+    if (!type_.on_soil) return;
+    talus_soil_properties s{soil.cohesion};
+    type_.on_soil(self_, &s);
+    if (!std::isfinite(s.cohesion) || s.cohesion < 0.0)
+      throw Error(
+          file_ + ": effect '" + name() +
+          "' set a soil cohesion that is negative or not finite; fix the plug-in's on_soil");
+    soil.cohesion = s.cohesion;
+  }
+  // an effect with on_soil alone shows only where there are particles
+  bool soil_only() const override {
+    return type_.on_soil && !type_.on_commands && !type_.on_step && !type_.on_sensors;
+  }
   void on_sensors(const EffectContext& c, SensorSample& sample) override {
     if (!type_.on_sensors) return;
     const talus_sensor_sample previous = to_c(c.previous);

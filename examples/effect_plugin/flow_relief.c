@@ -63,8 +63,9 @@ static void on_step(void* self, const talus_effect_context* context, talus_step_
 
 static const talus_effect_type kEffects[] = {
     {"flow_relief", "relief pressure falling with flow: lower cylinder force limits at high speed",
-     (int)(sizeof(kParameters) / sizeof(kParameters[0])), kParameters, create, destroy, set_parameter,
-     NULL /* reset: no state */, NULL /* on_commands */, on_step, NULL /* on_sensors */},
+     (int)(sizeof(kParameters) / sizeof(kParameters[0])), kParameters, create, destroy,
+     set_parameter, NULL /* reset: no state */, NULL /* on_commands */, on_step,
+     NULL /* on_sensors */, NULL /* on_soil */},
 };
 
 static const talus_effect_plugin_info kInfo = {TALUS_EFFECT_ABI_VERSION, "talus example effects", 1, kEffects};

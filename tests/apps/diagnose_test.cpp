@@ -10,6 +10,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <random>
+#include <set>
 #include <string>
 
 namespace {
@@ -170,6 +171,52 @@ TEST(DiagnoseTest, AnEffectOutsideTheCandidatesIsUnexplainedOrAClearlyWorseFit) 
         << context << ": " << j["discovered"].dump();
     EXPECT_GE(j["discovered"]["held_out_error_cut"].get<double>(), 0.5) << context;
   }
+  fs::remove_all(base);
+}
+
+TEST(DiagnoseTest, TwoEffectsOfSimilarSizeAreFoundTogether) {
+  // the case: cylinder friction of about 12 kN with a traction-sensor bias of about +6 kN,
+  // where the best single candidate removes just under half of the held-out excess; the pair
+  // search must add both
+  const unsigned seed = test_seed();
+  std::mt19937_64 rng(seed);
+  const double force = std::uniform_real_distribution<double>(10e3, 14e3)(rng);
+  const double bias = std::uniform_real_distribution<double>(5e3, 7e3)(rng);
+  const std::string context = "TALUS_TEST_SEED=" + std::to_string(seed) + ", friction " +
+                              std::to_string(force) + " N, bias " + std::to_string(bias) + " N";
+  const fs::path base = fs::temp_directory_path() / ("talus_diagnose_pair_" + std::to_string(seed));
+  fs::remove_all(base);
+  synthesise(base,
+             " --effect cylinder_friction:force=" + std::to_string(force) +
+                 " --effect sensor_bias:channel=f_traction,bias=" + std::to_string(bias),
+             seed);
+  const auto j = diagnose(base);
+  std::set<std::string> names;
+  for (const auto& f : j["effects_found"]) names.insert(f["name"].get<std::string>());
+  EXPECT_TRUE(names.count("cylinder_friction")) << context << ": " << j["effects_found"].dump();
+  EXPECT_TRUE(names.count("sensor_bias")) << context << ": " << j["effects_found"].dump();
+  const double before = j["error_before"]["mean"], after = j["error_after"]["mean"];
+  EXPECT_LE(after, 0.7 * before) << context;
+  fs::remove_all(base);
+}
+
+TEST(DiagnoseTest, ACandidateWhoseSimulationFailsIsReportedAndSkipped) {
+  // a plug-in effect that makes a command NaN in half its range joins the candidates; the loop
+  // reports it and still names the built-in effect in the data
+  const unsigned seed = test_seed();
+  std::mt19937_64 rng(seed);
+  const double force = std::uniform_real_distribution<double>(15e3, 25e3)(rng);
+  const std::string context = "TALUS_TEST_SEED=" + std::to_string(seed);
+  const fs::path base =
+      fs::temp_directory_path() / ("talus_diagnose_broken_" + std::to_string(seed));
+  fs::remove_all(base);
+  synthesise(base, " --effect cylinder_friction:force=" + std::to_string(force), seed);
+  const auto j = diagnose(base, std::string(" --effect-plugin ") + TALUS_BROKEN_EFFECT);
+  ASSERT_GE(j["effects_found"].size(), 1u) << context;
+  EXPECT_EQ(j["effects_found"][0]["name"], "cylinder_friction") << context;
+  bool reported = false;
+  for (const auto& f : j["rounds"][0]["failed"]) reported = reported || f["candidate"] == "broken";
+  EXPECT_TRUE(reported) << context << ": " << j["rounds"][0].dump();
   fs::remove_all(base);
 }
 

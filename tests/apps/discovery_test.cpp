@@ -3,7 +3,7 @@
 // only in tests/apps/hidden_effects.c, drawn at random from five families at random magnitudes,
 // and `talus diagnose` gets the data alone. Fresh seeds every run (TALUS_TEST_SEED repeats one).
 // The documentation run (docs/discovery.md) sets TALUS_DISCOVERY_DRAWS=20 and
-// TALUS_DISCOVERY_FREE_DRAWS=10; CI runs the defaults below.
+// TALUS_DISCOVERY_FREE_DRAWS=10; CI runs the defaults below (4 and 2).
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -144,7 +144,7 @@ bool discovered(const nlohmann::json& j, const Hidden& h, std::string& what) {
 TEST(DiscoveryTest, FindsTheRightTermForEffectsOutsideTheCandidates) {
   const unsigned seed = test_seed();
   std::mt19937_64 rng(seed);
-  const int draws = env_count("TALUS_DISCOVERY_DRAWS", 3);
+  const int draws = env_count("TALUS_DISCOVERY_DRAWS", 4);
   int found = 0;
   for (int draw = 0; draw < draws; ++draw) {
     const Hidden h = draw_hidden(rng);
@@ -163,9 +163,10 @@ TEST(DiscoveryTest, FindsTheRightTermForEffectsOutsideTheCandidates) {
     fs::remove_all(base);
   }
   RecordProperty("found", found);
-  // the bar: 80 % of the draws. CI's three draws must all but one succeed: with the rate
-  // measured in the documentation run (docs/discovery.md) a false failure is rare
-  const int needed = draws >= 10 ? (8 * draws + 9) / 10 : draws - 1;
+  // the bar: 80 % of the draws, held by the documentation run's 20 (docs/discovery.md: 18
+  // of 20). CI's four draws need two: at the measured rate of 0.9 it fails by chance once in about
+  // 270 runs, and a discovery that lost half its rate would fail it one time in three
+  const int needed = draws >= 10 ? (8 * draws + 9) / 10 : (draws + 1) / 2;
   EXPECT_GE(found, needed) << "TALUS_TEST_SEED=" << seed << ": " << found << " of " << draws
                            << " discovered";
 }

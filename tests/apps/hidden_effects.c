@@ -38,6 +38,26 @@ static void reset(void* self) {
   ((hidden*)self)->started = 0;
 }
 
+#ifdef TALUS_HIDDEN_ONLY_BROKEN
+/* broken: a command that is not a number once k > 0.5, the model of a user's effect whose
+ * arithmetic fails in part of its range; the diagnosis must report it and go on (built alone as
+ * talus_broken_effect, TALUS_HIDDEN_ONLY_BROKEN) */
+static void broken(void* self, const talus_effect_context* c, talus_commands* u) {
+  const hidden* e = (const hidden*)self;
+  (void)c;
+  if (e->k > 0.5) u->lift = NAN;
+}
+
+static const talus_effect_parameter kBroken[] = {
+    {"k", 0.0, 0.0, 1.0, "1", "above 0.5 the lift command is NaN"}};
+
+static const talus_effect_type kEffects[] = {
+    {"broken", "fails above half its range", 1, kBroken, create, destroy, set_parameter, reset,
+     broken, NULL, NULL, NULL},
+};
+static const talus_effect_plugin_info kInfo = {TALUS_EFFECT_ABI_VERSION, "talus broken test effect",
+                                               1, kEffects};
+#else
 /* the lift or tilt command and force of the previous sample */
 static double* command_of(const hidden* e, talus_commands* u) {
   return e->which < 0.5 ? &u->lift : &u->tilt;
@@ -132,19 +152,20 @@ static const talus_effect_parameter kLoadGain[] = {
 
 static const talus_effect_type kEffects[] = {
     {"leakage", "leakage with pressure", 2, kLeakage, create, destroy, set_parameter, reset,
-     leakage, NULL, NULL},
+     leakage, NULL, NULL, NULL},
     {"dead_band", "valve dead band", 2, kDeadBand, create, destroy, set_parameter, reset, dead_band,
-     NULL, NULL},
+     NULL, NULL, NULL},
     {"load_delay", "delay growing with load", 2, kLoadDelay, create, destroy, set_parameter, reset,
-     load_delay, NULL, NULL},
+     load_delay, NULL, NULL, NULL},
     {"speed_loss", "drive loss with speed", 1, kSpeedLoss, create, destroy, set_parameter, reset,
-     speed_loss, NULL, NULL},
+     speed_loss, NULL, NULL, NULL},
     {"load_gain", "load-dependent load-cell gain", 2, kLoadGain, create, destroy, set_parameter,
-     reset, NULL, NULL, load_gain},
+     reset, NULL, NULL, load_gain, NULL},
 };
 
 static const talus_effect_plugin_info kInfo = {TALUS_EFFECT_ABI_VERSION,
                                                "talus hidden test effects", 5, kEffects};
+#endif
 
 const talus_effect_plugin_info* talus_effect_plugin_entry(void);
 const talus_effect_plugin_info* talus_effect_plugin_entry(void) { return &kInfo; }

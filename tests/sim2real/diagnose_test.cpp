@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 
 namespace talus::sim2real {
 namespace {
@@ -29,6 +30,61 @@ TEST(Diagnose, CandidatesExpandChannelOptionsAndCarrySignatures) {
   ASSERT_NE(find("soil_cohesion"), candidates.end());
   EXPECT_TRUE(find("soil_cohesion")->needs_particles);  // screened out of runs without a pile
   EXPECT_FALSE(find("hydraulic_lag")->needs_particles);
+}
+
+TEST(Diagnose, ScanReachesNearZeroOnRangesFromZero) {
+  // hydraulic_lag's time constant spans [0, 2] s: the linear centres start at 1/18 of it (0.11 s),
+  // the near-zero points go down to 1e-3 of it, so a true 6 ms (0.3 % of the range) has a scan
+  // point within a factor of two
+  const Candidate lag{"hydraulic_lag", "", {}};
+  const auto points = candidate_scan_points(lag, {});
+  ASSERT_EQ(points.size(), static_cast<std::size_t>(kScanPoints + 3));
+  double smallest = 1.0, nearest = 1e9;
+  for (const auto& p : points) {
+    ASSERT_EQ(p.size(), 1u);
+    EXPECT_GT(p[0], 0.0);
+    EXPECT_LT(p[0], 1.0);
+    smallest = std::min(smallest, p[0]);
+    nearest = std::min(nearest, std::abs(std::log(p[0] / 0.003)));
+  }
+  EXPECT_LE(smallest, 1e-3);
+  EXPECT_LE(nearest, std::log(2.0));
+  // engine_power_sharing's efficiency spans [0.5, 1]: no near-zero points
+  EXPECT_EQ(candidate_scan_points({"engine_power_sharing", "", {}}, {}).size(),
+            static_cast<std::size_t>(kScanPoints));
+}
+
+// a plug-in described in memory with one effect of three parameters (hooks that do nothing)
+void* create_nothing() { return new int(0); }
+void destroy_nothing(void* self) { delete static_cast<int*>(self); }
+void set_nothing(void*, int, double) {}
+const talus_effect_parameter kThree[] = {{"a", 1.0, 0.0, 2.0, "1", "first"},
+                                         {"b", 1.0, 0.1, 10.0, "1", "second"},
+                                         {"c", 0.0, -1.0, 1.0, "1", "third"}};
+const talus_effect_type kThreeEffect[] = {{"three_parameters", "a test effect", 3, kThree,
+                                           create_nothing, destroy_nothing, set_nothing, nullptr,
+                                           nullptr, nullptr, nullptr, nullptr}};
+const talus_effect_plugin_info kThreeInfo = {TALUS_EFFECT_ABI_VERSION, "test", 1, kThreeEffect};
+
+TEST(Diagnose, EffectsWithThreeParametersAreScannedOnASpaceFillingDesign) {
+  const vehicle::EffectPlugins plugins = {
+      vehicle::EffectPlugin::from_info(&kThreeInfo, "in-memory")};
+  const auto points = candidate_scan_points({"three_parameters", "", {}}, plugins);
+  ASSERT_EQ(points.size(), static_cast<std::size_t>(3 * kScanPoints));
+  // inside the box, distinct, and every parameter's eighths all visited (a grid of 27 would visit
+  // three values per parameter)
+  for (int d = 0; d < 3; ++d) {
+    std::vector<int> eighths(8, 0);
+    for (const auto& p : points) {
+      ASSERT_EQ(p.size(), 3u);
+      ASSERT_GT(p[d], 0.0);
+      ASSERT_LT(p[d], 1.0);
+      ++eighths[static_cast<int>(8 * p[d])];
+    }
+    for (int e = 0; e < 8; ++e) EXPECT_GT(eighths[e], 0) << "parameter " << d << " eighth " << e;
+  }
+  for (std::size_t i = 0; i < points.size(); ++i)
+    for (std::size_t j = i + 1; j < points.size(); ++j) EXPECT_NE(points[i], points[j]);
 }
 
 TEST(Diagnose, MeanRowAveragesAbsoluteValues) {

@@ -409,19 +409,49 @@ TEST(EffectPluginTest, ExamplePluginLoadsAndActs) {
   EXPECT_THROW(load_effect_plugins({TALUS_EXAMPLE_EFFECT_PLUGIN, TALUS_EXAMPLE_EFFECT_PLUGIN}), InputError);
 }
 
+// a plug-in effect that reaches the soil (ABI version 2): cohesion = its parameter
+struct SoilPluginEffect {
+  double cohesion = 0.0;
+};
+const talus_effect_parameter kMoisture[] = {
+    {"cohesion", 0.0, 0.0, 2e4, "Pa", "the soil's bulk tensile strength"}};
+const talus_effect_type kMoistureType[] = {
+    {"moisture", "a wet gravel: cohesion", 1, kMoisture,
+     [] { return static_cast<void*>(new SoilPluginEffect); },
+     [](void* self) { delete static_cast<SoilPluginEffect*>(self); },
+     [](void* self, int, double v) { static_cast<SoilPluginEffect*>(self)->cohesion = v; }, nullptr,
+     nullptr, nullptr, nullptr,
+     [](void* self, talus_soil_properties* soil) {
+       soil->cohesion += static_cast<SoilPluginEffect*>(self)->cohesion;
+     }}};
+const talus_effect_plugin_info kMoistureInfo = {TALUS_EFFECT_ABI_VERSION, "soil test", 1,
+                                                kMoistureType};
+
+TEST(EffectPluginTest, PluginsReachTheSoilThroughOnSoil) {
+  const EffectPlugins plugins = {EffectPlugin::from_info(&kMoistureInfo, "in-memory")};
+  EffectSet set;
+  set.add(make_effect("moisture:cohesion=5000", plugins));
+  EXPECT_DOUBLE_EQ(set.soil().cohesion, 5000.0);
+  // with on_soil alone it acts on the soil only (the diagnosis tries it on pile runs only)
+  EXPECT_TRUE(set[0].soil_only());
+  EXPECT_FALSE(
+      make_effect("flow_relief", load_effect_plugins({TALUS_EXAMPLE_EFFECT_PLUGIN}))->soil_only());
+}
+
 TEST(EffectPluginTest, WrongAbiVersionAndMissingFilesAreRejectedNamingTheFile) {
-  static const talus_effect_plugin_info stale = {TALUS_EFFECT_ABI_VERSION + 998, "stale", 0, nullptr};
+  static const talus_effect_plugin_info stale = {TALUS_EFFECT_ABI_VERSION + 997, "stale", 0,
+                                                 nullptr};
   const std::string version = message_of<InputError>([] { EffectPlugin::from_info(&stale, "stale.so"); });
   EXPECT_NE(version.find("stale.so"), std::string::npos) << version;
   EXPECT_NE(version.find("ABI version 999"), std::string::npos) << version;
-  EXPECT_NE(version.find("version 1"), std::string::npos) << version;
+  EXPECT_NE(version.find("version 2"), std::string::npos) << version;
   const std::string missing = message_of<InputError>([] { EffectPlugin::load("/nonexistent/libnothing.so"); });
   EXPECT_NE(missing.find("/nonexistent/libnothing.so"), std::string::npos) << missing;
   // a plug-in whose effect's default lies outside its own range
   static const talus_effect_parameter bad_parameter[] = {{"gain", 5.0, 0.0, 1.0, "1", "a gain"}};
-  static const talus_effect_type bad_type[] = {{"bad", "a bad effect", 1, bad_parameter,
-                                                [] { return static_cast<void*>(nullptr); }, [](void*) {},
-                                                [](void*, int, double) {}, nullptr, nullptr, nullptr, nullptr}};
+  static const talus_effect_type bad_type[] = {
+      {"bad", "a bad effect", 1, bad_parameter, [] { return static_cast<void*>(nullptr); },
+       [](void*) {}, [](void*, int, double) {}, nullptr, nullptr, nullptr, nullptr, nullptr}};
   static const talus_effect_plugin_info bad = {TALUS_EFFECT_ABI_VERSION, "bad", 1, bad_type};
   const std::string defaults = message_of<InputError>([] { EffectPlugin::from_info(&bad, "bad.so"); });
   EXPECT_NE(defaults.find("'gain'"), std::string::npos) << defaults;
