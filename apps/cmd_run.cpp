@@ -20,6 +20,7 @@
 #include "digging/digging.hpp"
 #include "host/error.hpp"
 #include "host/files.hpp"
+#include "host/interrupt.hpp"
 #include "host/progress.hpp"
 #include "host/version.hpp"
 #include "io/output.hpp"
@@ -363,6 +364,13 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
   const int note_every =
       std::max(1, static_cast<int>(std::lround(kProgressNoteInterval / preset.dt)));
   const double dig_wall = sim.run([&](int k) {
+    // asked to stop: between steps, before anything of this step is written
+    if (interrupt_requested()) {
+      std::ostringstream where;
+      where << "the dig " << sc.name << " " << preset.name << " at t = " << sim.time() << " s of "
+            << sc.duration << " s";
+      throw_if_interrupted(where.str());
+    }
     snapshots.after_step(k, sim.time(), sim);
     if (!o.quiet && k % note_every == 0) {
       std::ostringstream note;

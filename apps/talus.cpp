@@ -4,9 +4,12 @@
 
 #include "apps/commands.hpp"
 #include "host/error.hpp"
+#include "host/interrupt.hpp"
 #include "host/version.hpp"
 
 int main(int argc, char** argv) {
+  // SIGINT and SIGTERM stop a command between steps, not mid-write (host/interrupt.hpp)
+  talus::watch_interrupts();
   CLI::App app{"talus: nonsmooth DEM and multibody simulation of a wheel loader digging in gravel"};
   app.require_subcommand(1);
   app.set_version_flag("--version", std::string("talus ") + talus::talus_version() + " (" +
@@ -39,6 +42,12 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     // --help and --version are "errors" with exit code 0 in CLI11
     return app.exit(e) == 0 ? 0 : talus::app::kExitUsage;
+  } catch (const talus::Interrupted& e) {
+    // what was written stays, without the summary.json that marks a finished run
+    std::cerr << "talus: " << e.what()
+              << "; stopped between steps, outputs written so far kept without their "
+              << "summary.json (the mark of a finished run)\n";
+    return e.exit_code();
   } catch (const talus::InputError& e) {
     // bad input file or field: a usage error, not a runtime failure
     std::cerr << "talus: error: " << e.what() << "\n";

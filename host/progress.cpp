@@ -4,6 +4,8 @@
 
 #include <cstdio>
 
+#include "host/interrupt.hpp"
+
 namespace talus {
 
 namespace {
@@ -18,6 +20,12 @@ Progress::Progress(std::string label, double total, bool enabled)
       start_(std::chrono::steady_clock::now()), last_(start_) {}
 
 void Progress::update(double done, const std::string& note) {
+  // a long loop's natural point to stop at when asked (host/interrupt.hpp)
+  if (interrupt_requested()) {
+    char where[160];
+    std::snprintf(where, sizeof where, "%s at %.3g of %.3g", label_.c_str(), done, total_);
+    throw_if_interrupted(where);
+  }
   if (!enabled_) return;
   auto now = std::chrono::steady_clock::now();
   double since = std::chrono::duration<double>(now - last_).count();

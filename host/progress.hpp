@@ -9,7 +9,8 @@ namespace talus {
 class Progress {
  public:
   Progress(std::string label, double total, bool enabled = true);
-  // reports `done` out of `total` (e.g. simulated seconds), with an optional note
+  // reports `done` out of `total` (e.g. simulated seconds), with an optional note; throws
+  // talus::Interrupted when the process was asked to stop (host/interrupt.hpp), enabled or not
   void update(double done, const std::string& note = "");
   void finish(const std::string& note = "");
 

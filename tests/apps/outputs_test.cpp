@@ -65,6 +65,33 @@ TEST(Outputs, BadInputKeepsTheOldFolderAndAKilledCommandLeavesNoSummary) {
   EXPECT_FALSE(fs::exists(dir / "summary.json"));
 }
 
+// SIGINT and SIGTERM stop a command between steps (host/interrupt.hpp): exit 128 + the signal,
+// one line naming what it was doing and how far it had come, no summary.json and no temporary file
+TEST(Outputs, AnInterruptStopsBetweenStepsAndSaysWhere) {
+  auto no_temporary_files = [](const fs::path& dir) {
+    for (const auto& e : fs::recursive_directory_iterator(dir))
+      EXPECT_EQ(e.path().string().find(".tmp"), std::string::npos) << e.path();
+  };
+  // a D200 pile settles for about 40 s here: Ctrl-C after 3 s
+  const fs::path pile = folder_with_old_summary("interrupted_pile");
+  const auto sigint = test::run_talus("timeout --preserve-status -s INT 3",
+                                      "pile --level D200 --quiet --out " + pile.string());
+  EXPECT_EQ(sigint.code, 130) << sigint.err;
+  EXPECT_NE(sigint.err.find("interrupted by SIGINT during pile D200 at"), std::string::npos)
+      << sigint.err;
+  EXPECT_FALSE(fs::exists(pile / "summary.json"));
+  no_temporary_files(pile);
+  // a D200 dig from a pile it builds: a scheduler's SIGTERM after 5 s
+  const fs::path run = folder_with_old_summary("interrupted_run");
+  const auto sigterm = test::run_talus(
+      "timeout --preserve-status -s TERM 5",
+      "run --scenario hd27 --fidelity D200 --no-pile-cache --quiet --out " + run.string());
+  EXPECT_EQ(sigterm.code, 143) << sigterm.err;
+  EXPECT_NE(sigterm.err.find("interrupted by SIGTERM during"), std::string::npos) << sigterm.err;
+  EXPECT_FALSE(fs::exists(run / "summary.json"));
+  no_temporary_files(run);
+}
+
 // synth: the data's summary comes last and carries no command line (it names the effects); the
 // answer key has the provenance
 TEST(Outputs, SynthKeepsItsCommandLineInTheAnswerKey) {
