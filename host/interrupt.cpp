@@ -16,11 +16,16 @@ namespace {
 // the signal that asked to stop (0: none); see the header for why it is process-wide
 std::atomic<int> g_requested{0};
 
+// SIGINT and SIGTERM, but not one the process started with ignored (a job a shell put in the
+// background ignores SIGINT): that one stays ignored
 sigset_t interrupt_signals() {
   sigset_t set;
   sigemptyset(&set);
-  sigaddset(&set, SIGINT);
-  sigaddset(&set, SIGTERM);
+  for (const int signal : {SIGINT, SIGTERM}) {
+    struct sigaction old {};
+    if (sigaction(signal, nullptr, &old) == 0 && old.sa_handler == SIG_IGN) continue;
+    sigaddset(&set, signal);
+  }
   return set;
 }
 

@@ -2,8 +2,10 @@
 // between steps, so an interrupted command leaves its outputs as a killed one does, but says so
 // and exits with 128 + the signal's number instead of dying mid-line.
 //
-// How: the command-line tool calls watch_interrupts() first thing. It blocks both signals in
-// every thread (PoCL's threads, started later, inherit the mask) and starts one thread that waits
+// How: the command-line tool calls watch_interrupts() first thing, before any other thread
+// exists (a thread started earlier keeps the signals unblocked, and one delivered there kills the
+// process as before). It blocks both signals (PoCL's threads, started later, inherit the mask; a
+// signal the process started with ignored stays ignored) and starts one thread that waits
 // for them with sigwait: the first marks the process as interrupted, a second one restores the
 // default action and re-raises, so Ctrl-C twice still kills at once. Long loops poll between steps
 // (Progress::update polls on every call, enabled or not; `talus run`'s loops poll every step) and

@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "host/error.hpp"
+#include "host/interrupt.hpp"
 
 namespace talus::sim2real {
 
@@ -178,6 +179,16 @@ double minimise(const std::function<double(const std::vector<double>&)>& f, std:
   return best;
 }
 
+// the effects as a set, a learned actuator correction first: it was fitted to the operator's own
+// commands (sim2real/discovery), so it must see them before a found lag or flow limit changes them
+vehicle::EffectSet in_hook_order(std::vector<std::unique_ptr<vehicle::Effect>> effects) {
+  std::stable_partition(effects.begin(), effects.end(),
+                        [](const auto& e) { return e->name() == "learned_actuator_correction"; });
+  vehicle::EffectSet set;
+  for (auto& e : effects) set.add(std::move(e));
+  return set;
+}
+
 double mean_of(const std::vector<double>& v) {
   double s = 0.0;
   for (double x : v) s += x;
@@ -324,6 +335,8 @@ class Search {
       if (!(scanned[j].score.excess < current_cal_)) break;  // no better than the model without it
       try {
         dr.fitted.push_back(fit(scanned[j]));
+      } catch (const Interrupted&) {
+        throw;
       } catch (const std::exception& e) {
         failed(dr, scanned[j].c->label(), e.what());
       }
@@ -390,7 +403,16 @@ class Search {
         continue;
       }
       say("  " + target.label() + ": " + c.expression);
-      evaluate(c);
+      // a correction whose simulation fails is reported and skipped, as a candidate is
+      try {
+        evaluate(c);
+      } catch (const Interrupted&) {
+        throw;
+      } catch (const std::exception& e) {
+        say("    its simulation failed (" + std::string(e.what()) + "); skipped");
+        d_.discovery_tried.push_back(c);
+        continue;
+      }
       say("    explains " + format_number(100.0 * c.explained) + " % of the excess on the " +
           c.explained_on + " runs");
       d_.discovery_tried.push_back(c);
@@ -404,11 +426,18 @@ class Search {
       return best;
     };
     if (const DiscoveredCorrection* best = best_of(); best && best->explained > 0.0) {
-      DiscoveredCorrection refined = refine(*best);
-      if (refined.explained > best->explained) {
-        say("  refined: " + refined.expression + ", explains " +
-            format_number(100.0 * refined.explained) + " %");
-        d_.discovery_tried.push_back(refined);
+      try {
+        DiscoveredCorrection refined = refine(*best);
+        if (refined.explained > best->explained) {
+          say("  refined: " + refined.expression + ", explains " +
+              format_number(100.0 * refined.explained) + " %");
+          d_.discovery_tried.push_back(refined);
+        }
+      } catch (const Interrupted&) {
+        throw;
+      } catch (const std::exception& e) {
+        say("  the refinement's simulation failed (" + std::string(e.what()) +
+            "); the regression's values kept");
       }
     }
     // the best simulated correction, if it explains enough
@@ -541,9 +570,11 @@ class Search {
 
   // run i simulated with the effects found so far plus, optionally, a candidate
   Run simulate(std::size_t i, std::unique_ptr<vehicle::Effect> extra) {
-    vehicle::EffectSet set;
-    for (const auto& spec : found_specs_) set.add(vehicle::make_effect(spec, options_.plugins));
-    if (extra) set.add(std::move(extra));
+    std::vector<std::unique_ptr<vehicle::Effect>> effects;
+    for (const auto& spec : found_specs_)
+      effects.push_back(vehicle::make_effect(spec, options_.plugins));
+    if (extra) effects.push_back(std::move(extra));
+    vehicle::EffectSet set = in_hook_order(std::move(effects));
     Run r = replays_[i]->simulate(set);
     ++d_.simulations;
     return r;
@@ -619,6 +650,8 @@ class Search {
             " (now " + format_number(current_cal_) + ", " + std::to_string(points.size()) +
             " points)");
         scanned.push_back(best);
+      } catch (const Interrupted&) {
+        throw;
       } catch (const std::exception& e) {
         failed(dr, c->label(), e.what());
       }
@@ -670,9 +703,11 @@ class Search {
   // run i simulated with the effects found so far plus the candidates at their normalised values
   Run simulate_with(std::size_t i,
                     const std::vector<std::pair<const Candidate*, std::vector<double>>>& extras) {
-    vehicle::EffectSet set;
-    for (const auto& spec : found_specs_) set.add(vehicle::make_effect(spec, options_.plugins));
-    for (const auto& [c, x] : extras) set.add(make_candidate(*c, x, options_.plugins));
+    std::vector<std::unique_ptr<vehicle::Effect>> effects;
+    for (const auto& spec : found_specs_)
+      effects.push_back(vehicle::make_effect(spec, options_.plugins));
+    for (const auto& [c, x] : extras) effects.push_back(make_candidate(*c, x, options_.plugins));
+    vehicle::EffectSet set = in_hook_order(std::move(effects));
     Run r = replays_[i]->simulate(set);
     ++d_.simulations;
     return r;
@@ -783,6 +818,8 @@ class Search {
         say("  pair " + p.first.spec + " + " + p.second.spec + ": explains " +
             format_number(100.0 * p.explained) + " % on the " + p.explained_on + " runs");
         dr.pairs.push_back(p);
+      } catch (const Interrupted&) {
+        throw;
       } catch (const std::exception& e) {
         restore(before);
         failed(dr, "pair with " + a->candidate.label(), e.what());

@@ -17,8 +17,8 @@ using vehicle::CorrectionKind;
 
 // a two-sided 95 % interval of a normal estimate
 constexpr double kZ95 = 1.959964;
-// ridge added to the scaled normal equations, relative to their mean diagonal: keeps collinear
-// features (a constant and a sign that is +1 most of the time) solvable without changing a
+// ridge added to the normal equations of RMS-scaled features, relative to their mean diagonal
+// (1 per sample): keeps exactly collinear features (constant columns) solvable without changing a
 // well-posed fit beyond rounding
 constexpr double kRidge = 1e-10;
 // a held-out error below this share of the residual's own mean square is an exact fit
@@ -60,12 +60,20 @@ Eigen::VectorXd solve_on(const Eigen::MatrixXd& x, const Eigen::VectorXd& y,
                          const std::vector<Eigen::Index>& support) {
   Eigen::VectorXd c = Eigen::VectorXd::Zero(x.cols());
   if (support.empty()) return c;
-  const Eigen::MatrixXd a = x(Eigen::all, support);
+  // on columns scaled to unit RMS, so the ridge is the same small share of every column's weight
+  // (a force column's square is 1e10 times a constant's)
+  Eigen::MatrixXd a = x(Eigen::all, support);
+  Eigen::VectorXd scale(a.cols());
+  for (Eigen::Index k = 0; k < a.cols(); ++k) {
+    scale[k] = std::sqrt(a.col(k).squaredNorm() /
+                         static_cast<double>(std::max<Eigen::Index>(1, a.rows())));
+    if (!(scale[k] > 0.0)) scale[k] = 1.0;
+    a.col(k) /= scale[k];
+  }
   Eigen::MatrixXd normal = a.transpose() * a;
-  const double ridge =
+  normal.diagonal().array() +=
       kRidge * std::max(normal.diagonal().mean(), std::numeric_limits<double>::min());
-  normal.diagonal().array() += ridge;
-  const Eigen::VectorXd b = normal.ldlt().solve(a.transpose() * y);
+  const Eigen::VectorXd b = normal.ldlt().solve(a.transpose() * y).cwiseQuotient(scale);
   for (std::size_t i = 0; i < support.size(); ++i) c[support[i]] = b[static_cast<Eigen::Index>(i)];
   return c;
 }
@@ -96,7 +104,12 @@ std::vector<double> cross_validated_mse(const Eigen::MatrixXd& x, const Eigen::V
     const Eigen::MatrixXd xt = x(train, Eigen::all);
     const Eigen::VectorXd yt = y(train);
     const auto path = elimination_path(xt, yt);
-    for (int m = 1; m <= kMaxTerms && m < static_cast<int>(path.size()); ++m) {
+    for (int m = 1; m <= kMaxTerms; ++m) {
+      // a model size this fold's path does not reach cannot be scored on it
+      if (m >= static_cast<int>(path.size())) {
+        sse[m - 1] = std::numeric_limits<double>::infinity();
+        continue;
+      }
       const Eigen::VectorXd c = solve_on(xt, yt, path[m]);
       sse[m - 1] += (y(test) - x(test, Eigen::all) * c).squaredNorm();
     }
@@ -193,7 +206,7 @@ RegressionData regression_data(const DiscoveryTarget& target,
         const std::size_t c = channel_column(target.target);
         const std::vector<double>& truth = s.columns[c];
         in.a = truth[j];
-        in.rate = (truth[j] - truth[j - 1]) / (t[j] - t[j - 1]);
+        in.rate = (truth[j] - value_at(t, truth, t[j] - vehicle::kRateSpan)) / vehicle::kRateSpan;
         in.force = s[Channel::f_lift][j];
         in.power = s[Channel::power][j];
         for (std::size_t d = 0; d < vehicle::kCorrectionDelays.size(); ++d)
@@ -264,6 +277,7 @@ DiscoveredCorrection fit_correction(const DiscoveryTarget& target, const Regress
   const Eigen::VectorXd& y = data.residual;
   if (y.size() == 0) return out;
   out.cv_mse_none = y.squaredNorm() / y.size();
+  if (!(out.cv_mse_none > 0.0)) return out;  // nothing to correct
   // the held-out error of 1 .. kMaxTerms terms; the fewest within kOneSeRule of the least
   const std::vector<double> cv = cross_validated_mse(x, y, data.fold);
   const double least = *std::min_element(cv.begin(), cv.end());

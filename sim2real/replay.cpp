@@ -4,9 +4,10 @@
 #include <chrono>
 #include <cmath>
 
+#include "digging/digging.hpp"
 #include "host/device.hpp"
 #include "host/error.hpp"
-#include "digging/digging.hpp"
+#include "host/interrupt.hpp"
 #include "terrain/pile.hpp"
 #include "vehicle/data_file.hpp"
 #include "vehicle/wheel_loader.hpp"
@@ -27,6 +28,10 @@ vehicle::SensorLog simulate_on_flat_ground(const vehicle::Scenario& sc, vehicle:
     vehicle::step_with_effects(loader, effects, t, h, (k + 1) * h, {sc.drive(t), sc.lift(t), sc.tilt(t)},
                                [&] { loader.step(h); }, &log);
     if (progress) progress->update((k + 1) * sc.timestep);
+    // asked to stop (host/interrupt.hpp): between steps, with or without a progress line
+    if (interrupt_requested())
+      throw_if_interrupted(sc.name + " on flat ground at t = " + std::to_string((k + 1) * h) +
+                           " s");
   }
   return log;
 }
@@ -130,7 +135,11 @@ Run Replay::simulate(vehicle::EffectSet& effects) {
                                   scan_scenario_pile(*pile_, placed, preset).points);
     }
     DiggingSimulation sim(*device_, scenario_, preset, *pile_, digging, &effects);
-    sim.run();
+    sim.run([&](int) {
+      if (interrupt_requested())
+        throw_if_interrupted("the replay of " + scenario_.name +
+                             " at t = " + std::to_string(sim.time()) + " s");
+    });
     run = dig_run(scenario_, preset.name, sim);
   }
   run.dir = measured_.run.dir;

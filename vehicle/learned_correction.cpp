@@ -163,6 +163,8 @@ class LearnedCorrection : public Effect {
       x.a_delayed[i] = line_.at(t - kCorrectionDelays[i]);
   }
   void clear_history() { line_.clear(); }
+  // the pushed quantity at an earlier time (the delay line's interpolation)
+  double history_at(double when) const { return line_.at(when); }
 
  private:
   const std::vector<CorrectionFeature>& features_;
@@ -247,20 +249,16 @@ class LearnedSensorCorrection : public LearnedCorrection {
   void reset(const WheelLoader& loader) override {
     (void)loader;
     clear_history();
-    has_last_ = false;
   }
   void on_sensors(const EffectContext& c, SensorSample& s) override {
     (void)c;
     CorrectionInputs x;
     x.a = s.*field_;
-    // the rate by a backward difference of the true readings the effect saw
-    x.rate = has_last_ && s.t > last_t_ ? (x.a - last_a_) / (s.t - last_t_) : 0.0;
     x.force = s.f_lift;
     x.power = s.power;
     delay(s.t, x);
-    last_t_ = s.t;
-    last_a_ = x.a;
-    has_last_ = true;
+    // the rate over kRateSpan of the true readings the effect saw, as the data path takes it
+    x.rate = (x.a - history_at(s.t - kRateSpan)) / kRateSpan;
     s.*field_ += correction(x);
   }
   std::vector<Channel> sensor_channels() const override {
@@ -272,8 +270,6 @@ class LearnedSensorCorrection : public LearnedCorrection {
  private:
   int channel_ = 0;
   double SensorSample::*field_ = &SensorSample::f_lift;
-  bool has_last_ = false;
-  double last_t_ = 0.0, last_a_ = 0.0;
 };
 
 }  // namespace

@@ -43,6 +43,11 @@ inline double lag_step(double lagged, double x, double dt) {
   return lagged + (1.0 - std::exp(-dt / kForceLag)) * (x - lagged);
 }
 
+// a sensor correction's rate is the difference of the true reading over this span [s] (the run
+// contract's sample period), at run time from the delay line and on data from the 100 Hz series
+// alike, so a reading that jumps from step to step gives both the same rate
+inline constexpr double kRateSpan = 0.01;
+
 // what a feature is made of, at one instant
 //  actuator: a = its target speed [m/s], force = its force reading [N] (cylinder: positive pushes
 //            it longer; drive: traction) and power = the machine's power reading [W], both of the
