@@ -54,6 +54,13 @@ std::string format(double v, int digits = 3) {
   return text;
 }
 
+// Pearson's correlation of two columns; 0 when either is constant
+double correlation(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  const Eigen::VectorXd da = a.array() - a.mean(), db = b.array() - b.mean();
+  const double norm = da.norm() * db.norm();
+  return norm > 0.0 ? da.dot(db) / norm : 0.0;
+}
+
 // least squares on the columns `support` of x (zero elsewhere), through the normal equations with a
 // ridge relative to their mean diagonal
 Eigen::VectorXd solve_on(const Eigen::MatrixXd& x, const Eigen::VectorXd& y,
@@ -329,6 +336,14 @@ DiscoveredCorrection fit_correction(const DiscoveryTarget& target, const Regress
         feature_unit == "1" ? symbols.a_unit : "(" + symbols.a_unit + ")/(" + feature_unit + ")";
     term.coefficient = c[static_cast<Eigen::Index>(i)];
     term.half_width = half[static_cast<Eigen::Index>(i)];
+    // the features these data cannot tell from it
+    for (Eigen::Index j = 0; j < x.cols(); ++j) {
+      if (std::find(support.begin(), support.end(), j) != support.end()) continue;
+      if (std::abs(correlation(x.col(support[i]), x.col(j))) >= kAliasCorrelation) {
+        term.aliases.emplace_back(features[j].name);
+        term.alias_expressions.push_back(vehicle::correction_expression(features[j], symbols));
+      }
+    }
     out.terms.push_back(term);
   }
   describe_correction(out);
@@ -348,6 +363,10 @@ void describe_correction(DiscoveredCorrection& c) {
     c.expression += (i == 0 ? " " : " + ") + format(term.coefficient) + " (±" +
                     format(term.half_width, 2) + ") " + term.unit +
                     (term.feature == "one" ? "" : " · " + term.expression);
+    // what the data cannot tell it from, said beside it
+    for (std::size_t k = 0; k < term.alias_expressions.size(); ++k)
+      c.expression += (k == 0 ? " [on these runs ≡ " : ", ") + term.alias_expressions[k] +
+                      (k + 1 == term.alias_expressions.size() ? "]" : "");
   }
 }
 
@@ -358,7 +377,8 @@ nlohmann::json correction_json(const DiscoveredCorrection& c) {
                      {"expression", t.expression},
                      {"unit", t.unit},
                      {"coefficient", t.coefficient},
-                     {"ci95", {t.coefficient - t.half_width, t.coefficient + t.half_width}}});
+                     {"ci95", {t.coefficient - t.half_width, t.coefficient + t.half_width}},
+                     {"aliases", t.aliases}});
   nlohmann::json dictionary = nlohmann::json::array();
   const vehicle::CorrectionSymbols symbols =
       vehicle::correction_symbols(c.target.kind, c.target.target);

@@ -47,6 +47,10 @@ inline constexpr int kFolds = 5;
 inline constexpr int kMaxTerms = 3;
 // the model with the fewest terms whose held-out error is within this factor of the least is chosen
 inline constexpr double kOneSeRule = 1.05;
+// two features whose values over the regression's rows correlate this closely are the same
+// function of these data: on load-carry the lift's sign(u) and f_lift·sign(u) correlate at 0.993-
+// 0.996 (one speed up, one down, a near-constant load), which no fit can separate
+inline constexpr double kAliasCorrelation = 0.99;
 // a correction must cut the held-out mean-square residual by this share to be simulated at all
 inline constexpr double kMinRegressionGain = 0.05;
 
@@ -93,6 +97,9 @@ struct DiscoveredTerm {
   std::string unit;        // the coefficient's unit
   double coefficient = 0.0;
   double half_width = 0.0;  // the 95 % interval is coefficient ± half_width
+  // features the fitted data cannot tell from this one (|correlation| ≥ kAliasCorrelation over the
+  // regression's rows): as good a term on these runs, a different physics elsewhere
+  std::vector<std::string> aliases, alias_expressions;
 };
 
 // a target's sparse model, before and after it is simulated

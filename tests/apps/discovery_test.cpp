@@ -135,9 +135,13 @@ bool discovered(const nlohmann::json& j, const Hidden& h, std::string& what) {
          ", held-out mean error " +
          std::to_string(d["error_before_held_out"]["mean"].get<double>()) + " -> " +
          std::to_string(d["error_after_held_out"]["mean"].get<double>());
+  // a term counts with the features the data cannot tell from it (its aliases, |r| >= 0.99 over the
+  // regression's rows): the discovered expression names them beside it
   bool feature = false;
-  for (const auto& c : d["coefficients"])
+  for (const auto& c : d["coefficients"]) {
     feature = feature || h.features.count(c["feature"].get<std::string>());
+    for (const auto& a : c["aliases"]) feature = feature || h.features.count(a.get<std::string>());
+  }
   return d["target"] == h.target && feature && d["held_out_error_cut"].get<double>() >= 0.5;
 }
 

@@ -119,6 +119,25 @@ TEST(Discovery, FitFindsASparseTruthAndItsIntervalsCoverIt) {
   EXPECT_GE(covered, 85 * coefficients / 100);
 }
 
+TEST(Discovery, FeaturesTheDataCannotSeparateAreNamedAsAliases) {
+  // the lift under a constant load: f_lift·sign(u) is 1.5e5 sign(u) exactly, so whichever of the
+  // two the fit keeps, the other is its alias and the expression says so
+  std::mt19937_64 rng(fresh_seed());
+  RegressionData d = synthetic(rng, {{"sign_command", -0.03}}, 0.005);
+  const Eigen::Index sign = feature_index(CorrectionKind::actuator, "sign_command");
+  const Eigen::Index force_sign = feature_index(CorrectionKind::actuator, "force_sign_command");
+  d.features.col(force_sign) = 1.5e5 * d.features.col(sign);
+  const DiscoveredCorrection c = fit_correction({CorrectionKind::actuator, "lift"}, d);
+  ASSERT_EQ(c.terms.size(), 1u) << c.expression;
+  const auto& t = c.terms[0];
+  ASSERT_TRUE(t.feature == "sign_command" || t.feature == "force_sign_command") << c.expression;
+  const std::string other = t.feature == "sign_command" ? "force_sign_command" : "sign_command";
+  EXPECT_NE(std::find(t.aliases.begin(), t.aliases.end(), other), t.aliases.end()) << c.expression;
+  EXPECT_NE(c.expression.find("on these runs ≡"), std::string::npos) << c.expression;
+  // a feature the data do separate is no alias
+  EXPECT_EQ(std::find(t.aliases.begin(), t.aliases.end(), "delay_02"), t.aliases.end());
+}
+
 TEST(Discovery, NoiseAloneGivesNoTerms) {
   // over several fresh draws: nothing cuts the held-out error of pure noise by 5 %
   std::mt19937_64 rng(fresh_seed());
