@@ -19,6 +19,15 @@ constexpr double kSignRampSpeed = 1e-3;
 
 double ramp_sign(double a) { return std::clamp(a / kSignRampSpeed, -1.0, 1.0); }
 
+// the entries both dictionaries share, written once: the offset and the delayed differences
+const CorrectionFeature kOne{"one", "1", "1", [](const CorrectionInputs&) { return 1.0; }};
+const CorrectionFeature kDelay01{"delay_01", "{a}(t−0.1 s) − {a}", "{a}",
+                                 [](const CorrectionInputs& x) { return x.a_delayed[0] - x.a; }};
+const CorrectionFeature kDelay02{"delay_02", "{a}(t−0.2 s) − {a}", "{a}",
+                                 [](const CorrectionInputs& x) { return x.a_delayed[1] - x.a; }};
+const CorrectionFeature kDelay04{"delay_04", "{a}(t−0.4 s) − {a}", "{a}",
+                                 [](const CorrectionInputs& x) { return x.a_delayed[2] - x.a; }};
+
 // the actuator dictionary: offsets, the command and its sign and square (dead bands, speed-
 // dependent losses), the force alone and with the command (leakage with pressure, friction), the
 // power, delayed differences (a lag) and a force-scaled one (a delay that grows with load). Not
@@ -26,7 +35,7 @@ double ramp_sign(double a) { return std::clamp(a / kSignRampSpeed, -1.0, 1.0); }
 // the measured speed minus the command", which in the simulation feeds the previous speed back as
 // the command and stalls the actuator
 const std::vector<CorrectionFeature> kActuatorFeatures = {
-    {"one", "1", "1", [](const CorrectionInputs&) { return 1.0; }},
+    kOne,
     {"command", "{a}", "{a}", [](const CorrectionInputs& x) { return x.a; }},
     {"sign_command", "sign({a})", "1", [](const CorrectionInputs& x) { return ramp_sign(x.a); }},
     {"command_squared", "{a}·|{a}|", "{a}^2",
@@ -37,12 +46,9 @@ const std::vector<CorrectionFeature> kActuatorFeatures = {
     {"abs_force_command", "|{F}|·{a}", "N·{a}",
      [](const CorrectionInputs& x) { return std::abs(x.force) * x.a; }},
     {"power", "{P}", "W", [](const CorrectionInputs& x) { return x.power; }},
-    {"delay_01", "{a}(t−0.1 s) − {a}", "{a}",
-     [](const CorrectionInputs& x) { return x.a_delayed[0] - x.a; }},
-    {"delay_02", "{a}(t−0.2 s) − {a}", "{a}",
-     [](const CorrectionInputs& x) { return x.a_delayed[1] - x.a; }},
-    {"delay_04", "{a}(t−0.4 s) − {a}", "{a}",
-     [](const CorrectionInputs& x) { return x.a_delayed[2] - x.a; }},
+    kDelay01,
+    kDelay02,
+    kDelay04,
     {"abs_force_delay_02", "|{F}|·({a}(t−0.2 s) − {a})", "N·{a}",
      [](const CorrectionInputs& x) { return std::abs(x.force) * (x.a_delayed[1] - x.a); }},
 };
@@ -51,7 +57,7 @@ const std::vector<CorrectionFeature> kActuatorFeatures = {
 // carries the load), the rate (a first-order sensor lag reads x − τ ẋ), the lift force alone and
 // delayed differences (a transport delay)
 const std::vector<CorrectionFeature> kSensorFeatures = {
-    {"one", "1", "1", [](const CorrectionInputs&) { return 1.0; }},
+    kOne,
     {"reading", "{a}", "{a}", [](const CorrectionInputs& x) { return x.a; }},
     {"reading_squared", "{a}·|{a}|", "{a}^2",
      [](const CorrectionInputs& x) { return x.a * std::abs(x.a); }},
@@ -59,12 +65,9 @@ const std::vector<CorrectionFeature> kSensorFeatures = {
      [](const CorrectionInputs& x) { return std::abs(x.force) * x.a; }},
     {"rate", "{v}", "{v}", [](const CorrectionInputs& x) { return x.rate; }},
     {"force", "{F}", "N", [](const CorrectionInputs& x) { return x.force; }},
-    {"delay_01", "{a}(t−0.1 s) − {a}", "{a}",
-     [](const CorrectionInputs& x) { return x.a_delayed[0] - x.a; }},
-    {"delay_02", "{a}(t−0.2 s) − {a}", "{a}",
-     [](const CorrectionInputs& x) { return x.a_delayed[1] - x.a; }},
-    {"delay_04", "{a}(t−0.4 s) − {a}", "{a}",
-     [](const CorrectionInputs& x) { return x.a_delayed[2] - x.a; }},
+    kDelay01,
+    kDelay02,
+    kDelay04,
 };
 
 // every "{key}" in text replaced by its value
