@@ -4,6 +4,7 @@
 #include <signal.h>
 
 #include <atomic>
+#include <chrono>
 #include <csignal>
 #include <cstring>
 #include <mutex>
@@ -29,14 +30,26 @@ sigset_t interrupt_signals() {
   return set;
 }
 
-// the watching thread: the first signal marks the process, the second one kills it as the
+// one request may arrive twice at once: `timeout` (coreutils) and schedulers signal the process
+// and then its whole process group, so a second signal within this time [s] is the same request;
+// a person's second Ctrl-C comes later
+constexpr double kSameRequest = 1.0;
+
+// the watching thread: the first signal marks the process, a second one later kills it as the
 // default action would have
 void watch(sigset_t set) {
+  std::chrono::steady_clock::time_point first;
   for (;;) {
     int signal = 0;
     if (sigwait(&set, &signal) != 0) continue;
     int none = 0;
-    if (g_requested.compare_exchange_strong(none, signal)) continue;
+    if (g_requested.compare_exchange_strong(none, signal)) {
+      first = std::chrono::steady_clock::now();
+      continue;
+    }
+    if (std::chrono::duration<double>(std::chrono::steady_clock::now() - first).count() <
+        kSameRequest)
+      continue;
     std::signal(signal, SIG_DFL);
     sigset_t one;
     sigemptyset(&one);

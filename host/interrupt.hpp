@@ -6,12 +6,13 @@
 // exists (a thread started earlier keeps the signals unblocked, and one delivered there kills the
 // process as before). It blocks both signals (PoCL's threads, started later, inherit the mask; a
 // signal the process started with ignored stays ignored) and starts one thread that waits
-// for them with sigwait: the first marks the process as interrupted, a second one restores the
-// default action and re-raises, so Ctrl-C twice still kills at once. Long loops poll between steps
-// (Progress::update polls on every call, enabled or not; `talus run`'s loops poll every step) and
-// unwind with talus::Interrupted, which the tool's main turns into one line and the exit code.
-// A program that never calls watch_interrupts (an application embedding the library) keeps its
-// own signal handling: nothing is ever marked and nothing thrown.
+// for them with sigwait: the first marks the process as interrupted, a second one more than a
+// second later restores the default action and re-raises, so Ctrl-C twice still kills at once
+// (one sooner is the same request: `timeout` signals the process and then its process group). Long
+// loops poll between steps (Progress::update polls on every call, enabled or not; `talus run`'s
+// loops poll every step) and unwind with talus::Interrupted, which the tool's main turns into one
+// line and the exit code. A program that never calls watch_interrupts (an application embedding the
+// library) keeps its own signal handling: nothing is ever marked and nothing thrown.
 //
 // The mark is process-wide state, the one mutable global of the library: a signal belongs to
 // the process, not to an object.
