@@ -244,4 +244,78 @@ void DiggingSimulation::multiscale_step() {
   aggregate_log_.push_back(a);
 }
 
+namespace {
+// what a saved state cannot hold yet: the type-G terrain and the effects' own state
+void check_savable(bool multiscale, const vehicle::EffectSet& effects, const char* what) {
+  if (multiscale)
+    throw Error(std::string(what) +
+                ": a type-G run's state (voxels, zone particles, aggregate) cannot be saved yet "
+                "(issue 16); save at a type-D level (D400 to D50) or the machine alone");
+  if (!effects.empty())
+    throw Error(std::string(what) +
+                ": the state of model extensions (effects) cannot be saved yet (issue 16); "
+                "save a run without effects");
+}
+}  // namespace
+
+void DiggingSimulation::save_state(ByteWriter& w) const {
+  check_savable(terrain_ != nullptr, effects_, "saving a digging state");
+  w.tag("dig");
+  w.f64(time_);
+  w.i64(steps_done_);
+  w.i64(steps_total_);
+  w.i64(contact_steps_);
+  w.i64(max_passes_);
+  w.i64(capped_steps_);
+  w.i64(pass_sum_);
+  w.f64(max_residual_);
+  w.f64(max_overlap_rel_);
+  w.u64(residuals_.size());
+  w.f64s(residuals_.data(), residuals_.size());
+  w.tag("sensors");
+  vehicle::write_sample(w, sensors_);
+  log_.save_state(w);
+  w.tag("machine");
+  loader_->system().save_state(w);
+  w.tag("particles");
+  dem_->save_state(w);
+  w.tag("bucket contacts");
+  split_->save_state(w);
+  w.tag("end");
+}
+
+void DiggingSimulation::restore_state(ByteReader& r) {
+  check_savable(terrain_ != nullptr, effects_, "restoring a digging state");
+  r.expect("dig");
+  const double time = r.f64("dig clock");
+  const std::int64_t steps_done = r.i64("dig clock");
+  const std::int64_t steps_total = r.i64("dig clock");
+  if (steps_total != steps_total_ || steps_done < 0 || steps_done > (1LL << 40))
+    throw InputError(r.where() + ": the saved run has " + std::to_string(steps_total) +
+                     " steps, this one " + std::to_string(steps_total_) +
+                     "; restore a state into a simulation of the same scenario and level");
+  time_ = time;
+  steps_done_ = static_cast<int>(steps_done);
+  contact_steps_ = static_cast<int>(r.i64("coupling counters"));
+  max_passes_ = static_cast<int>(r.i64("coupling counters"));
+  capped_steps_ = static_cast<int>(r.i64("coupling counters"));
+  pass_sum_ = static_cast<long>(r.i64("coupling counters"));
+  max_residual_ = r.f64("coupling counters");
+  max_overlap_rel_ = r.f64("coupling counters");
+  const std::uint64_t residuals = r.u64("coupling residuals");
+  r.need_elements(residuals, 8, "coupling residuals");
+  residuals_.resize(residuals);
+  r.f64s(residuals_.data(), residuals_.size(), "coupling residuals");
+  r.expect("sensors");
+  sensors_ = vehicle::read_sample(r, "sensors");
+  log_.restore_state(r);
+  r.expect("machine");
+  loader_->system().restore_state(r);
+  r.expect("particles");
+  dem_->restore_state(r);
+  r.expect("bucket contacts");
+  split_->restore_state(r);
+  r.expect("end");
+}
+
 }  // namespace talus

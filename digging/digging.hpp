@@ -123,6 +123,17 @@ class DiggingSimulation {
   // soil in the bucket now, by terrain/bucket_fill's rule [kg]
   double loaded_mass() const;
 
+  // the state between two steps (issue 16, docs/embedding.md "Saved states"): the machine (bodies,
+  // warm start, constraints), the particles with last step's contacts and impulses, the bucket
+  // contacts' impulses, the clock, the sensor log, what the sensors read and the coupling
+  // counters. restore_state reads it into a simulation made with the same scenario, level, pile
+  // and options, which then steps on bit-identically to the one saved (same device and work-group
+  // size). What the constructor sets (scenario, level, material, settings) is not saved; the
+  // caller checks that it is the same (embed/talus.cpp keys the file by it). talus::Error ("not
+  // yet") at a type-G level and with effects: their state is not saved yet
+  void save_state(ByteWriter& w) const;
+  void restore_state(ByteReader& r);
+
   // coupling over the run so far: steps with bucket contacts, the largest outer-pass count and
   // coupling residual, and the mean number of passes over steps with contacts
   int contact_steps() const { return contact_steps_; }

@@ -86,6 +86,18 @@ void LoadingCycle::step_fill(const vehicle::CycleTargets& fill) {
   step_with(fill);
 }
 
+void LoadingCycle::save_state(ByteWriter& w) const {
+  sim_.save_state(w);
+  w.tag("loading cycle");
+  cycle_.save_state(w);
+}
+
+void LoadingCycle::restore_state(ByteReader& r) {
+  sim_.restore_state(r);
+  r.expect("loading cycle");
+  cycle_.restore_state(r);
+}
+
 CycleResult LoadingCycle::result(double s) const {
   CycleResult r;
   r.s = s;

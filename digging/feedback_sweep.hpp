@@ -68,6 +68,10 @@ class LoadingCycle {
   // the fill began and ended (-1 before), at search parameter `s` (only recorded)
   CycleResult result(double s) const;
   const DiggingSimulation& simulation() const { return sim_; }
+  // the state between two steps: the dig's (DiggingSimulation::save_state) and the cycle's phase
+  // (vehicle::FeedbackCycle::save_state); restored into a cycle made with the same pile and gains
+  void save_state(ByteWriter& w) const;
+  void restore_state(ByteReader& r);
 
  private:
   // the sensors the cycle reads after each step: the machine's own (what the controller sees)

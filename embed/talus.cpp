@@ -7,15 +7,21 @@
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
+#include <sstream>
 #include <system_error>
 #include <utility>
 
 #include "digging/digging.hpp"
 #include "digging/feedback_sweep.hpp"
+#include "digging/saved_state.hpp"
+#include "host/binary.hpp"
 #include "host/data_files.hpp"
 #include "host/device.hpp"
+#include "host/files.hpp"
 #include "host/progress.hpp"
+#include "host/version.hpp"
 #include "terrain/pile.hpp"
+#include "vehicle/data_file.hpp"
 #include "vehicle/effect.hpp"
 #include "vehicle/force_feedback.hpp"
 #include "vehicle/scenario.hpp"
@@ -140,6 +146,37 @@ FidelityPreset options_level(const SimulationOptions& options) {
   }
 }
 
+// a data file by name and content, for a saved state's key: "name hash", the hash FNV-1a of its
+// bytes, so a state is refused after the file it was made from has changed
+std::string content_id(const std::string& path) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) return path + " (not a file)";
+  std::ostringstream id;
+  id << fs::path(path).filename().string() << " " << std::hex
+     << fnv1a64(read_file_bytes(path, "a data file of the scenario"));
+  return id.str();
+}
+
+// what a saved state is keyed by: every option that changes what the constructor builds, one
+// "name=value" line each (digging/saved_state.hpp)
+std::string state_key(const SimulationOptions& options, const vehicle::Scenario& scenario,
+                      const FidelityPreset& preset) {
+  std::ostringstream key;
+  key.precision(17);
+  key << "scenario=" << scenario.name << " " << content_id(scenario.path) << "\n";
+  key << "machine=" << content_id(vehicle::machine_file(scenario)) << "\n";
+  if (scenario.pile) {
+    key << "pile=" << content_id(vehicle::find_data_file(scenario.pile_profile, "piles")) << "\n";
+    key << "level=" << preset.name << "\n";
+    key << "seed=" << options.seed << "\n";
+  }
+  key << "loading_cycle=" << (options.loading_cycle ? 1 : 0) << "\n";
+  if (options.loading_cycle)
+    key << "cycle=" << options.cycle_approach << " m, " << options.cycle_max_time << " s, s "
+        << options.cycle_s << "\n";
+  return key.str();
+}
+
 }  // namespace
 
 // the run behind the facade: a dig (pile scenarios), the paper's loading cycle on a pile, or the
@@ -161,6 +198,8 @@ struct Simulation::Impl {
   double time = 0.0;
   long steps_done = 0;
   bool pile_from_cache = false;
+  // what a saved state must have been made from (state_key, with the particle count)
+  std::string state_key;
 
   // the dig now, whichever owns it (nullptr for the machine alone)
   const DiggingSimulation* dig() const {
@@ -185,6 +224,56 @@ struct Simulation::Impl {
         [&] { loader->step(h); }, &log);
     ++steps_done;
     time = t_end;
+  }
+  // the state between steps as a payload (digging/saved_state.hpp has the envelope)
+  std::string save() const {
+    ByteWriter w;
+    if (cycle) {
+      cycle->save_state(w);
+    } else if (replay) {
+      replay->save_state(w);
+    } else {
+      // the machine alone: the clock, the readings and the log, the machine
+      w.tag("vehicle");
+      w.f64(time);
+      w.i64(steps_done);
+      vehicle::write_sample(w, sensors);
+      log.save_state(w);
+      loader->system().save_state(w);
+      w.tag("end");
+    }
+    return std::move(w.bytes());
+  }
+  // a state's bytes (seal_state's) restored; the envelope and the key are checked before anything
+  // changes, so a file that fails them leaves the run as it was
+  void restore(const std::string& bytes, const std::string& where) {
+    std::string payload;
+    const SavedStateHeader header = open_state(bytes, where, &payload);
+    if (header.key != state_key)
+      throw InputError(
+          where + " was saved from another simulation: " + key_difference(header.key, state_key) +
+          "; make the Simulation with the options it was saved from");
+    ByteReader r(payload, payload.size(), where,
+                 "truncated or not a talus state file; save it again");
+    if (cycle) {
+      cycle->restore_state(r);
+    } else if (replay) {
+      replay->restore_state(r);
+    } else {
+      r.expect("vehicle");
+      const double t = r.f64("clock");
+      const std::int64_t steps = r.i64("clock");
+      if (steps < 0) throw InputError(where + ": a negative step count (corrupt)");
+      sensors = vehicle::read_sample(r, "sensors");
+      log.restore_state(r);
+      loader->system().restore_state(r);
+      r.expect("end");
+      time = t;
+      steps_done = static_cast<long>(steps);
+    }
+    if (r.left() != 0)
+      throw InputError(where + ": " + std::to_string(r.left()) +
+                       " bytes after the state (corrupt)");
   }
   double now() const { return dig() ? dig()->time() : time; }
   const vehicle::SensorSample& reading() const { return dig() ? dig()->sensors() : sensors; }
@@ -216,6 +305,7 @@ Simulation::Simulation(const SimulationOptions& options) : impl_(std::make_uniqu
   m.scenario = load_options_scenario(options);
   // the level is checked for every scenario, though only a pile uses it (as talus run does)
   m.preset = options_level(options);
+  m.state_key = state_key(options, m.scenario, m.preset);
   if (options.loading_cycle) check_cycle_options(options, m.scenario);
   if (m.scenario.pile) {
     // the pile built and settled at the level, then the machine settled in front of it
@@ -255,6 +345,7 @@ Simulation::Simulation(const SimulationOptions& options) : impl_(std::make_uniqu
     vehicle::check_payload_holds(m.scenario, *m.loader);
     m.sensors = vehicle::start_with_effects(*m.loader, m.no_effects, m.log);
   }
+  m.state_key += "particles=" + std::to_string(particle_count()) + "\n";
 }
 
 Simulation::~Simulation() = default;
@@ -387,6 +478,24 @@ ParticleState Simulation::particles() const {
     }
   }
   return state;
+}
+
+std::string Simulation::state() const {
+  SavedStateHeader header;
+  header.key = impl_->state_key;
+  header.commit = git_commit();
+  header.device = device();
+  return seal_state(header, impl_->save());
+}
+
+void Simulation::set_state(const std::string& bytes) {
+  impl_->restore(bytes, "the state given to Simulation::set_state");
+}
+
+void Simulation::save_state(const std::string& path) const { write_file_atomically(path, state()); }
+
+void Simulation::restore_state(const std::string& path) {
+  impl_->restore(read_file_bytes(path, "a saved simulation state"), path);
 }
 
 std::string Simulation::scenario_name() const { return impl_->scenario.name; }

@@ -137,7 +137,11 @@ struct ParticleState {
 /// force-feedback controller fills), and step(targets) commands the fill, as a learning agent or
 /// a controller of one's own does (the Python package's Gymnasium environment, docs/python.md).
 ///
-/// Not in this version: saving and restoring a state, model extensions (`talus run --effect`)
+/// The whole state between two steps can be saved and restored (save_state, restore_state; in
+/// memory: state, set_state): a restored run continues bit-identically to one that never stopped,
+/// on the same build and device (docs/embedding.md, "Saved states").
+///
+/// Not in this version: model extensions (`talus run --effect`); saving a type-G level's state
 /// (docs/embedding.md, "Not yet").
 class Simulation {
  public:
@@ -205,6 +209,26 @@ class Simulation {
   std::size_t particle_count() const;
   /// the particles now, downloaded from the device (empty arrays without a pile)
   ParticleState particles() const;
+
+  /// saves the whole state between two steps to `path`, written atomically: the machine (bodies,
+  /// the direct solver's warm start, joints and contacts), the particles with last step's
+  /// contacts and their impulses (the next warm start), the bucket contacts' impulses, the clock,
+  /// the 100 Hz sensor log, what the sensors read now and a loading cycle's phase. The file is
+  /// keyed by what made this simulation (scenario and machine files by content, level, seed,
+  /// loading-cycle options, particle count) and closed by a checksum. talus::Error naming the
+  /// path when it cannot be written, and ("not yet") at a type-G level
+  void save_state(const std::string& path) const;
+  /// restores a state save_state wrote into this simulation, which must have been made with the
+  /// same options (scenario, level, seed, loading cycle): stepping then continues exactly as the
+  /// saved run did, bit for bit on the same build and device. talus::InputError naming the file
+  /// when it cannot be read, is not a state file, is truncated or corrupt, is of another format
+  /// version, or was saved from another simulation (naming what differs); such a file leaves
+  /// this simulation unchanged
+  void restore_state(const std::string& path);
+  /// the same bytes as save_state's file, in memory (a rewind point, a copy to send elsewhere)
+  std::string state() const;
+  /// restores bytes from state() (or a file's), as restore_state does
+  void set_state(const std::string& bytes);
 
   /// the scenario's name as its file gives it ("HD27")
   std::string scenario_name() const;

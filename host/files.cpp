@@ -5,6 +5,7 @@
 #include <array>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
 #include "host/error.hpp"
 
@@ -66,6 +67,16 @@ void write_file_atomically(const std::string& path, const std::string& content) 
 
 void write_json(const std::string& path, const nlohmann::json& j) {
   write_file_atomically(path, j.dump(2) + "\n");
+}
+
+std::string read_file_bytes(const std::string& path, const std::string& why_needed) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream bytes;
+  if (in) bytes << in.rdbuf();
+  if (!in || in.bad())
+    throw InputError(path + ": cannot read the file (" + why_needed +
+                     "); check the name or path and that you may read it");
+  return bytes.str();
 }
 
 nlohmann::json read_json_file(const std::string& path, const std::string& why_needed) {

@@ -20,6 +20,9 @@ void move_into_place(const std::string& tmp, const std::string& path);
 // writes `content` to a temporary name, then renames it to path
 void write_file_atomically(const std::string& path, const std::string& content);
 void write_json(const std::string& path, const nlohmann::json& j);
+// the whole file's bytes; InputError naming the file when it cannot be read (`why_needed` says
+// what it is for)
+std::string read_file_bytes(const std::string& path, const std::string& why_needed);
 // parses a JSON file; InputError naming the file when it cannot be opened (`why_needed` says
 // what it is for) or is not JSON the parser accepts: bad syntax, or a number beyond double's
 // range (nlohmann's out_of_range.406, which is not a parse_error: found by fuzzing, docs/

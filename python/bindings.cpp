@@ -205,6 +205,32 @@ SimulationOptions. Errors: talus.InputError (ValueError) for bad options or data
             return d;
           },
           "the particles now: position, velocity, angular_velocity (N, 3) and radius (N,) [SI]")
+      // saved states (docs/embedding.md "Saved states")
+      .def(
+          "state",
+          [](const talus::Simulation& s) {
+            std::string bytes;
+            {
+              py::gil_scoped_release release;
+              bytes = s.state();
+            }
+            return py::bytes(bytes);
+          },
+          "the whole state between two steps as bytes: restore it with set_state to continue "
+          "bit for bit from here (a rewind point)")
+      .def(
+          "set_state",
+          [](talus::Simulation& s, const py::bytes& state) {
+            std::string bytes = state;
+            py::gil_scoped_release release;
+            s.set_state(bytes);
+          },
+          py::arg("state"),
+          "restores bytes from state() into a simulation made with the same options")
+      .def("save_state", &talus::Simulation::save_state, py::arg("path"),
+           py::call_guard<py::gil_scoped_release>(), "writes state() to a file, atomically")
+      .def("restore_state", &talus::Simulation::restore_state, py::arg("path"),
+           py::call_guard<py::gil_scoped_release>(), "restores a file save_state wrote")
       // names
       .def_property_readonly("scenario_name", &talus::Simulation::scenario_name)
       .def_property_readonly("level", &talus::Simulation::level)

@@ -174,6 +174,72 @@ Particles DemWorld::particles() const {
   return out;
 }
 
+void DemWorld::save_state(ByteWriter& w) const {
+  const DemBuffers& b = buffers_;
+  w.u64(particle_count_);
+  w.f64(max_radius_);
+  w.f64(time_);
+  // the particles in the device layout (kernels/dem_types.h), no double round trip
+  const size_t n = particle_count_;
+  write_words(w, n > 0 ? b.position.download(n) : std::vector<cl_float4>());
+  write_words(w, n > 0 ? b.velocity.download(n) : std::vector<cl_float4>());
+  write_words(w, n > 0 ? b.omega.download(n) : std::vector<cl_float4>());
+  write_words(w, n > 0 ? b.rotation.download(n) : std::vector<cl_float4>());
+  // last step's contacts and their owners' offsets: end_step flipped `current`, so they are the
+  // other pair, which the next narrow phase matches new contacts against
+  w.u8(b.has_previous ? 1 : 0);
+  if (!b.has_previous) return;
+  const int prev = 1 - b.current;
+  write_words(w, b.owner_offsets[prev].download(n + 1));
+  write_words(
+      w, b.n_contacts > 0 ? b.contacts[prev].download(b.n_contacts) : std::vector<TlContact>());
+}
+
+void DemWorld::restore_state(ByteReader& r) {
+  DemBuffers& b = buffers_;
+  const std::uint64_t n = r.u64("particle count");
+  if (n != particle_count_)
+    throw InputError(
+        r.where() + ": the saved state has " + std::to_string(n) + " particles, this simulation " +
+        std::to_string(particle_count_) +
+        "; restore a state into a simulation made with the same scenario, level and seed");
+  const double max_radius = r.f64("particles");
+  const double time = r.f64("particle clock");
+  const auto x = read_words<cl_float4>(r, "particle positions");
+  const auto v = read_words<cl_float4>(r, "particle velocities");
+  const auto w = read_words<cl_float4>(r, "particle angular velocities");
+  const auto q = read_words<cl_float4>(r, "particle rotations");
+  if (x.size() != n || v.size() != n || w.size() != n || q.size() != n)
+    throw InputError(r.where() + ": the saved particle arrays differ in length (corrupt)");
+  const bool has_previous = r.u8("particle contacts") != 0;
+  std::vector<int> offsets;
+  std::vector<TlContact> contacts;
+  if (has_previous) {
+    offsets = read_words<int>(r, "particle contact offsets");
+    contacts = read_words<TlContact>(r, "particle contacts");
+    if (offsets.size() != n + 1 || offsets.back() != static_cast<int>(contacts.size()))
+      throw InputError(r.where() + ": the saved contacts do not match their offsets (corrupt)");
+  }
+  // everything read: the world is changed only now, so a bad file leaves it as it was
+  if (n > 0) {
+    b.position.upload(x);
+    b.velocity.upload(v);
+    b.omega.upload(w);
+    b.rotation.upload(q);
+  }
+  max_radius_ = max_radius;
+  time_ = time;
+  b.current = 0;
+  b.has_previous = has_previous;
+  b.n_contacts = static_cast<int>(contacts.size());
+  if (has_previous) {
+    b.owner_offsets[1].upload(offsets);
+    if (!contacts.empty()) b.contacts[1].upload(contacts);
+  }
+  sweep_.reset();
+  update_params();
+}
+
 void DemWorld::check_finite() {
   DemBuffers& b = buffers_;
   const int n = static_cast<int>(particle_count_);

@@ -9,6 +9,7 @@
 #include <memory>
 #include <vector>
 
+#include "host/binary.hpp"
 #include "host/device.hpp"
 #include "host/scan.hpp"
 #include "solvers/contact_rows.hpp"
@@ -35,6 +36,14 @@ class DemWorld {
 
   // replaces the particles (contacts start fresh: no warm start on the next step)
   void set_particles(const Particles& particles);
+  // the state between two steps, for a saved state (digging/saved_state): the particles as the
+  // device holds them (float bit for bit), last step's contacts with their impulses (the next
+  // warm start), the largest radius and the clock. restore_state reads it into a world made with
+  // the same material, settings, bounds and geometry and as many particles (InputError naming
+  // the reader's file otherwise); the world then steps on bit-identically to the saved one on
+  // the same device and work-group size
+  void save_state(ByteWriter& w) const;
+  void restore_state(ByteReader& r);
   // replaces the static geometry (e.g. walls removed or moved). Contacts with static geometry
   // are matched by its index, so warm starting goes on only when `same_layout` says the
   // geometries kept their order (moved, not added or removed)

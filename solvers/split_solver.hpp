@@ -70,6 +70,10 @@ class SplitSolver {
   const BucketScene& bucket_scene() const { return scene_; }
   // the bucket contacts' solved impulses of the last step (particle indices of the whole system)
   const std::vector<BucketImpulse>& bucket_impulses() const { return previous_; }
+  // the state between two steps, for a saved state (digging/saved_state): the bucket contacts'
+  // impulses, which the next step warm starts from (the particles and the machine save their own)
+  void save_state(ByteWriter& w) const;
+  void restore_state(ByteReader& r);
 
  private:
   // the particles near the bucket at the step's start: their indices in the whole system, their

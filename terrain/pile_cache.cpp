@@ -8,6 +8,7 @@
 #include <sstream>
 #include <string_view>
 
+#include "host/binary.hpp"
 #include "host/error.hpp"
 #include "host/files.hpp"
 #include "host/version.hpp"
@@ -18,98 +19,20 @@ namespace {
 
 // the file's first bytes: what it is, before its version
 constexpr std::array<char, 8> kMagic = {'T', 'A', 'L', 'U', 'S', 'P', 'I', 'L'};
-// FNV-1a's 64-bit parameters (Fowler, Noll, Vo; http://www.isthe.com/chongo/tech/comp/fnv/)
-constexpr std::uint64_t kFnvOffset = 14695981039346656037ULL;
-constexpr std::uint64_t kFnvPrime = 1099511628211ULL;
 // bytes per particle in the file: 3 vectors of 3, a quaternion, radius, inverse mass and inertia
 constexpr std::uint64_t kParticleBytes = 8 * (3 * 3 + 4 + 3);
 // bytes per geom: its type, then centre (3), axes (9) and half extents (3)
 constexpr std::uint64_t kGeomBytes = 1 + 8 * (3 + 9 + 3);
+// what a user does about a pile file that cannot be read: the cache treats it as a miss
+constexpr const char* kPileFileHint =
+    "truncated or not a talus pile; delete it, the pile is built again";
 
-// little-endian bytes, whatever the machine's order, so a file moves between machines
-class Writer {
- public:
-  void u8(std::uint8_t v) { out_.push_back(static_cast<char>(v)); }
-  void u32(std::uint32_t v) {
-    for (int b = 0; b < 4; ++b) u8(static_cast<std::uint8_t>(v >> (8 * b)));
-  }
-  void u64(std::uint64_t v) {
-    for (int b = 0; b < 8; ++b) u8(static_cast<std::uint8_t>(v >> (8 * b)));
-  }
-  // a double bit for bit (NaN payloads and signed zeros included)
-  void f64(double v) {
-    std::uint64_t bits = 0;
-    std::memcpy(&bits, &v, sizeof bits);
-    u64(bits);
-  }
-  void str(const std::string& s) {
-    u64(s.size());
-    out_ += s;
-  }
-  void vec(const Vec3& v) {
-    for (int k = 0; k < 3; ++k) f64(v[k]);
-  }
-  std::string& bytes() { return out_; }
-
- private:
-  std::string out_;
-};
-
-// the same bytes read back; every read checks the length first, so a short file is named, not
-// read past its end
-class Reader {
- public:
-  Reader(std::string_view bytes, std::size_t end, std::string where)
-      : bytes_(bytes), end_(end), where_(std::move(where)) {}
-  void need(std::uint64_t n, const char* what) const {
-    if (n > end_ - pos_)
-      throw InputError(where_ + ": the file ends inside its " + what +
-                       " (truncated or not a talus pile); delete it, the pile is built again");
-  }
-  std::uint8_t u8(const char* what) {
-    need(1, what);
-    return static_cast<std::uint8_t>(bytes_[pos_++]);
-  }
-  std::uint32_t u32(const char* what) {
-    need(4, what);
-    std::uint32_t v = 0;
-    for (int b = 0; b < 4; ++b)
-      v |= static_cast<std::uint32_t>(static_cast<std::uint8_t>(bytes_[pos_++])) << (8 * b);
-    return v;
-  }
-  std::uint64_t u64(const char* what) {
-    need(8, what);
-    std::uint64_t v = 0;
-    for (int b = 0; b < 8; ++b)
-      v |= static_cast<std::uint64_t>(static_cast<std::uint8_t>(bytes_[pos_++])) << (8 * b);
-    return v;
-  }
-  double f64(const char* what) {
-    const std::uint64_t bits = u64(what);
-    double v = 0.0;
-    std::memcpy(&v, &bits, sizeof v);
-    return v;
-  }
-  std::string str(const char* what) {
-    const std::uint64_t n = u64(what);
-    need(n, what);
-    std::string s(bytes_.substr(pos_, n));
-    pos_ += n;
-    return s;
-  }
-  Vec3 vec(const char* what) {
-    Vec3 v;
-    for (int k = 0; k < 3; ++k) v[k] = f64(what);
-    return v;
-  }
-  std::size_t left() const { return end_ - pos_; }
-
- private:
-  std::string_view bytes_;
-  std::size_t end_;
-  std::size_t pos_ = 0;
-  std::string where_;
-};
+void write_vec(ByteWriter& w, const Vec3& v) { w.f64s(v.data(), 3); }
+Vec3 read_vec(ByteReader& r, const char* what) {
+  Vec3 v;
+  r.f64s(v.data(), 3, what);
+  return v;
+}
 
 std::string hex16(std::uint64_t v) {
   std::ostringstream s;
@@ -126,27 +49,18 @@ std::string describe(const PileProfile& profile, const FidelityPreset& preset) {
 
 }  // namespace
 
-std::uint64_t fnv1a64(const std::string& bytes) {
-  std::uint64_t h = kFnvOffset;
-  for (char c : bytes) {
-    h ^= static_cast<std::uint8_t>(c);
-    h *= kFnvPrime;
-  }
-  return h;
-}
-
 std::string pile_key_name(const std::string& key_bytes) { return hex16(fnv1a64(key_bytes)); }
 
 std::string pile_key_bytes(const PileProfile& profile, const FidelityPreset& preset,
                            const Material& material, const PileBuildOptions& options,
                            const std::string& device, const std::string& commit) {
   // each part named, so two keys that differ only in where a field ends cannot coincide
-  Writer w;
+  ByteWriter w;
   w.str("profile");
   w.f64(profile.width);
   w.f64(profile.rear_wall_x);
   w.u64(profile.points.size());
-  for (const Vec3& p : profile.points) w.vec(p);
+  for (const Vec3& p : profile.points) write_vec(w, p);
   w.str("preset");
   w.str(preset.name);
   w.f64(preset.diameter);
@@ -172,7 +86,7 @@ std::string pile_key_bytes(const PileProfile& profile, const FidelityPreset& pre
 }
 
 std::string serialise_pile(const PileBuild& pile, const std::string& key) {
-  Writer w;
+  ByteWriter w;
   for (char c : kMagic) w.u8(static_cast<std::uint8_t>(c));
   w.u32(kPileFormatVersion);
   w.str(key);
@@ -188,15 +102,15 @@ std::string serialise_pile(const PileBuild& pile, const std::string& key) {
   w.f64(pile.toe_shift);
   w.f64(pile.soil_fit.rms_m);
   w.f64(pile.soil_fit.mean_m);
-  w.vec(pile.bounds.lo);
-  w.vec(pile.bounds.hi);
+  write_vec(w, pile.bounds.lo);
+  write_vec(w, pile.bounds.hi);
   // the container
   w.u64(pile.geoms.size());
   for (const StaticGeom& g : pile.geoms) {
     w.u8(g.type == StaticGeom::Type::Box ? 1 : 0);
-    w.vec(g.centre);
-    for (int c = 0; c < 3; ++c) w.vec(g.axes.col(c));
-    w.vec(g.half);
+    write_vec(w, g.centre);
+    for (int c = 0; c < 3; ++c) write_vec(w, g.axes.col(c));
+    write_vec(w, g.half);
   }
   // the particles, array by array as Particles stores them
   const Particles& p = pile.particles;
@@ -205,9 +119,9 @@ std::string serialise_pile(const PileBuild& pile, const std::string& key) {
       p.radius.size() != n || p.inv_mass.size() != n || p.inv_inertia.size() != n)
     throw Error("serialise_pile: the particles' arrays differ in length");
   w.u64(n);
-  for (const Vec3& v : p.position) w.vec(v);
-  for (const Vec3& v : p.velocity) w.vec(v);
-  for (const Vec3& v : p.omega) w.vec(v);
+  for (const Vec3& v : p.position) write_vec(w, v);
+  for (const Vec3& v : p.velocity) write_vec(w, v);
+  for (const Vec3& v : p.omega) write_vec(w, v);
   for (const Eigen::Vector4d& q : p.rotation)
     for (int k = 0; k < 4; ++k) w.f64(q[k]);
   for (double v : p.radius) w.f64(v);
@@ -223,7 +137,7 @@ PileBuild parse_pile(const std::string& bytes, const std::string& where, std::st
   if (bytes.size() < kMagic.size() ||
       bytes.compare(0, kMagic.size(), kMagic.data(), kMagic.size()) != 0)
     throw InputError(where + ": not a talus pile file (no 'TALUSPIL' at its start)");
-  Reader head(bytes, bytes.size(), where);
+  ByteReader head(bytes, bytes.size(), where, kPileFileHint);
   for (std::size_t k = 0; k < kMagic.size(); ++k) head.u8("magic");
   const std::uint32_t version = head.u32("format version");
   if (version != kPileFormatVersion)
@@ -235,13 +149,13 @@ PileBuild parse_pile(const std::string& bytes, const std::string& where, std::st
         where +
         ": the file ends inside its checksum (truncated); delete it, the pile is built again");
   const std::size_t body = bytes.size() - 8;
-  Reader tail(std::string_view(bytes).substr(body), 8, where);
-  if (tail.u64("checksum") != fnv1a64(bytes.substr(0, body)))
+  ByteReader tail(std::string_view(bytes).substr(body), 8, where, kPileFileHint);
+  if (tail.u64("checksum") != fnv1a64(std::string_view(bytes).substr(0, body)))
     throw InputError(
         where +
         ": the checksum does not match (truncated or corrupt); delete it, the pile is built again");
 
-  Reader r(bytes, body, where);
+  ByteReader r(bytes, body, where, kPileFileHint);
   for (std::size_t k = 0; k < kMagic.size(); ++k) r.u8("magic");
   r.u32("format version");
   std::string stored_key = r.str("key");
@@ -257,20 +171,20 @@ PileBuild parse_pile(const std::string& bytes, const std::string& where, std::st
   pile.toe_shift = r.f64("numbers");
   pile.soil_fit.rms_m = r.f64("numbers");
   pile.soil_fit.mean_m = r.f64("numbers");
-  pile.bounds.lo = r.vec("bounds");
-  pile.bounds.hi = r.vec("bounds");
+  pile.bounds.lo = read_vec(r, "bounds");
+  pile.bounds.hi = read_vec(r, "bounds");
   // counts are checked against the bytes left before anything is allocated
   const std::uint64_t geoms = r.u64("geoms");
-  r.need(geoms <= r.left() / kGeomBytes ? geoms * kGeomBytes : r.left() + 1, "geoms");
+  r.need_elements(geoms, kGeomBytes, "geoms");
   pile.geoms.resize(geoms);
   for (StaticGeom& g : pile.geoms) {
     g.type = r.u8("geoms") != 0 ? StaticGeom::Type::Box : StaticGeom::Type::Plane;
-    g.centre = r.vec("geoms");
-    for (int c = 0; c < 3; ++c) g.axes.col(c) = r.vec("geoms");
-    g.half = r.vec("geoms");
+    g.centre = read_vec(r, "geoms");
+    for (int c = 0; c < 3; ++c) g.axes.col(c) = read_vec(r, "geoms");
+    g.half = read_vec(r, "geoms");
   }
   const std::uint64_t n = r.u64("particles");
-  r.need(n <= r.left() / kParticleBytes ? n * kParticleBytes : r.left() + 1, "particles");
+  r.need_elements(n, kParticleBytes, "particles");
   Particles& p = pile.particles;
   p.position.resize(n);
   p.velocity.resize(n);
@@ -279,9 +193,9 @@ PileBuild parse_pile(const std::string& bytes, const std::string& where, std::st
   p.radius.resize(n);
   p.inv_mass.resize(n);
   p.inv_inertia.resize(n);
-  for (Vec3& v : p.position) v = r.vec("particles");
-  for (Vec3& v : p.velocity) v = r.vec("particles");
-  for (Vec3& v : p.omega) v = r.vec("particles");
+  for (Vec3& v : p.position) v = read_vec(r, "particles");
+  for (Vec3& v : p.velocity) v = read_vec(r, "particles");
+  for (Vec3& v : p.omega) v = read_vec(r, "particles");
   for (Eigen::Vector4d& q : p.rotation)
     for (int k = 0; k < 4; ++k) q[k] = r.f64("particles");
   for (double& v : p.radius) v = r.f64("particles");
@@ -299,11 +213,7 @@ void write_pile(const std::string& path, const PileBuild& pile, const std::strin
 }
 
 PileBuild read_pile(const std::string& path, std::string* key) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path + ": cannot open the pile file (does it exist, may you read it?)");
-  std::ostringstream bytes;
-  bytes << in.rdbuf();
-  return parse_pile(bytes.str(), path, key);
+  return parse_pile(read_file_bytes(path, "a settled pile"), path, key);
 }
 
 std::string default_cache_dir() {

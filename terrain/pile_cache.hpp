@@ -42,10 +42,6 @@ PileBuild read_pile(const std::string& path, std::string* key = nullptr);
 std::string pile_key_bytes(const PileProfile& profile, const FidelityPreset& preset,
                            const Material& material, const PileBuildOptions& options,
                            const std::string& device, const std::string& commit);
-// FNV-1a, 64 bits (Fowler, Noll, Vo; offset basis 14695981039346656037, prime 1099511628211):
-// not cryptographic, but the file holds the whole key and a read checks it, so a collision is a
-// miss, never a wrong pile
-std::uint64_t fnv1a64(const std::string& bytes);
 // the key's file name stem: the hash as 16 hex digits
 std::string pile_key_name(const std::string& key_bytes);
 

@@ -7,6 +7,18 @@ void Constraint::store_forces(const double* impulse, int count, double h) {
   for (int i = 0; i < count; ++i) forces_[i] = impulse[i] / h;
 }
 
+void Constraint::save_state(ByteWriter& w) const {
+  w.u64(forces_.size());
+  w.f64s(forces_.data(), forces_.size());
+}
+
+void Constraint::restore_state(ByteReader& r) {
+  const std::uint64_t n = r.u64("constraint forces");
+  r.need_elements(n, 8, "constraint forces");
+  forces_.assign(n, 0.0);
+  r.f64s(forces_.data(), forces_.size(), "constraint forces");
+}
+
 BodyFrame BodyFrame::from_world(const std::vector<RigidBody>& bodies, int body, const Vec3& world_anchor,
                                 const Mat3& world_axes) {
   BodyFrame f;

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "host/binary.hpp"
 #include "vehicle/rigid_body.hpp"
 
 namespace talus::vehicle {
@@ -58,6 +59,11 @@ class Constraint {
   // the impulses of this constraint's rows after the solve, converted to forces (impulse / h)
   virtual void store_forces(const double* impulse, int count, double h);
   const std::vector<double>& forces() const { return forces_; }
+  // what this constraint carries from one step to the next, for a saved state (digging/
+  // saved_state): the base keeps the last step's forces, which the sensors read; a constraint
+  // with more adds its own after them. restore_state reads what save_state wrote
+  virtual void save_state(ByteWriter& w) const;
+  virtual void restore_state(ByteReader& r);
   std::string name;
 
  protected:

@@ -86,4 +86,16 @@ bool Driveline::update_bounds(const double* row_velocity, const double* impulse,
   return false;
 }
 
+void Driveline::save_state(ByteWriter& w) const {
+  Constraint::save_state(w);
+  w.f64(target_drive_speed_);
+  w.f64(power_limit_);
+}
+
+void Driveline::restore_state(ByteReader& r) {
+  Constraint::restore_state(r);
+  target_drive_speed_ = r.f64("driveline");
+  power_limit_ = r.f64("driveline");
+}
+
 }  // namespace talus::vehicle

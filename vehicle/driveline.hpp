@@ -42,6 +42,9 @@ class Driveline : public Constraint {
   // the rated value
   void set_power_limit(double watts);
   double power_limit() const { return power_limit_; }
+  // the base's forces, the target speed and the power limit
+  void save_state(ByteWriter& w) const override;
+  void restore_state(ByteReader& r) override;
 
  private:
   ConstraintRow motor_row(const std::vector<RigidBody>& bodies) const;

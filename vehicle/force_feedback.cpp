@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 
 #include "host/error.hpp"
 
@@ -105,6 +106,23 @@ CycleTargets FeedbackCycle::targets(const SensorSample& s) const {
       break;
   }
   return c;
+}
+
+void FeedbackCycle::save_state(ByteWriter& w) const {
+  w.u8(static_cast<std::uint8_t>(phase_));
+  w.f64s(starts_, std::size(starts_));
+  w.u8(buried_ ? 1 : 0);
+  w.u8(broke_out_ ? 1 : 0);
+}
+
+void FeedbackCycle::restore_state(ByteReader& r) {
+  const std::uint8_t phase = r.u8("loading cycle");
+  if (phase > static_cast<std::uint8_t>(CyclePhase::Done))
+    throw InputError(r.where() + ": a loading-cycle phase " + std::to_string(phase) + " (corrupt)");
+  phase_ = static_cast<CyclePhase>(phase);
+  r.f64s(starts_, std::size(starts_), "loading cycle");
+  buried_ = r.u8("loading cycle") != 0;
+  broke_out_ = r.u8("loading cycle") != 0;
 }
 
 }  // namespace talus::vehicle

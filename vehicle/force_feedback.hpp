@@ -74,6 +74,10 @@ class FeedbackCycle {
   double phase_start(CyclePhase p) const { return starts_[static_cast<int>(p)]; }
   // the pile's initial surface height at x [m] (linear between scan points, 0 before the first)
   double surface_at(double x) const;
+  // where the cycle is, for a saved state (digging/saved_state): the phase, when each began and
+  // what the fill found; the gains, settings and surface are the constructor's, not saved
+  void save_state(ByteWriter& w) const;
+  void restore_state(ByteReader& r);
 
  private:
   void enter(CyclePhase p, double t);

@@ -236,4 +236,30 @@ ConstraintRow CylinderJoint::coordinate_row(const std::vector<RigidBody>& bodies
   return point_row(bodies, a_, b_, pa, pb, (pb - pa).normalized());
 }
 
+void Joint::save_state(ByteWriter& w) const {
+  Constraint::save_state(w);
+  w.u8(motor.enabled ? 1 : 0);
+  w.f64(motor.target_speed);
+  w.f64(motor.force_min);
+  w.f64(motor.force_max);
+  w.f64(motor.viscous_compliance);
+  w.f64(motor_force_);
+  w.f64(limit_force_);
+  w.f64(position_violation_);
+  w.f64(angle_violation_);
+}
+
+void Joint::restore_state(ByteReader& r) {
+  Constraint::restore_state(r);
+  motor.enabled = r.u8("joint motor") != 0;
+  motor.target_speed = r.f64("joint motor");
+  motor.force_min = r.f64("joint motor");
+  motor.force_max = r.f64("joint motor");
+  motor.viscous_compliance = r.f64("joint motor");
+  motor_force_ = r.f64("joint forces");
+  limit_force_ = r.f64("joint forces");
+  position_violation_ = r.f64("joint violations");
+  angle_violation_ = r.f64("joint violations");
+}
+
 }  // namespace talus::vehicle

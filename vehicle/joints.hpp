@@ -50,6 +50,9 @@ class Joint : public Constraint {
   const BodyFrame& frame_a() const { return a_; }
   const BodyFrame& frame_b() const { return b_; }
   void store_forces(const double* impulse, int count, double h) override;
+  // the base's forces, the motor as last commanded, the coordinate's forces and the violations
+  void save_state(ByteWriter& w) const override;
+  void restore_state(ByteReader& r) override;
 
  protected:
   // the row of the free coordinate (Jacobian only), for motor and limits

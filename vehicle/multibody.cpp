@@ -242,4 +242,73 @@ double MultibodySystem::max_joint_angle_violation() const {
   return v;
 }
 
+void MultibodySystem::save_state(ByteWriter& w) const {
+  // between steps only: a solve's assembly and result are not kept
+  if (assembled_ || solved_)
+    throw Error(
+        "multibody system: save_state() inside a step (after assemble(), before integrate())");
+  w.u64(bodies_.size());
+  for (const RigidBody& b : bodies_) {
+    w.f64(b.mass);
+    write_matrix(w, b.inertia);
+    write_matrix(w, b.position);
+    write_matrix(w, b.orientation.coeffs());
+    write_matrix(w, b.velocity);
+    write_matrix(w, b.angular_velocity);
+  }
+  write_matrix(w, gravity_);
+  w.f64(h_);
+  w.f64(time_);
+  w.u64(static_cast<std::uint64_t>(warm_lambda_.size()));
+  w.f64s(warm_lambda_.data(), static_cast<std::size_t>(warm_lambda_.size()));
+  w.u64(warm_state_.size());
+  for (const RowState s : warm_state_) w.u8(static_cast<std::uint8_t>(s));
+  w.u64(constraints_.size());
+  for (const auto& c : constraints_) c->save_state(w);
+}
+
+void MultibodySystem::restore_state(ByteReader& r) {
+  // the same machine: as many bodies and constraints as were saved
+  const std::uint64_t bodies = r.u64("machine bodies");
+  if (bodies != bodies_.size())
+    throw InputError(r.where() + ": the saved machine has " + std::to_string(bodies) +
+                     " bodies, this one " + std::to_string(bodies_.size()) +
+                     "; restore a state into a simulation made with the same machine");
+  for (RigidBody& b : bodies_) {
+    b.mass = r.f64("machine bodies");
+    read_matrix(r, b.inertia, "machine bodies");
+    read_matrix(r, b.position, "machine bodies");
+    read_matrix(r, b.orientation.coeffs(), "machine bodies");
+    read_matrix(r, b.velocity, "machine bodies");
+    read_matrix(r, b.angular_velocity, "machine bodies");
+  }
+  read_matrix(r, gravity_, "machine gravity");
+  h_ = r.f64("machine clock");
+  time_ = r.f64("machine clock");
+  // the direct solver's warm start
+  const std::uint64_t lambdas = r.u64("machine warm start");
+  r.need_elements(lambdas, 8, "machine warm start");
+  warm_lambda_.resize(static_cast<Eigen::Index>(lambdas));
+  r.f64s(warm_lambda_.data(), lambdas, "machine warm start");
+  const std::uint64_t states = r.u64("machine active set");
+  r.need_elements(states, 1, "machine active set");
+  warm_state_.resize(states);
+  for (RowState& s : warm_state_) {
+    const std::uint8_t v = r.u8("machine active set");
+    if (v > static_cast<std::uint8_t>(RowState::upper))
+      throw InputError(r.where() + ": a row state " + std::to_string(v) +
+                       " in the machine's active set (corrupt)");
+    s = static_cast<RowState>(v);
+  }
+  const std::uint64_t constraints = r.u64("machine constraints");
+  if (constraints != constraints_.size())
+    throw InputError(r.where() + ": the saved machine has " + std::to_string(constraints) +
+                     " constraints, this one " + std::to_string(constraints_.size()) +
+                     "; restore a state into a simulation made with the same machine");
+  for (const auto& c : constraints_) c->restore_state(r);
+  // nothing of a step in progress
+  for (auto& e : external_) e.setZero();
+  assembled_ = solved_ = false;
+}
+
 }  // namespace talus::vehicle

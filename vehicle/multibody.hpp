@@ -62,6 +62,13 @@ class MultibodySystem {
   int row_count() const { return static_cast<int>(rows_.size()); }
   const McpResult& last_result() const { return result_; }
   int bound_passes() const { return bound_passes_; }
+  // the state between two steps, for a saved state (digging/saved_state): the bodies' poses and
+  // velocities, the clock, the direct solver's warm start (impulses and active set) and every
+  // constraint's own (Constraint::save_state), in the order they were added. restore_state reads
+  // it into a system built the same way (InputError naming the reader's file when the bodies or
+  // constraints differ in number); the system then steps on as the saved one would have
+  void save_state(ByteWriter& w) const;
+  void restore_state(ByteReader& r);
   // largest violation of bilateral joint rows at the start of the last step: length [m], angle [rad]
   double max_joint_position_violation() const;
   double max_joint_angle_violation() const;

@@ -1,6 +1,7 @@
 #include "vehicle/sensors.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <iomanip>
 #include <limits>
@@ -132,6 +133,54 @@ void SensorLog::after_step(const SensorSample& s, double h) {
   }
   last_ = s;
   has_last_ = true;
+}
+
+namespace {
+// every field of a sample, the contract's channels first: what a saved state keeps of it
+constexpr std::array<double SensorSample::*, kChannelCount + 2> kSampleFields = [] {
+  std::array<double SensorSample::*, kChannelCount + 2> f{};
+  for (std::size_t c = 0; c < kChannelCount; ++c) f[c] = kSensorChannels[c].field;
+  f[kChannelCount] = &SensorSample::lift_rate;
+  f[kChannelCount + 1] = &SensorSample::tilt_rate;
+  return f;
+}();
+// a field added to SensorSample must be added to kSampleFields, or saved states lose it
+static_assert(sizeof(SensorSample) == kSampleFields.size() * sizeof(double),
+              "SensorSample has a field that kSampleFields does not list");
+}  // namespace
+
+void write_sample(ByteWriter& w, const SensorSample& s) {
+  for (const auto field : kSampleFields) w.f64(s.*field);
+}
+
+SensorSample read_sample(ByteReader& r, const char* what) {
+  SensorSample s;
+  for (const auto field : kSampleFields) s.*field = r.f64(what);
+  return s;
+}
+
+void SensorLog::save_state(ByteWriter& w) const {
+  w.f64(period_);
+  w.f64(work_);
+  w.u64(samples_.size());
+  for (const SensorSample& s : samples_) write_sample(w, s);
+  write_sample(w, last_);
+  w.u8(has_last_ ? 1 : 0);
+}
+
+void SensorLog::restore_state(ByteReader& r) {
+  const double period = r.f64("sensor log");
+  if (period != period_)
+    throw InputError(r.where() + ": the saved sensor log samples every " + std::to_string(period) +
+                     " s, this one every " + std::to_string(period_) + " s");
+  work_ = r.f64("sensor log");
+  const std::uint64_t n = r.u64("sensor log");
+  r.need_elements(n, kSampleFields.size() * 8, "sensor log");
+  samples_.clear();
+  samples_.reserve(n);
+  for (std::uint64_t k = 0; k < n; ++k) samples_.push_back(read_sample(r, "sensor log"));
+  last_ = read_sample(r, "sensor log");
+  has_last_ = r.u8("sensor log") != 0;
 }
 
 }  // namespace talus::vehicle

@@ -28,6 +28,10 @@ class SensorLog {
   const std::vector<SensorSample>& samples() const { return samples_; }
   double work() const { return work_; }  // J, integrated every step
   double period() const { return period_; }
+  // the log for a saved state (digging/saved_state): its samples, work and the state after the
+  // last step it interpolates from; restore_state replaces this log's with what save_state wrote
+  void save_state(ByteWriter& w) const;
+  void restore_state(ByteReader& r);
 
  private:
   double period_;
@@ -36,6 +40,10 @@ class SensorLog {
   SensorSample last_;       // the state after the previous step
   bool has_last_ = false;
 };
+
+// one sample bit for bit, every field (the contract's channels and the rates), for saved states
+void write_sample(ByteWriter& w, const SensorSample& s);
+SensorSample read_sample(ByteReader& r, const char* what);
 
 // samples as the run contract's timeseries.csv: channel_header() and one row per sample, each
 // number with the 17 digits that round-trip a double, so the file reads back as the samples

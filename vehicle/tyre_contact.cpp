@@ -41,4 +41,16 @@ void TyreContact::add_rows(const std::vector<RigidBody>& bodies, std::vector<Con
   (void)first;
 }
 
+void TyreContact::save_state(ByteWriter& w) const {
+  Constraint::save_state(w);
+  w.f64(deflection_);
+  write_matrix(w, longitudinal_);
+}
+
+void TyreContact::restore_state(ByteReader& r) {
+  Constraint::restore_state(r);
+  deflection_ = r.f64("tyre contact");
+  read_matrix(r, longitudinal_, "tyre contact");
+}
+
 }  // namespace talus::vehicle

@@ -1,0 +1,39 @@
+// Saved states (issue 16): the envelope of a simulation's state file, which the embedding facade
+// (embed/talus.cpp) writes and reads; the state inside is DiggingSimulation::save_state's, a
+// loading cycle's or the machine alone's.
+//
+// The file (version kStateFormatVersion, little-endian whatever the machine, host/binary.hpp):
+//   "TALUSSTA" (8 bytes), u32 version, then the strings key, commit and device, the payload's
+//   length and bytes, then u64 FNV-1a of every byte before it.
+// The key says what made the simulation, one "name=value" line each (scenario and machine files
+// by content, level, seed, loading-cycle options, particle count): a state is restored only into
+// a simulation with the same key, since the constructor's configuration is not in the payload.
+// commit and device are recorded: bit-identical continuation holds on the same build and device
+// (work-group size included); on another the state restores and steps on, to float rounding.
+#pragma once
+#include <cstdint>
+#include <string>
+
+namespace talus {
+
+// the file's format: raise it whenever what any save_state writes changes (a file of another
+// version is refused, never half-read)
+inline constexpr std::uint32_t kStateFormatVersion = 1;
+
+struct SavedStateHeader {
+  std::string key;     // "name=value" lines: what the simulation was made from
+  std::string commit;  // the build's git commit
+  std::string device;  // the OpenCL device the particles ran on (empty for the machine alone)
+};
+
+// the file's bytes for a payload
+std::string seal_state(const SavedStateHeader& header, const std::string& payload);
+// the header of a state file's bytes, its payload in *payload; InputError naming `where` (the
+// file) for another magic or version, a short file or a wrong checksum
+SavedStateHeader open_state(const std::string& bytes, const std::string& where,
+                            std::string* payload);
+// where two keys differ, for an error: "level=D200 (saved) against level=D400 (this
+// simulation)"; empty when they are the same
+std::string key_difference(const std::string& saved, const std::string& mine);
+
+}  // namespace talus
