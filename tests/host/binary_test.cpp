@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <limits>
 #include <random>
@@ -16,6 +17,18 @@
 
 namespace talus {
 namespace {
+
+// a number's bit pattern: NaN payloads and signed zeros compare as what they are
+std::uint64_t bits(double d) {
+  std::uint64_t b = 0;
+  std::memcpy(&b, &d, sizeof b);
+  return b;
+}
+std::uint32_t bits(float f) {
+  std::uint32_t b = 0;
+  std::memcpy(&b, &f, sizeof b);
+  return b;
+}
 
 ByteReader reader(const std::string& bytes) {
   return ByteReader(bytes, bytes.size(), "f.bin", "save it again");
@@ -42,11 +55,9 @@ TEST(Binary, NumbersComeBackBitForBit) {
   w.tag("section");
   ByteReader r = reader(w.bytes());
   for (const double d : specials) {
-    const double back = r.f64("numbers");
-    EXPECT_EQ(std::memcmp(&back, &d, sizeof d), 0) << d;
+    EXPECT_EQ(bits(r.f64("numbers")), bits(d)) << d;
   }
-  const float fb = r.f32("float");
-  EXPECT_EQ(std::memcmp(&fb, &f, sizeof f), 0);
+  EXPECT_EQ(bits(r.f32("float")), bits(f));
   EXPECT_EQ(r.u8("byte"), 200);
   EXPECT_EQ(r.u32("word"), 0xdeadbeefu);
   EXPECT_EQ(r.i64("signed"), -42);
