@@ -73,16 +73,29 @@ class BucketFillingEnv(gym.Env):
         self.observation_space = spaces.Box(-np.inf, np.inf, shape=(len(CHANNELS),), dtype=np.float32)
         self.action_space = spaces.Box(-1.0, 1.0, shape=(3,), dtype=np.float32)
         self.sim = None
+        self._sim_seed = None
+        # each pile's state at the start of its fill (bytes of Simulation.state), once reached
+        self._fill_states = {}
         self._top = None
 
-    # the simulation at the start of the fill, on pile `seed`
+    # the simulation at the start of the fill, on pile `seed`. The first episode on a pile drives
+    # the approach and saves the state at the fill's start (Simulation.state); later ones restore
+    # it, bit for bit the same start, without building the machine's approach again. A type-G
+    # level's state cannot be saved yet: there every reset drives the approach
     def _start(self, seed):
+        if self.sim is not None and self._sim_seed == seed and seed in self._fill_states:
+            self.sim.set_state(self._fill_states[seed])
+            return
         self.sim = None  # the previous episode's device memory goes first
         self.sim = Simulation(scenario=self.scenario, level=self.level, seed=seed, loading_cycle=True,
                               cycle_approach=self.approach, cycle_max_time=self.max_cycle_time,
                               progress=self.progress)
+        self._sim_seed = seed
         top = self.sim.top_speeds()
         self._top = np.array([top.drive, top.lift, top.tilt])
+        if seed in self._fill_states:
+            self.sim.set_state(self._fill_states[seed])
+            return
         # the approach drives itself, up to the pile
         while self.sim.cycle_phase == "approach" and not self.sim.done:
             self.sim.step()
@@ -90,6 +103,8 @@ class BucketFillingEnv(gym.Env):
             raise RuntimeError(f"BucketFillingEnv: the loading cycle never reached the pile "
                                f"(phase {self.sim.cycle_phase!r} at t = {self.sim.time:.2f} s); "
                                "give a longer max_cycle_time or a shorter approach")
+        if self.level.upper().startswith("D"):
+            self._fill_states[seed] = self.sim.state()
 
     def _observation(self):
         return self.sim.sensors().astype(np.float32)

@@ -99,3 +99,30 @@ def test_bad_parameters_are_refused_at_construction_naming_them():
                          ({"pile_seeds": ()}, "pile_seeds")):
         with pytest.raises(ValueError, match=name):
             BucketFillingEnv(level=LEVEL, **kwargs)
+
+
+def test_a_type_d_reset_restores_the_fill_start_bit_for_bit():
+    # the first reset drives the approach and saves the fill's start; the next restores it into
+    # the same simulation (no new pile, no new approach), and an episode from it is the episode
+    # of an environment that drove its own approach
+    actions = [np.array([0.4, 0.2 * k % 1.0, 0.5], dtype=np.float32) for k in range(25)]
+
+    def episode(env, reset_seed):
+        obs, _ = env.reset(seed=reset_seed)
+        out = [obs]
+        for a in actions:
+            obs, reward, terminated, truncated, _ = env.step(a)
+            out.append(np.append(obs, reward))
+            if terminated or truncated:
+                break
+        return out
+
+    env = BucketFillingEnv(level="D400")
+    first = episode(env, 5)
+    sim = env.sim
+    again = episode(env, 6)
+    assert env.sim is sim, "the second reset built a new simulation instead of restoring"
+    fresh = episode(BucketFillingEnv(level="D400"), 7)
+    for a, b, c in zip(first, again, fresh):
+        assert np.array_equal(a, b) and np.array_equal(a, c)
+    assert len(first) == len(again) == len(fresh)
