@@ -44,19 +44,6 @@ constexpr int kImageWidth = 1600, kImageHeight = 800;
 // simulated time between progress notes, which count the load in the bucket [s]
 constexpr double kProgressNoteInterval = 0.5;
 
-// the model extensions of the options, in their order (bad input before anything runs)
-struct RunEffects {
-  vehicle::EffectPlugins plugins;  // keeps the libraries loaded while the effects live
-  vehicle::EffectSet set;
-};
-
-std::unique_ptr<RunEffects> make_run_effects(const RunOptions& o) {
-  auto e = std::make_unique<RunEffects>();
-  e->plugins = vehicle::load_effect_plugins(o.effect_plugins);
-  for (const auto& spec : o.effects) e->set.add(vehicle::make_effect(spec, e->plugins));
-  return e;
-}
-
 // one line for stderr: "effects: a (k=v, ...), b (...)"
 std::string effects_note(const vehicle::EffectSet& effects) {
   std::ostringstream note;
@@ -414,12 +401,8 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
 void run_scenario(const RunOptions& o) {
   const vehicle::Scenario sc = o.scenario_data ? *o.scenario_data : vehicle::load_scenario(o.scenario);
   check_output_file(o.json, "--json");
-  const auto effects = make_run_effects(o);
-  for (size_t i = 0; i < effects->set.size(); ++i) {
-    if (!sc.pile && effects->set[i].soil_only())
-      throw InputError("--effect " + effects->set[i].name() + ": acts on the soil's particles, and scenario '" + sc.name +
-                       "' has none; use it with a pile scenario (fb35, hd27, rd21)");
-  }
+  // the model extensions of the options, in their order (bad input before anything runs)
+  const auto effects = vehicle::load_effects(o.effects, o.effect_plugins, sc, "--effect");
   // the level and the sweep are checked for every scenario, though only a pile uses them
   level_preset(o.fidelity);
   parse_sweep(o.sweep, "--sweep");

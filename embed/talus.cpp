@@ -23,6 +23,7 @@
 #include "terrain/pile.hpp"
 #include "vehicle/data_file.hpp"
 #include "vehicle/effect.hpp"
+#include "vehicle/effect_plugin.hpp"
 #include "vehicle/force_feedback.hpp"
 #include "vehicle/scenario.hpp"
 #include "vehicle/sensors.hpp"
@@ -185,14 +186,16 @@ std::string state_key(const SimulationOptions& options, const vehicle::Scenario&
 struct Simulation::Impl {
   vehicle::Scenario scenario;
   FidelityPreset preset;
+  // the model extensions (the options' effects; empty: the identity). Declared before the runs
+  // that hold them, so it outlives them
+  std::unique_ptr<vehicle::LoadedEffects> effects;
   // a pile: the device and either the coupled dig on it or the loading cycle around such a dig
   std::unique_ptr<Device> device;
   std::unique_ptr<DiggingSimulation> replay;
   std::unique_ptr<LoadingCycle> cycle;
   double cycle_s = 0.0;
-  // the machine alone: its own steps, the empty effect set (the identity) and the 100 Hz log
+  // the machine alone: its own steps and the 100 Hz log
   std::unique_ptr<vehicle::WheelLoader> loader;
-  vehicle::EffectSet no_effects;
   vehicle::SensorLog log{100.0};
   vehicle::SensorSample sensors;
   double time = 0.0;
@@ -220,13 +223,17 @@ struct Simulation::Impl {
     const double h = scenario.timestep;
     const double t_end = static_cast<double>(steps_done + 1) * h;
     sensors = vehicle::step_with_effects(
-        *loader, no_effects, time, h, t_end, {targets.drive, targets.lift, targets.tilt},
+        *loader, effects->set, time, h, t_end, {targets.drive, targets.lift, targets.tilt},
         [&] { loader->step(h); }, &log);
     ++steps_done;
     time = t_end;
   }
   // the state between steps as a payload (digging/saved_state.hpp has the envelope)
   std::string save() const {
+    if (!effects->set.empty())
+      throw Error(
+          "Simulation::state: the state of model extensions (SimulationOptions::effects) cannot "
+          "be saved yet (issue 16); save a run without effects");
     ByteWriter w;
     if (cycle) {
       cycle->save_state(w);
@@ -307,6 +314,12 @@ Simulation::Simulation(const SimulationOptions& options) : impl_(std::make_uniqu
   m.preset = options_level(options);
   m.state_key = state_key(options, m.scenario, m.preset);
   if (options.loading_cycle) check_cycle_options(options, m.scenario);
+  if (options.loading_cycle && !options.effects.empty())
+    throw InputError(
+        "SimulationOptions::effects: the loading cycle runs the baseline machine (effects with "
+        "loading_cycle are not supported yet); replay the scenario, or leave effects empty");
+  m.effects = vehicle::load_effects(options.effects, options.effect_plugins, m.scenario,
+                                    "SimulationOptions::effects");
   if (m.scenario.pile) {
     // the pile built and settled at the level, then the machine settled in front of it
     DiggingOptions dig_options;
@@ -335,15 +348,15 @@ Simulation::Simulation(const SimulationOptions& options) : impl_(std::make_uniqu
           build_scenario_pile(*m.device, m.scenario, placed, m.preset, dig_options, &progress);
       progress.finish(std::to_string(pile.particles.size()) + " particles");
       m.pile_from_cache = pile.from_cache;
-      m.replay =
-          std::make_unique<DiggingSimulation>(*m.device, m.scenario, m.preset, pile, dig_options);
+      m.replay = std::make_unique<DiggingSimulation>(*m.device, m.scenario, m.preset, pile,
+                                                     dig_options, &m.effects->set);
     }
   } else {
     // the machine alone, with a payload it can hold on its wheels
     m.loader = std::make_unique<vehicle::WheelLoader>(vehicle::machine_file(m.scenario),
                                                       m.scenario.payload);
     vehicle::check_payload_holds(m.scenario, *m.loader);
-    m.sensors = vehicle::start_with_effects(*m.loader, m.no_effects, m.log);
+    m.sensors = vehicle::start_with_effects(*m.loader, m.effects->set, m.log);
   }
   m.state_key += "particles=" + std::to_string(particle_count()) + "\n";
 }

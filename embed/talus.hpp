@@ -69,6 +69,14 @@ struct SimulationOptions {
   /// the force-feedback controller's point on the paper's search line, s in [0, 1]: what fills
   /// the bucket when a cycle is stepped with step() (paper §7.1; the sweep of `talus sweep`)
   double cycle_s = 0.5;
+  /// model extensions (docs/effects.md), each as `talus run --effect` takes it: "NAME" or
+  /// "NAME:key=value,..." (for example "engine_power_sharing", "hydraulic_lag:time_constant=0.2",
+  /// "sensor_bias:channel=f_lift,bias=2e4"), applied in this order to every step's commands,
+  /// limits and forces and to what the sensors report. Not with loading_cycle yet
+  std::vector<std::string> effects;
+  /// shared libraries with more effects (docs/effects.md, "Plug-ins"), as `talus run
+  /// --effect-plugin` loads them; their effects are named in `effects` like built-in ones
+  std::vector<std::string> effect_plugins;
 };
 
 /// \brief the operator's commands for one step: target speeds, clipped to the machine's maxima.
@@ -141,7 +149,8 @@ struct ParticleState {
 /// memory: state, set_state): a restored run continues bit-identically to one that never stopped,
 /// on the same build and device (docs/embedding.md, "Saved states").
 ///
-/// Not in this version: model extensions (`talus run --effect`); saving a type-G level's state
+/// Model extensions (SimulationOptions::effects) change the machine and its sensors as `talus run
+/// --effect` does. Not in this version: saving a type-G level's state or a run with effects
 /// (docs/embedding.md, "Not yet").
 class Simulation {
  public:

@@ -100,7 +100,12 @@ PYBIND11_MODULE(_talus, m) {
       .def_readwrite("cycle_max_time", &talus::SimulationOptions::cycle_max_time,
                      "the cycle's time limit [s]")
       .def_readwrite("cycle_s", &talus::SimulationOptions::cycle_s,
-                     "the force-feedback controller's search parameter, in [0, 1]");
+                     "the force-feedback controller's search parameter, in [0, 1]")
+      .def_readwrite("effects", &talus::SimulationOptions::effects,
+                     "model extensions as talus run --effect takes them, a list of "
+                     "'NAME:key=value,...' (docs/effects.md)")
+      .def_readwrite("effect_plugins", &talus::SimulationOptions::effect_plugins,
+                     "shared libraries with more effects, as talus run --effect-plugin");
 
   py::class_<talus::Targets>(m, "Targets", "target speeds [m/s]: drive, lift and tilt strokes")
       .def(py::init([](double drive, double lift, double tilt) {

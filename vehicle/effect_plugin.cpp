@@ -326,4 +326,20 @@ std::unique_ptr<Effect> make_effect(const std::string& spec, const EffectPlugins
   return effect;
 }
 
+std::unique_ptr<LoadedEffects> load_effects(const std::vector<std::string>& specs,
+                                            const std::vector<std::string>& plugin_files,
+                                            const Scenario& scenario, const std::string& option) {
+  auto e = std::make_unique<LoadedEffects>();
+  e->plugins = load_effect_plugins(plugin_files);
+  for (const auto& spec : specs) e->set.add(make_effect(spec, e->plugins));
+  // an effect on the particles needs particles
+  for (size_t i = 0; i < e->set.size(); ++i) {
+    if (!scenario.pile && e->set[i].soil_only())
+      throw InputError(option + " " + e->set[i].name() +
+                       ": acts on the soil's particles, and scenario '" + scenario.name +
+                       "' has none; use it with a pile scenario (fb35, hd27, rd21)");
+  }
+  return e;
+}
+
 }  // namespace talus::vehicle

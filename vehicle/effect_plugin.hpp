@@ -46,4 +46,18 @@ EffectPlugins load_effect_plugins(const std::vector<std::string>& files);
 // specification and the fix for a malformed one, an unknown name or parameter, a value out of range
 std::unique_ptr<Effect> make_effect(const std::string& spec, const EffectPlugins& plugins = {});
 
+// a run's model extensions: the plug-ins' libraries stay loaded while their effects live
+struct LoadedEffects {
+  EffectPlugins plugins;
+  EffectSet set;
+};
+// the effects of `specs` (make_effect's), in their order, with the plug-ins of `plugin_files`, for
+// a run of `scenario`: InputError for a bad specification or file, and for an effect on the
+// soil's particles in a scenario without a pile, naming `option` (the flag or field that gave the
+// specification) and the fix. What talus run --effect and the facade's SimulationOptions::effects
+// both go through
+std::unique_ptr<LoadedEffects> load_effects(const std::vector<std::string>& specs,
+                                            const std::vector<std::string>& plugin_files,
+                                            const Scenario& scenario, const std::string& option);
+
 }  // namespace talus::vehicle

@@ -17,6 +17,7 @@
 
 #include "digging/feedback_sweep.hpp"
 #include "tests/solvers/dem_test_util.hpp"
+#include "vehicle/effect_plugin.hpp"
 #include "vehicle/sensor_channels.hpp"
 
 namespace talus {
@@ -345,6 +346,94 @@ TEST(Simulation, LoadingCycleTakesTheCallersTargetsOnlyInTheFill) {
     EXPECT_NE(std::string(e.what()).find("SimulationOptions::cycle_s"), std::string::npos)
         << e.what();
   }
+}
+
+// model extensions through the facade (SimulationOptions::effects): a sensor bias shifts exactly
+// its channel by its offset and nothing else; a lag on the cylinders slows the lift stroke
+TEST(SimulationEffects, ABiasShiftsItsChannelOnlyAndALagSlowsTheLift) {
+  SimulationOptions o = vehicle_only();
+  Simulation plain(o);
+  o.effects = {"sensor_bias:channel=f_lift,bias=1000"};
+  Simulation biased(o);
+  o.effects = {"hydraulic_lag:time_constant=0.3"};
+  Simulation lagged(o);
+  Targets lift;
+  lift.lift = 0.1;
+  for (Simulation* s : {&plain, &biased, &lagged}) hold(*s, lift, 1.0);
+  const std::vector<SensorReading> a = plain.sensor_log(), b = biased.sensor_log();
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    EXPECT_DOUBLE_EQ(b[k].f_lift - a[k].f_lift, 1000.0) << "sample " << k;
+    EXPECT_EQ(b[k].d_lift, a[k].d_lift) << "sample " << k;
+    EXPECT_EQ(b[k].f_tilt, a[k].f_tilt) << "sample " << k;
+  }
+  // a first-order lag of 0.3 s behind a step: after 1 s the stroke is short by about 0.3 s of
+  // motion (0.03 m at 0.1 m/s; the unlagged cylinder also accelerates, so at least half of it)
+  const double shortfall = plain.sensors().d_lift - lagged.sensors().d_lift;
+  EXPECT_GT(shortfall, 0.015);
+  EXPECT_LT(shortfall, 0.04);
+}
+
+// a dig with an effect through the facade is the dig below it with the same effect, bit for bit
+TEST(SimulationEffects, ADigWithAnEffectIsTheDigBelowIt) {
+  SimulationOptions o;
+  o.scenario = "hd27";
+  o.level = "D400";
+  o.effects = {"engine_power_sharing"};
+  Simulation sim(o);
+  for (int k = 0; k < 150; ++k) sim.step();
+
+  const vehicle::Scenario sc = vehicle::load_scenario("hd27");
+  const FidelityPreset& preset = level_preset("D400");
+  DiggingOptions dig;
+  const PileBuild pile = build_scenario_pile(test::shared_device(), sc, scenario_pile_profile(sc),
+                                             preset, dig, nullptr);
+  vehicle::EffectSet effects;
+  effects.add(vehicle::make_effect("engine_power_sharing"));
+  DiggingSimulation below(test::shared_device(), sc, preset, pile, dig, &effects);
+  for (int k = 0; k < 150; ++k) below.step();
+  const std::vector<SensorReading> log = sim.sensor_log();
+  const std::vector<vehicle::SensorSample>& expected = below.log().samples();
+  ASSERT_EQ(log.size(), expected.size());
+  for (std::size_t k = 0; k < log.size(); ++k) {
+    EXPECT_EQ(log[k].f_lift, expected[k].f_lift) << "sample " << k;
+    EXPECT_EQ(log[k].f_traction, expected[k].f_traction) << "sample " << k;
+    EXPECT_EQ(log[k].x_vehicle, expected[k].x_vehicle) << "sample " << k;
+  }
+  EXPECT_EQ(sim.work(), below.log().work());
+  // and the effect acts: the baseline machine drives differently over the same steps
+  o.effects.clear();
+  Simulation plain(o);
+  for (int k = 0; k < 150; ++k) plain.step();
+  EXPECT_NE(plain.sensors().f_traction, sim.sensors().f_traction);
+  EXPECT_NE(plain.work(), sim.work());
+}
+
+// bad effects are one InputError naming the option; a run with effects does not save its state
+TEST(SimulationEffects, BadEffectsNameTheOption) {
+  const auto refused = [](const SimulationOptions& o, const std::string& says) {
+    try {
+      Simulation sim(o);
+      ADD_FAILURE() << "took effects " << o.effects.front();
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(says), std::string::npos) << e.what();
+    }
+  };
+  SimulationOptions o = vehicle_only();
+  o.effects = {"soil_cohesion:cohesion=1000"};
+  refused(o, "SimulationOptions::effects soil_cohesion: acts on the soil's particles");
+  o.effects = {"no_such_effect"};
+  refused(o, "no_such_effect");
+  SimulationOptions cycle;
+  cycle.scenario = "fb35";
+  cycle.level = "G400";
+  cycle.loading_cycle = true;
+  cycle.effects = {"engine_power_sharing"};
+  refused(cycle, "SimulationOptions::effects: the loading cycle");
+
+  o.effects = {"hydraulic_lag"};
+  Simulation lagged(o);
+  EXPECT_THROW((void)lagged.state(), Error);
 }
 
 }  // namespace

@@ -89,6 +89,18 @@ def test_a_saved_state_rewinds_the_run_bit_for_bit(tmp_path):
         sim.set_state(b"garbage")
 
 
+def test_effects_are_options_as_talus_run_takes_them():
+    plain = talus.Simulation(scenario="flat-lift")
+    biased = talus.Simulation(scenario="flat-lift", effects=["sensor_bias:channel=f_lift,bias=1000"])
+    for s in (plain, biased):
+        for _ in range(20):
+            s.step(drive=0.0, lift=0.05, tilt=0.0)
+    f = talus.CHANNELS.index("f_lift")
+    assert biased.sensors()[f] - plain.sensors()[f] == pytest.approx(1000.0)
+    with pytest.raises(talus.InputError, match="no_such_effect"):
+        talus.Simulation(scenario="flat-lift", effects=["no_such_effect"])
+
+
 def test_errors_name_the_option_and_are_python_exceptions():
     with pytest.raises(talus.InputError, match="scenario 'nope'"):
         talus.Simulation(scenario="nope")
