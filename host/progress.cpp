@@ -22,8 +22,13 @@ Progress::Progress(std::string label, double total, bool enabled)
 void Progress::update(double done, const std::string& note) {
   // a long loop's natural point to stop at when asked (host/interrupt.hpp)
   if (interrupt_requested()) {
+    // how far it had come: of its total when it knows one (soil tests and cuts run to a
+    // criterion, not to a total)
     char where[160];
-    std::snprintf(where, sizeof where, "%s at %.3g of %.3g", label_.c_str(), done, total_);
+    if (total_ > 0.0)
+      std::snprintf(where, sizeof where, "%s at %.3g of %.3g", label_.c_str(), done, total_);
+    else
+      std::snprintf(where, sizeof where, "%s at %.3g", label_.c_str(), done);
     throw_if_interrupted(where);
   }
   if (!enabled_) return;

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "host/version.hpp"
 #include "tests/apps/cli_test_util.hpp"
@@ -90,6 +91,64 @@ TEST(Outputs, AnInterruptStopsBetweenStepsAndSaysWhere) {
   EXPECT_NE(sigterm.err.find("interrupted by SIGTERM during"), std::string::npos) << sigterm.err;
   EXPECT_FALSE(fs::exists(run / "summary.json"));
   no_temporary_files(run);
+}
+
+// every command that runs long stops on Ctrl-C (issue 15): exit 130, its last line on stderr the
+// one that says where it stopped, no summary.json in its folder and no temporary file. Each is
+// interrupted 3 s after it starts, inside its pile, settling, test, cycle or candidate search
+TEST(Outputs, EveryLongCommandStopsOnSigintWithOneLine) {
+  const fs::path base = fs::temp_directory_path() / "talus_outputs_sigint";
+  fs::remove_all(base);
+  fs::create_directories(base);
+  const std::string b = base.string();
+  // two short measured-like runs for diagnose
+  for (const char* sc : {"flat-lift", "load-carry"}) {
+    const std::string d = b + "/data-" + sc;
+    ASSERT_EQ(test::run_talus("", std::string("synth --scenario ") + sc +
+                                      " --effect hydraulic_lag --quiet --out " + d +
+                                      " --answer-key " + d + ".key.json")
+                  .code,
+              0);
+  }
+  struct Command {
+    std::string name, args, out;  // out: the folder or file it writes ("" none)
+  };
+  const std::vector<Command> commands = {
+      {"pile", "pile --level D200 --out " + b + "/pile", b + "/pile"},
+      {"repose", "repose --diameter 0.1 --out " + b + "/repose", b + "/repose"},
+      {"soil", "soil --test shear --level D200 --out " + b + "/soil", b + "/soil"},
+      {"cut", "cut --level D200 --out " + b + "/cut", b + "/cut"},
+      {"bench dem", "bench dem --json " + b + "/dem.json", b + "/dem.json"},
+      {"bench dig",
+       "bench dig --scenario hd27 --level D200 --seconds 5 --no-pile-cache --json " + b +
+           "/dig.json",
+       b + "/dig.json"},
+      {"run", "run --scenario hd27 --fidelity D200 --out " + b + "/run", b + "/run"},
+      {"sweep", "sweep --scenario fb35 --fidelity D200 --samples 3 --out " + b + "/sweep",
+       b + "/sweep"},
+      {"synth",
+       "synth --scenario hd27 --fidelity D200 --out " + b + "/synth --answer-key " + b + "/k.json",
+       b + "/synth"},
+      {"diagnose",
+       "diagnose --data " + b + "/data-flat-lift " + b + "/data-load-carry --out " + b + "/diag",
+       b + "/diag"}};
+  for (const Command& c : commands) {
+    SCOPED_TRACE(c.name);
+    const auto r = test::run_talus("timeout --preserve-status -s INT 3", c.args);
+    EXPECT_EQ(r.code, 130) << r.err;
+    // the last line says so; what came before is the command's own progress
+    std::string last = r.err.substr(0, r.err.find_last_not_of('\n') + 1);
+    last = last.substr(last.find_last_of('\n') + 1);
+    EXPECT_EQ(last.rfind("talus: interrupted by SIGINT during ", 0), 0u) << r.err;
+    if (fs::is_directory(c.out)) {
+      EXPECT_FALSE(fs::exists(fs::path(c.out) / "summary.json"));
+      for (const auto& e : fs::recursive_directory_iterator(c.out))
+        EXPECT_EQ(e.path().string().find(".tmp"), std::string::npos) << e.path();
+    } else {
+      EXPECT_FALSE(fs::exists(c.out)) << "a JSON written by an interrupted command";
+    }
+  }
+  fs::remove_all(base);
 }
 
 // synth: the data's summary comes last and carries no command line (it names the effects); the
