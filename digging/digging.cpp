@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 
 #include "host/error.hpp"
 #include "host/stage_times.hpp"
@@ -290,7 +291,8 @@ void DiggingSimulation::restore_state(ByteReader& r) {
   const double time = r.f64("dig clock");
   const std::int64_t steps_done = r.i64("dig clock");
   const std::int64_t steps_total = r.i64("dig clock");
-  if (steps_total != steps_total_ || steps_done < 0 || steps_done > (1LL << 40))
+  // a run may step on past its duration, but its step count is an int
+  if (steps_total != steps_total_ || steps_done < 0 || steps_done > std::numeric_limits<int>::max())
     throw InputError(r.where() + ": the saved run has " + std::to_string(steps_total) +
                      " steps, this one " + std::to_string(steps_total_) +
                      "; restore a state into a simulation of the same scenario and level");

@@ -14,6 +14,8 @@
 #include <cstdint>
 #include <string>
 
+#include "host/binary.hpp"
+
 namespace talus {
 
 // the file's format: raise it whenever what any save_state writes changes (a file of another
@@ -32,6 +34,8 @@ std::string seal_state(const SavedStateHeader& header, const std::string& payloa
 // file) for another magic or version, a short file or a wrong checksum
 SavedStateHeader open_state(const std::string& bytes, const std::string& where,
                             std::string* payload);
+// a reader over a payload from open_state, naming `where` and what to do about a bad file
+ByteReader payload_reader(const std::string& payload, const std::string& where);
 // where two keys differ, for an error: "level=D200 (saved) against level=D400 (this
 // simulation)"; empty when they are the same
 std::string key_difference(const std::string& saved, const std::string& mine);

@@ -229,11 +229,18 @@ struct Simulation::Impl {
     time = t_end;
   }
   // the state between steps as a payload (digging/saved_state.hpp has the envelope)
+  // the machine alone with effects cannot save or restore its state: the effects' own (lags,
+  // delay lines, plug-ins' opaque state) is not saved yet. The one check for both directions
+  // (a dig checks its own, DiggingSimulation::save_state)
+  void check_savable(const char* what) const {
+    if (!dig() && !effects->set.empty())
+      throw Error(std::string(what) +
+                  ": the state of model extensions (SimulationOptions::effects) cannot be saved "
+                  "or restored yet (issue 16); use a run without effects");
+  }
+  // the state between steps as a payload (digging/saved_state.hpp has the envelope)
   std::string save() const {
-    if (!effects->set.empty())
-      throw Error(
-          "Simulation::state: the state of model extensions (SimulationOptions::effects) cannot "
-          "be saved yet (issue 16); save a run without effects");
+    check_savable("Simulation::state");
     ByteWriter w;
     if (cycle) {
       cycle->save_state(w);
@@ -251,17 +258,9 @@ struct Simulation::Impl {
     }
     return std::move(w.bytes());
   }
-  // a state's bytes (seal_state's) restored; the envelope and the key are checked before anything
-  // changes, so a file that fails them leaves the run as it was
-  void restore(const std::string& bytes, const std::string& where) {
-    std::string payload;
-    const SavedStateHeader header = open_state(bytes, where, &payload);
-    if (header.key != state_key)
-      throw InputError(
-          where + " was saved from another simulation: " + key_difference(header.key, state_key) +
-          "; make the Simulation with the options it was saved from");
-    ByteReader r(payload, payload.size(), where,
-                 "truncated or not a talus state file; save it again");
+  // a payload read into the run (the parts write into themselves as they read)
+  void read_payload(const std::string& payload, const std::string& where) {
+    ByteReader r = payload_reader(payload, where);
     if (cycle) {
       cycle->restore_state(r);
     } else if (replay) {
@@ -281,6 +280,26 @@ struct Simulation::Impl {
     if (r.left() != 0)
       throw InputError(where + ": " + std::to_string(r.left()) +
                        " bytes after the state (corrupt)");
+  }
+  // a state's bytes (seal_state's) restored. The envelope and the key are checked before anything
+  // changes; a payload that passes them and still fails (a file of another build whose layout
+  // changed without a new format version) is undone from a copy of the state taken first, so a
+  // bad file never leaves the run half-restored
+  void restore(const std::string& bytes, const std::string& where) {
+    check_savable("Simulation::set_state");
+    std::string payload;
+    const SavedStateHeader header = open_state(bytes, where, &payload);
+    if (header.key != state_key)
+      throw InputError(
+          where + " was saved from another simulation: " + key_difference(header.key, state_key) +
+          "; make the Simulation with the options it was saved from");
+    const std::string before = save();
+    try {
+      read_payload(payload, where);
+    } catch (...) {
+      read_payload(before, "the state before " + where);
+      throw;
+    }
   }
   double now() const { return dig() ? dig()->time() : time; }
   const vehicle::SensorSample& reading() const { return dig() ? dig()->sensors() : sensors; }

@@ -232,7 +232,7 @@ class Simulation {
   /// saved run did, bit for bit on the same build and device. talus::InputError naming the file
   /// when it cannot be read, is not a state file, is truncated or corrupt, is of another format
   /// version, or was saved from another simulation (naming what differs); such a file leaves
-  /// this simulation unchanged
+  /// this simulation unchanged (a payload that fails inside is undone from a copy taken first)
   void restore_state(const std::string& path);
   /// the same bytes as save_state's file, in memory (a rewind point, a copy to send elsewhere)
   std::string state() const;

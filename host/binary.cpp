@@ -22,6 +22,40 @@ std::uint64_t fnv1a64(std::string_view bytes) {
   return h;
 }
 
+void begin_sealed(ByteWriter& w, const SealedFormat& format) {
+  for (const char c : format.magic) w.u8(static_cast<std::uint8_t>(c));
+  w.u32(format.version);
+}
+
+void end_sealed(ByteWriter& w) { w.u64(fnv1a64(w.bytes())); }
+
+ByteReader open_sealed(const std::string& bytes, const SealedFormat& format,
+                       const std::string& where) {
+  const std::string hint = "truncated or not a talus " + format.kind + " file; " + format.fix;
+  const std::size_t head = format.magic.size() + 4;
+  // the magic first: a file of another kind is named as such, not as corrupt
+  if (bytes.size() < format.magic.size() ||
+      bytes.compare(0, format.magic.size(), format.magic) != 0)
+    throw InputError(where + ": not a talus " + format.kind + " file (no '" + format.magic +
+                     "' at its start); " + format.fix);
+  ByteReader version(std::string_view(bytes).substr(format.magic.size()),
+                     bytes.size() - format.magic.size(), where, hint);
+  const std::uint32_t v = version.u32("format version");
+  if (v != format.version)
+    throw InputError(where + ": " + format.kind + " format version " + std::to_string(v) +
+                     ", this talus reads " + std::to_string(format.version) + "; " + format.fix);
+  // then the checksum over everything before it
+  if (bytes.size() < head + 8)
+    throw InputError(where + ": the file ends inside its checksum (" + hint + ")");
+  const std::size_t body = bytes.size() - 8;
+  ByteReader tail(std::string_view(bytes).substr(body), 8, where, hint);
+  if (tail.u64("checksum") != fnv1a64(std::string_view(bytes).substr(0, body)))
+    throw InputError(where + ": the checksum does not match (" + hint + ")");
+  ByteReader r(bytes, body, where, hint);
+  for (std::size_t k = 0; k < head; ++k) r.u8("header");
+  return r;
+}
+
 void ByteWriter::u32(std::uint32_t v) {
   for (int b = 0; b < 4; ++b) u8(static_cast<std::uint8_t>(v >> (8 * b)));
 }

@@ -81,6 +81,25 @@ class ByteReader {
   std::string where_, hint_;
 };
 
+// talus's sealed files (the pile cache's piles, the saved states): an 8-byte magic, a u32
+// format version, the body, then the FNV-1a 64 of every byte before it
+struct SealedFormat {
+  std::string magic;      // 8 characters: what the file is ("TALUSPIL")
+  std::uint32_t version;  // the version this talus reads and writes
+  std::string kind;       // in messages: "pile", "state"
+  std::string fix;  // what the user does about a bad file: "delete it, the pile is built again"
+};
+// starts a sealed file: the magic and the version
+void begin_sealed(ByteWriter& w, const SealedFormat& format);
+// ends it: the checksum of every byte written so far
+void end_sealed(ByteWriter& w);
+// a reader over a sealed file's body (after the magic and version, before the checksum), once
+// the magic, the version and the checksum are checked, in that order, so that a file of another
+// kind or version is named as such rather than as corrupt; InputError naming `where`, the defect
+// and format.fix. The reader names a short body the same way
+ByteReader open_sealed(const std::string& bytes, const SealedFormat& format,
+                       const std::string& where);
+
 // a vector of 4-byte-field device structs (cl_float4, TlContact, ...): its length, then its words
 template <class T>
 void write_words(ByteWriter& w, const std::vector<T>& v) {

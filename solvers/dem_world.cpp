@@ -217,9 +217,20 @@ void DemWorld::restore_state(ByteReader& r) {
   if (has_previous) {
     offsets = read_words<int>(r, "particle contact offsets");
     contacts = read_words<TlContact>(r, "particle contacts");
-    if (offsets.size() != n + 1 || offsets.back() != static_cast<int>(contacts.size()))
+    // the offsets index the contacts on the device unchecked: start at 0, never decrease, end
+    // at the count
+    bool ordered = offsets.size() == n + 1 && offsets.front() == 0 &&
+                   offsets.back() == static_cast<int>(contacts.size());
+    for (size_t i = 0; ordered && i < n; ++i) ordered = offsets[i] <= offsets[i + 1];
+    if (!ordered)
       throw InputError(r.where() + ": the saved contacts do not match their offsets (corrupt)");
   }
+  // the largest radius sizes the broad phase's cells: finite, and at least every particle's
+  float largest = 0.0f;
+  for (const cl_float4& p : x) largest = std::max(largest, p.s[3]);
+  if (!(std::isfinite(max_radius) && max_radius >= largest && (n == 0 || max_radius > 0.0)))
+    throw InputError(r.where() + ": the saved largest radius " + std::to_string(max_radius) +
+                     " m does not fit the particles (corrupt)");
   // everything read: the world is changed only now, so a bad file leaves it as it was
   if (n > 0) {
     b.position.upload(x);

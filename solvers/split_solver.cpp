@@ -226,8 +226,9 @@ void SplitSolver::save_state(ByteWriter& w) const {
 }
 
 void SplitSolver::restore_state(ByteReader& r) {
-  // a particle index, then 10 doubles
-  constexpr std::uint64_t kImpulseBytes = 8 * 11;
+  // what save_state writes per impulse: the particle index, the normal, the normal impulse, the
+  // friction and rolling impulses
+  constexpr std::uint64_t kImpulseBytes = 8 * (1 + 3 + 1 + 3 + 3);
   const std::uint64_t n = r.u64("bucket impulses");
   r.need_elements(n, kImpulseBytes, "bucket impulses");
   std::vector<BucketImpulse> previous(n);

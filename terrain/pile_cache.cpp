@@ -17,15 +17,16 @@ namespace talus {
 
 namespace {
 
-// the file's first bytes: what it is, before its version
-constexpr std::array<char, 8> kMagic = {'T', 'A', 'L', 'U', 'S', 'P', 'I', 'L'};
+// the file's magic, version and what a user does about a bad one (the cache treats it as a miss)
+const SealedFormat& pile_format() {
+  static const SealedFormat format{"TALUSPIL", kPileFormatVersion, "pile",
+                                   "delete it, the pile is built again"};
+  return format;
+}
 // bytes per particle in the file: 3 vectors of 3, a quaternion, radius, inverse mass and inertia
 constexpr std::uint64_t kParticleBytes = 8 * (3 * 3 + 4 + 3);
 // bytes per geom: its type, then centre (3), axes (9) and half extents (3)
 constexpr std::uint64_t kGeomBytes = 1 + 8 * (3 + 9 + 3);
-// what a user does about a pile file that cannot be read: the cache treats it as a miss
-constexpr const char* kPileFileHint =
-    "truncated or not a talus pile; delete it, the pile is built again";
 
 void write_vec(ByteWriter& w, const Vec3& v) { w.f64s(v.data(), 3); }
 Vec3 read_vec(ByteReader& r, const char* what) {
@@ -87,8 +88,7 @@ std::string pile_key_bytes(const PileProfile& profile, const FidelityPreset& pre
 
 std::string serialise_pile(const PileBuild& pile, const std::string& key) {
   ByteWriter w;
-  for (char c : kMagic) w.u8(static_cast<std::uint8_t>(c));
-  w.u32(kPileFormatVersion);
+  begin_sealed(w, pile_format());
   w.str(key);
   // the recorded numbers of the build
   w.f64(pile.fill_time);
@@ -128,36 +128,13 @@ std::string serialise_pile(const PileBuild& pile, const std::string& key) {
   for (double v : p.inv_mass) w.f64(v);
   for (double v : p.inv_inertia) w.f64(v);
   // the checksum of everything before it
-  w.u64(fnv1a64(w.bytes()));
+  end_sealed(w);
   return std::move(w.bytes());
 }
 
 PileBuild parse_pile(const std::string& bytes, const std::string& where, std::string* key) {
-  // the header first: a file of another kind or version is named as such, not as corrupt
-  if (bytes.size() < kMagic.size() ||
-      bytes.compare(0, kMagic.size(), kMagic.data(), kMagic.size()) != 0)
-    throw InputError(where + ": not a talus pile file (no 'TALUSPIL' at its start)");
-  ByteReader head(bytes, bytes.size(), where, kPileFileHint);
-  for (std::size_t k = 0; k < kMagic.size(); ++k) head.u8("magic");
-  const std::uint32_t version = head.u32("format version");
-  if (version != kPileFormatVersion)
-    throw InputError(where + ": pile format version " + std::to_string(version) +
-                     ", this talus reads " + std::to_string(kPileFormatVersion) +
-                     "; delete the file, the pile is built again");
-  if (bytes.size() < kMagic.size() + 4 + 8)
-    throw InputError(
-        where +
-        ": the file ends inside its checksum (truncated); delete it, the pile is built again");
-  const std::size_t body = bytes.size() - 8;
-  ByteReader tail(std::string_view(bytes).substr(body), 8, where, kPileFileHint);
-  if (tail.u64("checksum") != fnv1a64(std::string_view(bytes).substr(0, body)))
-    throw InputError(
-        where +
-        ": the checksum does not match (truncated or corrupt); delete it, the pile is built again");
-
-  ByteReader r(bytes, body, where, kPileFileHint);
-  for (std::size_t k = 0; k < kMagic.size(); ++k) r.u8("magic");
-  r.u32("format version");
+  // magic, version and checksum checked before anything is read
+  ByteReader r = open_sealed(bytes, pile_format(), where);
   std::string stored_key = r.str("key");
   PileBuild pile;
   pile.fill_time = r.f64("numbers");

@@ -263,8 +263,12 @@ void MultibodySystem::save_state(ByteWriter& w) const {
   w.f64s(warm_lambda_.data(), static_cast<std::size_t>(warm_lambda_.size()));
   w.u64(warm_state_.size());
   for (const RowState s : warm_state_) w.u8(static_cast<std::uint8_t>(s));
+  // each constraint under its name, so a file of a build that ordered them otherwise is refused
   w.u64(constraints_.size());
-  for (const auto& c : constraints_) c->save_state(w);
+  for (const auto& c : constraints_) {
+    w.tag(c->name);
+    c->save_state(w);
+  }
 }
 
 void MultibodySystem::restore_state(ByteReader& r) {
@@ -305,7 +309,10 @@ void MultibodySystem::restore_state(ByteReader& r) {
     throw InputError(r.where() + ": the saved machine has " + std::to_string(constraints) +
                      " constraints, this one " + std::to_string(constraints_.size()) +
                      "; restore a state into a simulation made with the same machine");
-  for (const auto& c : constraints_) c->restore_state(r);
+  for (const auto& c : constraints_) {
+    r.expect(c->name);
+    c->restore_state(r);
+  }
   // nothing of a step in progress
   for (auto& e : external_) e.setZero();
   assembled_ = solved_ = false;

@@ -25,7 +25,10 @@ import numpy as np
 import gymnasium as gym
 from gymnasium import spaces
 
-from . import CHANNELS, Simulation
+from . import CHANNELS, Error, Simulation
+
+# the most piles whose fill start a reset keeps (Simulation.state bytes, one per pile seed)
+MAX_SAVED_STARTS = 16
 
 # the paper's productivity scale (§7: best M/T 366-416 kg/s) [t/s]
 DEFAULT_TIME_COST = 0.4
@@ -103,8 +106,13 @@ class BucketFillingEnv(gym.Env):
             raise RuntimeError(f"BucketFillingEnv: the loading cycle never reached the pile "
                                f"(phase {self.sim.cycle_phase!r} at t = {self.sim.time:.2f} s); "
                                "give a longer max_cycle_time or a shorter approach")
-        if self.level.upper().startswith("D"):
+        try:
             self._fill_states[seed] = self.sim.state()
+        except Error:
+            pass  # a type-G level: its state cannot be saved yet, each reset drives the approach
+        # the oldest start goes first beyond the cap (a D50 state is tens of megabytes)
+        while len(self._fill_states) > MAX_SAVED_STARTS:
+            del self._fill_states[next(iter(self._fill_states))]
 
     def _observation(self):
         return self.sim.sensors().astype(np.float32)

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "digging/saved_state.hpp"
 #include "embed/talus.hpp"
 
 namespace talus {
@@ -219,6 +220,18 @@ TEST(SavedState, BadStatesAreOneClearErrorAndChangeNothing) {
   std::string version = good;
   version[8] = 99;
   expect_refused(version, "state format version 99");
+
+  // a payload that passes the envelope and the key but fails inside (a file of a build whose
+  // layout changed under the same format version): the parts read into the run until the cut,
+  // then everything is put back from the copy taken first
+  std::string payload;
+  SavedStateHeader header = open_state(good, "good", &payload);
+  expect_refused(seal_state(header, payload.substr(0, payload.size() / 2)), "ends inside");
+  std::string renamed = payload;
+  const std::size_t tyre = renamed.find("tyre");
+  ASSERT_NE(tyre, std::string::npos) << "the constraints' names are in the payload";
+  renamed[tyre] = 'T';
+  expect_refused(seal_state(header, renamed), "expected the section");
 
   // a state of another simulation names what differs
   SimulationOptions other = o;
