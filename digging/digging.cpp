@@ -246,21 +246,18 @@ void DiggingSimulation::multiscale_step() {
 }
 
 namespace {
-// what a saved state cannot hold yet: the type-G terrain and the effects' own state
-void check_savable(bool multiscale, const vehicle::EffectSet& effects, const char* what) {
+// what a saved state cannot hold yet: the type-G terrain (a plug-in effect's state is refused by
+// the effect set itself)
+void check_savable(bool multiscale, const char* what) {
   if (multiscale)
     throw Error(std::string(what) +
                 ": a type-G run's state (voxels, zone particles, aggregate) cannot be saved yet "
                 "(issue 16); save at a type-D level (D400 to D50) or the machine alone");
-  if (!effects.empty())
-    throw Error(std::string(what) +
-                ": the state of model extensions (effects) cannot be saved yet (issue 16); "
-                "save a run without effects");
 }
 }  // namespace
 
 void DiggingSimulation::save_state(ByteWriter& w) const {
-  check_savable(terrain_ != nullptr, effects_, "saving a digging state");
+  check_savable(terrain_ != nullptr, "saving a digging state");
   w.tag("dig");
   w.f64(time_);
   w.i64(steps_done_);
@@ -282,11 +279,13 @@ void DiggingSimulation::save_state(ByteWriter& w) const {
   dem_->save_state(w);
   w.tag("bucket contacts");
   split_->save_state(w);
+  w.tag("effects");
+  effects_.save_state(w);
   w.tag("end");
 }
 
 void DiggingSimulation::restore_state(ByteReader& r) {
-  check_savable(terrain_ != nullptr, effects_, "restoring a digging state");
+  check_savable(terrain_ != nullptr, "restoring a digging state");
   r.expect("dig");
   const double time = r.f64("dig clock");
   const std::int64_t steps_done = r.i64("dig clock");
@@ -317,6 +316,8 @@ void DiggingSimulation::restore_state(ByteReader& r) {
   dem_->restore_state(r);
   r.expect("bucket contacts");
   split_->restore_state(r);
+  r.expect("effects");
+  effects_.restore_state(r);
   r.expect("end");
 }
 

@@ -125,12 +125,13 @@ class DiggingSimulation {
 
   // the state between two steps (issue 16, docs/embedding.md "Saved states"): the machine (bodies,
   // warm start, constraints), the particles with last step's contacts and impulses, the bucket
-  // contacts' impulses, the clock, the sensor log, what the sensors read and the coupling
-  // counters. restore_state reads it into a simulation made with the same scenario, level, pile
-  // and options, which then steps on bit-identically to the one saved (same device and work-group
-  // size). What the constructor sets (scenario, level, material, settings) is not saved; the
-  // caller checks that it is the same (embed/talus.cpp keys the file by it). talus::Error ("not
-  // yet") at a type-G level and with effects: their state is not saved yet
+  // contacts' impulses, the clock, the sensor log, what the sensors read, the coupling counters
+  // and the effects' memories (vehicle::EffectSet::save_state). restore_state reads it into a
+  // simulation made with the same scenario, level, pile and options, which then steps on
+  // bit-identically to the one saved (same device and work-group size). What the constructor sets
+  // (scenario, level, material, settings) is not saved; the caller checks that it is the same
+  // (embed/talus.cpp keys the file by it). talus::Error ("not yet") at a type-G level and with a
+  // plug-in's effect: their state is not saved yet
   void save_state(ByteWriter& w) const;
   void restore_state(ByteReader& r);
 

@@ -172,6 +172,10 @@ std::string state_key(const SimulationOptions& options, const vehicle::Scenario&
     key << "seed=" << options.seed << "\n";
   }
   key << "loading_cycle=" << (options.loading_cycle ? 1 : 0) << "\n";
+  // the model extensions as given, and the plug-ins by content
+  for (const std::string& effect : options.effects) key << "effect=" << effect << "\n";
+  for (const std::string& plugin : options.effect_plugins)
+    key << "effect_plugin=" << content_id(plugin) << "\n";
   if (options.loading_cycle)
     key << "cycle=" << options.cycle_approach << " m, " << options.cycle_max_time << " s, s "
         << options.cycle_s << "\n";
@@ -229,18 +233,7 @@ struct Simulation::Impl {
     time = t_end;
   }
   // the state between steps as a payload (digging/saved_state.hpp has the envelope)
-  // the machine alone with effects cannot save or restore its state: the effects' own (lags,
-  // delay lines, plug-ins' opaque state) is not saved yet. The one check for both directions
-  // (a dig checks its own, DiggingSimulation::save_state)
-  void check_savable(const char* what) const {
-    if (!dig() && !effects->set.empty())
-      throw Error(std::string(what) +
-                  ": the state of model extensions (SimulationOptions::effects) cannot be saved "
-                  "or restored yet (issue 16); use a run without effects");
-  }
-  // the state between steps as a payload (digging/saved_state.hpp has the envelope)
   std::string save() const {
-    check_savable("Simulation::state");
     ByteWriter w;
     if (cycle) {
       cycle->save_state(w);
@@ -254,6 +247,8 @@ struct Simulation::Impl {
       vehicle::write_sample(w, sensors);
       log.save_state(w);
       loader->system().save_state(w);
+      w.tag("effects");
+      effects->set.save_state(w);
       w.tag("end");
     }
     return std::move(w.bytes());
@@ -273,6 +268,8 @@ struct Simulation::Impl {
       sensors = vehicle::read_sample(r, "sensors");
       log.restore_state(r);
       loader->system().restore_state(r);
+      r.expect("effects");
+      effects->set.restore_state(r);
       r.expect("end");
       time = t;
       steps_done = static_cast<long>(steps);
@@ -286,7 +283,6 @@ struct Simulation::Impl {
   // changed without a new format version) is undone from a copy of the state taken first, so a
   // bad file never leaves the run half-restored
   void restore(const std::string& bytes, const std::string& where) {
-    check_savable("Simulation::set_state");
     std::string payload;
     const SavedStateHeader header = open_state(bytes, where, &payload);
     if (header.key != state_key)

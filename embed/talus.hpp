@@ -150,7 +150,8 @@ struct ParticleState {
 /// on the same build and device (docs/embedding.md, "Saved states").
 ///
 /// Model extensions (SimulationOptions::effects) change the machine and its sensors as `talus run
-/// --effect` does. Not in this version: saving a type-G level's state or a run with effects
+/// --effect` does. Not in this version: saving a type-G level's state or a run with a plug-in's
+/// effect
 /// (docs/embedding.md, "Not yet").
 class Simulation {
  public:
@@ -222,7 +223,8 @@ class Simulation {
   /// saves the whole state between two steps to `path`, written atomically: the machine (bodies,
   /// the direct solver's warm start, joints and contacts), the particles with last step's
   /// contacts and their impulses (the next warm start), the bucket contacts' impulses, the clock,
-  /// the 100 Hz sensor log, what the sensors read now and a loading cycle's phase. The file is
+  /// the 100 Hz sensor log, what the sensors read now, the effects' memories (lags, delay lines)
+  /// and a loading cycle's phase. The file is
   /// keyed by what made this simulation (scenario and machine files by content, level, seed,
   /// loading-cycle options, particle count) and closed by a checksum. talus::Error naming the
   /// path when it cannot be written, and ("not yet") at a type-G level

@@ -253,6 +253,37 @@ SensorSample EffectSet::sensors(double h, const SensorSample& truth) {
   return s;
 }
 
+void EffectSet::save_state(ByteWriter& w) const {
+  if (!reset_done_) throw Error("effects: save_state() before the set was reset on its machine");
+  for (const auto& e : effects_)
+    if (!e->savable())
+      throw Error("effects: the state of effect '" + e->name() +
+                  "' (a plug-in's, opaque to talus) cannot be saved yet (issue 16); save a run "
+                  "without it");
+  w.u64(effects_.size());
+  for (const auto& e : effects_) {
+    w.tag(e->name());
+    e->save_state(w);
+  }
+  write_sample(w, previous_);
+}
+
+void EffectSet::restore_state(ByteReader& r) {
+  if (!reset_done_) throw Error("effects: restore_state() before the set was reset on its machine");
+  const std::uint64_t n = r.u64("effects");
+  if (n != effects_.size())
+    throw InputError(r.where() + ": the saved run has " + std::to_string(n) +
+                     " effects, this one " + std::to_string(effects_.size()) +
+                     "; restore into a run with the same effects");
+  for (const auto& e : effects_) {
+    if (!e->savable())
+      throw Error("effects: the state of effect '" + e->name() + "' cannot be restored yet");
+    r.expect(e->name());
+    e->restore_state(r);
+  }
+  previous_ = read_sample(r, "effects' previous sample");
+}
+
 SensorSample start_with_effects(WheelLoader& loader, EffectSet& effects, SensorLog& log) {
   effects.reset(loader, 0.0);
   const SensorSample reported = effects.sensors(0.0, read_sensors(loader, 0.0));

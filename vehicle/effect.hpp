@@ -125,6 +125,12 @@ class Effect {
   }
   // the soil's properties, once before a run with particles
   virtual void on_soil(SoilProperties& soil) { (void)soil; }
+  // what it carries from one step to the next, for a saved state (digging/saved_state): nothing
+  // by default; an effect with a memory (a lag, a delay line) writes it and reads it back. One
+  // whose memory talus cannot see (a plug-in's, behind the C ABI) is not savable
+  virtual bool savable() const { return true; }
+  virtual void save_state(ByteWriter& w) const { (void)w; }
+  virtual void restore_state(ByteReader& r) { (void)r; }
   // does it act only through on_soil (so a run without particles cannot show it)?
   virtual bool soil_only() const { return false; }
   // the channels it changes when it acts only on what fixed sensors report (its signature, which
@@ -174,6 +180,12 @@ class EffectSet {
   // follows: P = f_tr v + f_l ḋ_l + f_t ḋ_t of the readings
   SensorSample sensors(double h, const SensorSample& truth);
   const SensorSample& previous() const { return previous_; }
+  // the set's state between steps, for a saved state: each effect's under its name, then the true
+  // previous sample (the machine's own limits are the reset's, the same in a set reset on the same
+  // machine). talus::Error naming an effect that is not savable (a plug-in's); restore_state
+  // reads into a set of the same effects, reset on its machine (InputError otherwise)
+  void save_state(ByteWriter& w) const;
+  void restore_state(ByteReader& r);
 
  private:
   std::vector<std::unique_ptr<Effect>> effects_;

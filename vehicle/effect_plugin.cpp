@@ -100,6 +100,8 @@ int add_wrench_callback(void* host, const char* body, const double force[3], con
 // an effect whose hooks live in a plug-in
 class PluginEffect : public Effect {
  public:
+  // its state lives behind the C ABI, which has no way to hand it over yet
+  bool savable() const override { return false; }
   PluginEffect(const talus_effect_type& type, std::string file, std::shared_ptr<void> handle)
       : Effect(type.name, text_or_empty(type.summary)), type_(type), file_(std::move(file)), handle_(std::move(handle)) {
     for (int i = 0; i < type.parameter_count; ++i) {

@@ -136,6 +136,14 @@ class HydraulicLag : public Effect {
     u.lift = lift_;
     u.tilt = tilt_;
   }
+  void save_state(ByteWriter& w) const override {
+    w.f64(lift_);
+    w.f64(tilt_);
+  }
+  void restore_state(ByteReader& r) override {
+    lift_ = r.f64("hydraulic lag");
+    tilt_ = r.f64("hydraulic lag");
+  }
 
  private:
   int tau_ = 0;
@@ -317,6 +325,26 @@ class SensorDelay : public Effect {
     }
     s.*field_ = value_then;
     if (rate_) s.*rate_ = rate_then;
+  }
+  void save_state(ByteWriter& w) const override {
+    w.u64(past_.size());
+    for (const Past& p : past_) {
+      w.f64(p.t);
+      w.f64(p.value);
+      w.f64(p.rate);
+    }
+  }
+  void restore_state(ByteReader& r) override {
+    const std::uint64_t n = r.u64("sensor delay");
+    r.need_elements(n, 3 * 8, "sensor delay");
+    past_.clear();
+    for (std::uint64_t k = 0; k < n; ++k) {
+      Past p{};
+      p.t = r.f64("sensor delay");
+      p.value = r.f64("sensor delay");
+      p.rate = r.f64("sensor delay");
+      past_.push_back(p);
+    }
   }
 
  private:

@@ -97,6 +97,22 @@ class DelayLine {
     past_.emplace_back(t, value);
     while (past_.size() > 1 && past_[1].first <= t - kCorrectionDelays.back()) past_.pop_front();
   }
+  void save_state(ByteWriter& w) const {
+    w.u64(past_.size());
+    for (const auto& [t, v] : past_) {
+      w.f64(t);
+      w.f64(v);
+    }
+  }
+  void restore_state(ByteReader& r) {
+    const std::uint64_t n = r.u64("delay line");
+    r.need_elements(n, 2 * 8, "delay line");
+    past_.clear();
+    for (std::uint64_t k = 0; k < n; ++k) {
+      const double t = r.f64("delay line");
+      past_.emplace_back(t, r.f64("delay line"));
+    }
+  }
   double at(double when) const {
     if (past_.empty()) return 0.0;
     if (when <= past_.front().first) return past_.front().second;
@@ -166,6 +182,9 @@ class LearnedCorrection : public Effect {
       x.a_delayed[i] = line_.at(t - kCorrectionDelays[i]);
   }
   void clear_history() { line_.clear(); }
+  // the delay line is the memory both kinds carry between steps
+  void save_state(ByteWriter& w) const override { line_.save_state(w); }
+  void restore_state(ByteReader& r) override { line_.restore_state(r); }
   // the pushed quantity at an earlier time (the delay line's interpolation)
   double history_at(double when) const { return line_.at(when); }
 
@@ -213,6 +232,19 @@ class LearnedActuatorCorrection : public LearnedCorrection {
     x.power = power_;
     delay(c.t, x);
     target += correction(x);
+  }
+  // the delay line, then the lagged force and power
+  void save_state(ByteWriter& w) const override {
+    LearnedCorrection::save_state(w);
+    w.u8(lagged_ ? 1 : 0);
+    w.f64(force_);
+    w.f64(power_);
+  }
+  void restore_state(ByteReader& r) override {
+    LearnedCorrection::restore_state(r);
+    lagged_ = r.u8("actuator correction") != 0;
+    force_ = r.f64("actuator correction");
+    power_ = r.f64("actuator correction");
   }
 
  private:

@@ -150,6 +150,31 @@ TEST(SavedState, MachineAloneContinuesBitIdentically) {
   expect_bit_identical_continuation(o, 150, 250);
 }
 
+// effects with a memory (a lag, a delay line, a learned correction's delay line and force lag)
+// are saved with the run: the machine alone and a dig continue bit for bit with them
+TEST(SavedState, EffectsMemoriesContinueBitIdentically) {
+  SimulationOptions o;
+  o.scenario = "load-carry";
+  o.effects = {"hydraulic_lag:time_constant=0.3", "sensor_delay:channel=f_lift,delay=0.2",
+               "learned_actuator_correction:actuator=lift,delay_02=0.5,force=-1e-8"};
+  expect_bit_identical_continuation(o, 300, 300);
+  SimulationOptions dig;
+  dig.scenario = "hd27";
+  dig.level = "D400";
+  dig.effects = {"engine_power_sharing", "hydraulic_lag"};
+  expect_bit_identical_continuation(dig, 100, 40);
+  // a state saved without the effects is another simulation's
+  SimulationOptions plain = o;
+  plain.effects.clear();
+  Simulation with(o);
+  try {
+    with.set_state(Simulation(plain).state());
+    ADD_FAILURE() << "restored a state without effects into a run with them";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("effect=hydraulic_lag"), std::string::npos) << e.what();
+  }
+}
+
 // the loading cycle at D400: saved in the approach, continued through the change to the fill
 TEST(SavedState, LoadingCycleContinuesBitIdentically) {
   SimulationOptions o;
