@@ -63,12 +63,28 @@ PileScan scan_scenario_pile(const PileBuild& pile, const PileProfile& placed,
   return scan_pile(pile.particles, placed, preset.diameter);
 }
 
+std::vector<vehicle::RigidPlane> container_walls(const std::vector<StaticGeom>& geoms) {
+  std::vector<vehicle::RigidPlane> walls;
+  for (const StaticGeom& g : geoms) {
+    if (g.type != StaticGeom::Type::Plane) continue;
+    const Vec3 n = g.axes.col(0).normalized();
+    // a wall stands upright: its normal lies (nearly) in the horizontal plane; the ground does not
+    if (std::abs(n.z()) > 0.5) continue;
+    walls.push_back({n, n.dot(g.centre)});
+  }
+  return walls;
+}
+
 DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scenario, const FidelityPreset& preset,
                                      const PileBuild& pile, const DiggingOptions& options,
                                      vehicle::EffectSet* effects)
     : dev_(dev), scenario_(scenario), preset_(preset), log_(100.0), effects_(effects ? *effects : no_effects_) {
   if (!scenario.pile) throw InputError(scenario.path + ": scenario '" + scenario.name + "' has no pile (\"pile\": false)");
   loader_ = std::make_unique<vehicle::WheelLoader>(vehicle::machine_file(scenario), scenario.payload);
+  // the pile's container walls stop the bucket as they stop the gravel (the ground has its own
+  // contact): without them a cycle that drives on after its fill takes the bucket through the
+  // rear wall, which holds the load back (docs/multiscale.md)
+  loader_->add_bucket_walls(container_walls(pile.geoms));
 
   // the machine settles on its tyres first, controls at rest
   const double h = preset.dt;

@@ -52,6 +52,10 @@ PileProfile scenario_pile_profile(const vehicle::Scenario& scenario);
 // the bucket as the type-G terrain sees it: its profile frame (tip) and that point's twist
 KinematicBucket kinematic_bucket(const vehicle::WheelLoader& loader);
 
+// the upright walls among a pile's static planes (terrain/pile's container: side and rear walls;
+// not the ground), as rigid planes for the machine's bucket
+std::vector<vehicle::RigidPlane> container_walls(const std::vector<StaticGeom>& geoms);
+
 // the scenario's pile at the level, built and settled on `placed` (scenario_pile_profile):
 // particles, container (ground, sides, rear wall) and the broad-phase bounds, which also cover
 // where the machine carries gravel (back to 6 m in front of the toe, up to 5 m high). Through the

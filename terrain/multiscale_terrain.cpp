@@ -115,6 +115,13 @@ MultiscaleTerrain::MultiscaleTerrain(Device& dev, const PileProfile& profile,
   tool.omega = start.omega;
   tool.material = options.bucket_material;
   tools_ = std::make_unique<ToolWorld>(dev, *dem_, std::vector<Tool>{tool}, embree);
+  // the zone where the bucket starts, so that what reads the last step's zone before the first
+  // step (the aggregate) sees the real cutting edge and not an empty default: a zone of zero
+  // width gave the aggregate's interfaces zero stiffness, and the machine's first step lurched
+  // back at up to 1 m/s (docs/multiscale.md)
+  const std::vector<double> surface = voxels_.surface_heights();
+  last_.zone =
+      predict_active_zone(voxels_, bucket_edges(bucket_mesh_, start), options_.soil, &surface);
 }
 
 MultiscaleTerrain::~MultiscaleTerrain() = default;

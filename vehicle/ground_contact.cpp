@@ -1,39 +1,80 @@
 #include "vehicle/ground_contact.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
+#include <numeric>
+#include <string>
+
+#include "host/error.hpp"
 
 namespace talus::vehicle {
 
 namespace {
-// rows per point: normal, friction along x, friction along y
+// rows per point: normal, friction along the plane's two tangents
 constexpr int kRowsPerPoint = 3;
 }  // namespace
 
-void PointGroundContact::add_rows(const std::vector<RigidBody>& bodies, std::vector<ConstraintRow>& rows) {
-  const BodyFrame ground{kWorld, Vec3::Zero(), Mat3::Identity()};
+PointGroundContact::PointGroundContact(int body, std::vector<Vec3> points,
+                                       GroundContactParameters p)
+    : PointGroundContact(body, std::move(points), p, RigidPlane{Vec3::UnitZ(), p.ground_height},
+                         0) {}
+
+PointGroundContact::PointGroundContact(int body, std::vector<Vec3> points,
+                                       GroundContactParameters p, const RigidPlane& plane,
+                                       int max_points)
+    : body_(body), points_(std::move(points)), p_(p), plane_(plane) {
+  if (points_.empty()) throw Error("point-plane contact: no points");
+  if (!(p_.stiffness > 0.0 && std::isfinite(p_.stiffness)))
+    throw Error("point-plane contact: stiffness " + std::to_string(p_.stiffness) +
+                " N/m is not a positive finite number");
+  if (!(std::abs(plane_.normal.norm() - 1.0) < 1e-9))
+    throw Error("point-plane contact: the plane's normal is not a unit vector");
+  const int n = static_cast<int>(points_.size());
+  rows_points_ = max_points > 0 ? std::min(max_points, n) : n;
+  // world x and y along the ground (frame_from_axis of +z is the identity)
+  frame_ = frame_from_axis(plane_.normal);
+}
+
+void PointGroundContact::add_rows(const std::vector<RigidBody>& bodies,
+                                  std::vector<ConstraintRow>& rows) {
+  const BodyFrame world{kWorld, Vec3::Zero(), Mat3::Identity()};
   const BodyFrame body{body_, Vec3::Zero(), Mat3::Identity()};
+  // every candidate's world position and gap g = n·p - offset
+  const int n = static_cast<int>(points_.size());
+  std::vector<Vec3> at(n);
+  std::vector<double> gap(n);
+  for (int k = 0; k < n; ++k) {
+    at[k] = bodies.at(body_).point_to_world(points_[k]);
+    gap[k] = plane_.normal.dot(at[k]) - plane_.offset;
+  }
+  // the rows' points: all of them in order, or the nearest rows_points_ (by gap, then index)
+  std::vector<int> chosen(n);
+  std::iota(chosen.begin(), chosen.end(), 0);
+  if (rows_points_ < n) {
+    std::stable_sort(chosen.begin(), chosen.end(), [&](int a, int b) { return gap[a] < gap[b]; });
+    chosen.resize(rows_points_);
+  }
   clearance_ = std::numeric_limits<double>::infinity();
-  for (size_t k = 0; k < points_.size(); ++k) {
-    const Vec3 p = bodies.at(body_).point_to_world(points_[k]);
-    const double gap = p.z() - p_.ground_height;
-    clearance_ = std::min(clearance_, gap);
-    // normal: gap g = z - ground, pushed apart only
-    ConstraintRow normal = point_row(bodies, ground, body, p, p, Vec3::UnitZ());
+  for (int k : chosen) clearance_ = std::min(clearance_, gap[k]);
+  for (size_t c = 0; c < chosen.size(); ++c) {
+    const Vec3& p = at[chosen[c]];
+    // normal: the gap, pushed apart only
+    ConstraintRow normal = point_row(bodies, world, body, p, p, frame_.col(2));
     normal.kind = RowKind::holonomic;
     normal.unit = RowUnit::length;
-    normal.violation = gap;
+    normal.violation = gap[chosen[c]];
     normal.compliance = 1.0 / p_.stiffness;
     normal.damping_time = p_.damping_time;
     normal.force_min = 0.0;
     rows.push_back(normal);
-    // friction along the ground's axes, bounded by this point's normal row
-    for (const Vec3& t : {Vec3(Vec3::UnitX()), Vec3(Vec3::UnitY())}) {
-      ConstraintRow f = point_row(bodies, ground, body, p, p, t);
+    // friction along the plane, bounded by this point's normal row
+    for (int t = 0; t < 2; ++t) {
+      ConstraintRow f = point_row(bodies, world, body, p, p, frame_.col(t));
       f.kind = RowKind::velocity;
       f.target_speed = 0.0;
       f.compliance = p_.viscous_compliance;
-      f.friction_normal = static_cast<int>(kRowsPerPoint * k);
+      f.friction_normal = static_cast<int>(kRowsPerPoint * c);
       f.friction_coefficient = p_.friction;
       rows.push_back(f);
     }
@@ -43,6 +84,14 @@ void PointGroundContact::add_rows(const std::vector<RigidBody>& bodies, std::vec
 double PointGroundContact::normal_force() const {
   double f = 0.0;
   for (size_t k = 0; k < forces_.size(); k += kRowsPerPoint) f += forces_[k];
+  return f;
+}
+
+Vec3 PointGroundContact::force_on_body() const {
+  Vec3 f = Vec3::Zero();
+  for (size_t k = 0; k + 2 < forces_.size(); k += kRowsPerPoint)
+    f += forces_[k] * frame_.col(2) + forces_[k + 1] * frame_.col(0) +
+         forces_[k + 2] * frame_.col(1);
   return f;
 }
 

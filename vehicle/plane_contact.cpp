@@ -1,5 +1,6 @@
 #include "vehicle/plane_contact.hpp"
 
+#include <cmath>
 #include <string>
 
 #include "host/error.hpp"
@@ -13,6 +14,16 @@ PlaneContact::PlaneContact(int body_a, int body_b, int points, PlaneContactParam
     : a_(body_a), b_(body_b), points_(points), p_(p) {
   if (points < 1) throw Error("plane contact: a patch needs at least one point");
   g_.points.assign(points, Vec3::Zero());
+  set_parameters(p);
+}
+
+void PlaneContact::set_parameters(const PlaneContactParameters& p) {
+  // the rows' compliance is points / stiffness: a stiffness of zero (or NaN) would put an
+  // infinite compliance into the machine's system, active or not, and corrupt its solve
+  if (!(p.stiffness > 0.0 && std::isfinite(p.stiffness)))
+    throw Error("plane contact '" + name + "': stiffness " + std::to_string(p.stiffness) +
+                " N/m is not a positive finite number");
+  p_ = p;
 }
 
 void PlaneContact::set_geometry(const PlaneContactGeometry& g) {

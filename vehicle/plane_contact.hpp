@@ -35,12 +35,14 @@ struct PlaneContactParameters {
 
 class PlaneContact : public Constraint {
  public:
-  // body indices of the system, or kWorld for either side; a patch of `points` points (at least 1)
+  // body indices of the system, or kWorld for either side; a patch of `points` points (at least 1);
+  // throws talus::Error as set_parameters
   PlaneContact(int body_a, int body_b, int points, PlaneContactParameters p);
   // throws talus::Error when the geometry has another number of points than the contact
   void set_geometry(const PlaneContactGeometry& g);
   int points() const { return points_; }
-  void set_parameters(const PlaneContactParameters& p) { p_ = p; }
+  // throws talus::Error for a stiffness that is not positive and finite
+  void set_parameters(const PlaneContactParameters& p);
   const PlaneContactGeometry& geometry() const { return g_; }
   const PlaneContactParameters& parameters() const { return p_; }
   void add_rows(const std::vector<RigidBody>& bodies, std::vector<ConstraintRow>& rows) override;

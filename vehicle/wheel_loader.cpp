@@ -256,6 +256,7 @@ void WheelLoader::add_driveline(const MachineDescription& m,
   bucket_ground_ = &system_.add_constraint(
       std::make_unique<PointGroundContact>(bucket_, corners, m.bucket_ground));
   bucket_ground_->name = "bucket_ground";
+  bucket_contact_ = m.bucket_ground;
   driveline_ = &system_.add_constraint(std::make_unique<Driveline>(w, frames, Vec3::UnitY(), dp));
   driveline_->name = "driveline";
   front_frame_ = frames[0];
@@ -281,6 +282,19 @@ HingeJoint& WheelLoader::hinge(const std::string& name) const {
 
 Vec3 WheelLoader::bucket_mesh_vertex_world(int i) const {
   return system_.body(bucket_).point_to_world(profile_to_body_ * mesh_.vertices.at(i));
+}
+
+void WheelLoader::add_bucket_walls(const std::vector<RigidPlane>& walls) {
+  // the hull's candidates: every vertex of the bucket's mesh, in the bucket body's frame
+  std::vector<Vec3> hull;
+  hull.reserve(mesh_.vertices.size());
+  for (const Vec3& v : mesh_.vertices) hull.push_back(profile_to_body_ * v);
+  for (const RigidPlane& wall : walls) {
+    auto& c = system_.add_constraint(
+        std::make_unique<PointGroundContact>(bucket_, hull, bucket_contact_, wall, kWallPoints));
+    c.name = "bucket_wall_" + std::to_string(bucket_walls_.size());
+    bucket_walls_.push_back(&c);
+  }
 }
 
 Vec3 WheelLoader::bucket_tip_world() const { return system_.body(bucket_).point_to_world(tip_local_); }

@@ -77,6 +77,17 @@ class WheelLoader {
   const std::array<TyreContact*, 4>& tyres() const { return tyres_; }
   // the bucket's bottom corners (cutting-edge and heel ends) against the flat ground
   const PointGroundContact& bucket_ground() const { return *bucket_ground_; }
+  // rigid walls for the bucket (a pile's container): each a contact of the bucket's hull (its
+  // mesh's vertices) with the plane, rows for the kWallPoints of them nearest the wall, with the
+  // machine's bucket_ground parameters (the same steel on the same gravel-covered rigid surface).
+  // Named "bucket_wall_0", "bucket_wall_1", ... in the order given; add them before the
+  // system's first step that should see them. Only the bucket meets them: it leads the machine
+  // into a pile (the tyres and frame stay behind it on the straight paths of the scenarios)
+  void add_bucket_walls(const std::vector<RigidPlane>& walls);
+  const std::vector<PointGroundContact*>& bucket_walls() const { return bucket_walls_; }
+  // rows per wall: four points hold a face of the hull flat against a wall, as the ground's four
+  // corners do
+  static constexpr int kWallPoints = 4;
   const CylinderSpec& lift_spec() const { return lift_spec_; }
   const CylinderSpec& tilt_spec() const { return tilt_spec_; }
   HingeJoint& hinge(const std::string& name) const;
@@ -108,6 +119,8 @@ class WheelLoader {
   Driveline* driveline_ = nullptr;
   std::array<TyreContact*, 4> tyres_{};
   PointGroundContact* bucket_ground_ = nullptr;
+  std::vector<PointGroundContact*> bucket_walls_;
+  GroundContactParameters bucket_contact_;  // the machine file's bucket_ground
   std::vector<Joint*> joints_;
   std::vector<std::pair<std::string, HingeJoint*>> hinges_;
   CylinderSpec lift_spec_, tilt_spec_;

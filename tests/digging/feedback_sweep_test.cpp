@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include "tests/solvers/dem_test_util.hpp"
+#include "vehicle/wheel_loader.hpp"
 
 namespace talus {
 namespace {
@@ -103,6 +104,69 @@ TEST(FeedbackSweep, ACallerCommandingTheFillWithTheControllersTargetsGivesTheSam
   EXPECT_EQ(mine.work_J, own.work_J);
   EXPECT_EQ(mine.breakout_s, own.breakout_s);
   EXPECT_EQ(run.cycle().broke_out(), own.breakout_s - own.fill_start_s <= 15.0);
+}
+
+// the s = 0.35 cycle at G400 drives on over the crest after its fill until its bucket meets the
+// pile's rear wall: the wall stops the bucket (it used to pass through while the wall held its load
+// back, and the cycle ended with 0 kg after 708 kJ; docs/multiscale.md), and the cycle ends with
+// its load (~4.5 t measured)
+TEST(FeedbackSweep, ABucketDrivenIntoThePilesRearWallStopsThereWithItsLoad) {
+  const FidelityPreset& g400 = level_preset("G400");
+  const DiggingOptions options;
+  const CyclePile cycle = build_cycle_pile(test::shared_device(), vehicle::load_scenario("fb35"),
+                                           5.0, 40.0, g400, options, nullptr);
+  const double wall_x = scenario_pile_profile(cycle.scenario).rear_wall_x;
+  LoadingCycle run(test::shared_device(), cycle, g400, options,
+                   vehicle::gains_on_search_line(0.35));
+  double deepest = -INFINITY, most_force = 0.0;
+  while (!run.done()) {
+    run.step();
+    const vehicle::WheelLoader& loader = run.simulation().loader();
+    for (int v = 0; v < static_cast<int>(loader.bucket_mesh().vertices.size()); ++v)
+      deepest = std::max(deepest, loader.bucket_mesh_vertex_world(v).x() - wall_x);
+    for (const vehicle::PointGroundContact* w : loader.bucket_walls())
+      most_force = std::max(most_force, w->normal_force());
+  }
+  const CycleResult r = run.result(0.35);
+  std::printf(
+      "[ measured ] FB35-G400 s = 0.35: %.0f kg in %.1f s, bucket at most %.4f m past the rear "
+      "wall, largest wall force %.0f kN\n",
+      r.loaded_mass_kg, r.cycle_time_s, deepest, 1e-3 * most_force);
+  EXPECT_TRUE(r.completed);
+  EXPECT_GT(most_force, 0.0);  // it did reach the wall
+  // the machine (17 t at 2.2 m/s) meets the wall within a 50 ms step and the stiff rows push the
+  // bucket out over their damping time: about a centimetre in at the worst (before: 3 m through)
+  EXPECT_LT(deepest, 0.03);
+  EXPECT_GT(r.loaded_mass_kg, 3000.0);
+}
+
+// before the terrain's first step the aggregate's interfaces stood on an empty zone of zero width:
+// zero stiffness, an infinite compliance in the machine's system, and the first step of every
+// type-G run pushed the machine back at up to 1 m/s. Now the first step of the approach is the
+// machine's own: the same as the machine alone, settled the same way, to round-off
+TEST(FeedbackSweep, TheTypeGApproachStartsAsTheMachineAlone) {
+  const FidelityPreset& g400 = level_preset("G400");
+  const DiggingOptions options;
+  const CyclePile cycle = build_cycle_pile(test::shared_device(), vehicle::load_scenario("fb35"),
+                                           5.0, 40.0, g400, options, nullptr);
+  LoadingCycle run(test::shared_device(), cycle, g400, options, vehicle::gains_on_search_line(0.0));
+  run.step();
+  const vehicle::WheelLoader& in_cycle = run.simulation().loader();
+  const double cycle_speed = in_cycle.system().body(in_cycle.front_frame()).velocity.x();
+
+  // the machine alone: settled 1 s at rest (digging/digging's settling), then one step driving
+  vehicle::WheelLoader alone(vehicle::machine_file(cycle.scenario), cycle.scenario.payload);
+  alone.set_drive_speed(0.0);
+  alone.set_lift_speed(0.0);
+  alone.set_tilt_speed(0.0);
+  for (int k = 0; k < static_cast<int>(std::lround(1.0 / g400.dt)); ++k) alone.step(g400.dt);
+  alone.set_drive_speed(vehicle::CycleSettings().drive_speed);  // the approach's
+  alone.step(g400.dt);
+  const double alone_speed = alone.system().body(alone.front_frame()).velocity.x();
+  std::printf("[ measured ] first step of the approach: %.6f m/s in the G400 cycle, %.6f alone\n",
+              cycle_speed, alone_speed);
+  EXPECT_GT(cycle_speed, 0.0);
+  EXPECT_NEAR(cycle_speed, alone_speed, 1e-6);
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <limits>
 
 #include "host/error.hpp"
 #include "vehicle/multibody.hpp"
@@ -90,6 +91,19 @@ TEST(PlaneContact, APatchOfTheWrongSizeIsRefused) {
   g.points.assign(3, Vec3::Zero());
   EXPECT_THROW(c.set_geometry(g), Error);
   EXPECT_THROW(PlaneContact(kWorld, 0, 0, PlaneContactParameters{}), Error);
+}
+
+// a stiffness of zero is an infinite compliance in the machine's system even while the patch is
+// inactive (the type-G aggregate's interfaces before the terrain's first step had it, and the
+// machine's first step lurched back): refused, as NaN is
+TEST(PlaneContact, AStiffnessThatIsNotPositiveAndFiniteIsRefused) {
+  for (double k : {0.0, -1.0, std::nan(""), std::numeric_limits<double>::infinity()}) {
+    PlaneContactParameters p;
+    p.stiffness = k;
+    EXPECT_THROW(PlaneContact(kWorld, 0, 4, p), Error) << k;
+    PlaneContact c(kWorld, 0, 4, PlaneContactParameters{});
+    EXPECT_THROW(c.set_parameters(p), Error) << k;
+  }
 }
 
 }  // namespace
