@@ -57,16 +57,13 @@ vehicle::CycleSettings cycle_settings(const vehicle::WheelLoader& loader) {
 }  // namespace
 
 LoadingCycle::LoadingCycle(Device& dev, const CyclePile& cycle, const FidelityPreset& preset,
-                           const DiggingOptions& options, const vehicle::FeedbackGains& gains)
-    : sim_(dev, cycle.scenario, preset, cycle.pile, options),
+                           const DiggingOptions& options, const vehicle::FeedbackGains& gains,
+                           vehicle::EffectSet* effects)
+    : sim_(dev, cycle.scenario, preset, cycle.pile, options, effects),
       cycle_(gains, cycle_settings(sim_.loader()), cycle.surface, cycle_toe(cycle, preset),
-             vehicle::read_sensors(sim_.loader(), 0.0).x_vehicle) {
+             sim_.sensors().x_vehicle) {
   // the phase at the start, before the first step
   cycle_.advance(reading());
-}
-
-vehicle::SensorSample LoadingCycle::reading() const {
-  return vehicle::read_sensors(sim_.loader(), sim_.time());
 }
 
 void LoadingCycle::step_with(const vehicle::CycleTargets& c) {

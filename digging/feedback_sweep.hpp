@@ -48,9 +48,13 @@ CyclePile build_cycle_pile(Device& dev, const vehicle::Scenario& base, double ap
 // reads it before choosing its next targets.
 class LoadingCycle {
  public:
-  // `cycle` from build_cycle_pile; the pile is copied into the dig, so `cycle` need not outlive it
+  // `cycle` from build_cycle_pile; the pile is copied into the dig, so `cycle` need not outlive it.
+  // With `effects` (model extensions, vehicle/effect.hpp; not owned, must outlive the cycle) the
+  // machine runs through them as a dig does, and the controller reads the sensors as the effects
+  // report them (a delayed or biased sensor misleads it as it would the real machine's)
   LoadingCycle(Device& dev, const CyclePile& cycle, const FidelityPreset& preset,
-               const DiggingOptions& options, const vehicle::FeedbackGains& gains);
+               const DiggingOptions& options, const vehicle::FeedbackGains& gains,
+               vehicle::EffectSet* effects = nullptr);
   // it holds a DiggingSimulation, which stays where it was built
   LoadingCycle(const LoadingCycle&) = delete;
   LoadingCycle& operator=(const LoadingCycle&) = delete;
@@ -74,8 +78,9 @@ class LoadingCycle {
   void restore_state(ByteReader& r);
 
  private:
-  // the sensors the cycle reads after each step: the machine's own (what the controller sees)
-  vehicle::SensorSample reading() const;
+  // the sensors the cycle reads after each step: what the machine's sensors report through the
+  // effects (the truth without effects), as the controller sees them
+  const vehicle::SensorSample& reading() const { return sim_.sensors(); }
   void step_with(const vehicle::CycleTargets& c);
 
   DiggingSimulation sim_;

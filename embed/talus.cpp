@@ -329,10 +329,6 @@ Simulation::Simulation(const SimulationOptions& options) : impl_(std::make_uniqu
   m.preset = options_level(options);
   m.state_key = state_key(options, m.scenario, m.preset);
   if (options.loading_cycle) check_cycle_options(options, m.scenario);
-  if (options.loading_cycle && !options.effects.empty())
-    throw InputError(
-        "SimulationOptions::effects: the loading cycle runs the baseline machine (effects with "
-        "loading_cycle are not supported yet); replay the scenario, or leave effects empty");
   m.effects = vehicle::load_effects(options.effects, options.effect_plugins, m.scenario,
                                     "SimulationOptions::effects");
   if (m.scenario.pile) {
@@ -356,7 +352,8 @@ Simulation::Simulation(const SimulationOptions& options) : impl_(std::make_uniqu
       m.pile_from_cache = pile.pile.from_cache;
       m.cycle_s = options.cycle_s;
       m.cycle = std::make_unique<LoadingCycle>(*m.device, pile, m.preset, dig_options,
-                                               vehicle::gains_on_search_line(options.cycle_s));
+                                               vehicle::gains_on_search_line(options.cycle_s),
+                                               &m.effects->set);
     } else {
       const PileProfile placed = scenario_pile_profile(m.scenario);
       const PileBuild pile =

@@ -72,7 +72,8 @@ struct SimulationOptions {
   /// model extensions (docs/effects.md), each as `talus run --effect` takes it: "NAME" or
   /// "NAME:key=value,..." (for example "engine_power_sharing", "hydraulic_lag:time_constant=0.2",
   /// "sensor_bias:channel=f_lift,bias=2e4"), applied in this order to every step's commands,
-  /// limits and forces and to what the sensors report. Not with loading_cycle yet
+  /// limits and forces and to what the sensors report; in a loading cycle the controller reads the
+  /// sensors as the effects report them
   std::vector<std::string> effects;
   /// shared libraries with more effects (docs/effects.md, "Plug-ins"), as `talus run
   /// --effect-plugin` loads them; their effects are named in `effects` like built-in ones
