@@ -262,18 +262,33 @@ void DiggingSimulation::multiscale_step() {
 }
 
 namespace {
-// what a saved state cannot hold yet: the type-G terrain (a plug-in effect's state is refused by
-// the effect set itself)
-void check_savable(bool multiscale, const char* what) {
-  if (multiscale)
-    throw Error(std::string(what) +
-                ": a type-G run's state (voxels, zone particles, aggregate) cannot be saved yet "
-                "(issue 16); save at a type-D level (D400 to D50) or the machine alone");
+// one step's aggregate sample, field by field
+void write_aggregate_sample(ByteWriter& w, const AggregateSample& a) {
+  w.f64(a.t);
+  w.i64(a.particles);
+  w.f64(a.mass);
+  write_matrix(w, a.centre);
+  write_matrix(w, a.velocity);
+  write_matrix(w, a.force_on_bucket);
+  for (double v : {a.terrain_normal_force, a.edge_force, a.depth_a, a.depth_b}) w.f64(v);
 }
+AggregateSample read_aggregate_sample(ByteReader& r) {
+  AggregateSample a;
+  a.t = r.f64("aggregate log");
+  a.particles = static_cast<int>(r.i64("aggregate log"));
+  a.mass = r.f64("aggregate log");
+  read_matrix(r, a.centre, "aggregate log");
+  read_matrix(r, a.velocity, "aggregate log");
+  read_matrix(r, a.force_on_bucket, "aggregate log");
+  for (double* v : {&a.terrain_normal_force, &a.edge_force, &a.depth_a, &a.depth_b})
+    *v = r.f64("aggregate log");
+  return a;
+}
+// bytes write_aggregate_sample writes
+constexpr std::uint64_t kAggregateSampleBytes = 8 * (1 + 1 + 1 + 3 + 3 + 3 + 4);
 }  // namespace
 
 void DiggingSimulation::save_state(ByteWriter& w) const {
-  check_savable(terrain_ != nullptr, "saving a digging state");
   w.tag("dig");
   w.f64(time_);
   w.i64(steps_done_);
@@ -291,17 +306,26 @@ void DiggingSimulation::save_state(ByteWriter& w) const {
   log_.save_state(w);
   w.tag("machine");
   loader_->system().save_state(w);
-  w.tag("particles");
-  dem_->save_state(w);
-  w.tag("bucket contacts");
-  split_->save_state(w);
+  if (terrain_) {
+    // type G: the terrain (voxels, zone particles, ledger), the aggregate's memory, its log
+    w.tag("multiscale terrain");
+    terrain_->save_state(w);
+    w.tag("aggregate");
+    aggregate_->save_state(w);
+    w.u64(aggregate_log_.size());
+    for (const AggregateSample& a : aggregate_log_) write_aggregate_sample(w, a);
+  } else {
+    w.tag("particles");
+    dem_->save_state(w);
+    w.tag("bucket contacts");
+    split_->save_state(w);
+  }
   w.tag("effects");
   effects_.save_state(w);
   w.tag("end");
 }
 
 void DiggingSimulation::restore_state(ByteReader& r) {
-  check_savable(terrain_ != nullptr, "restoring a digging state");
   r.expect("dig");
   const double time = r.f64("dig clock");
   const std::int64_t steps_done = r.i64("dig clock");
@@ -328,10 +352,22 @@ void DiggingSimulation::restore_state(ByteReader& r) {
   log_.restore_state(r);
   r.expect("machine");
   loader_->system().restore_state(r);
-  r.expect("particles");
-  dem_->restore_state(r);
-  r.expect("bucket contacts");
-  split_->restore_state(r);
+  if (terrain_) {
+    r.expect("multiscale terrain");
+    terrain_->restore_state(r);
+    r.expect("aggregate");
+    aggregate_->restore_state(r);
+    const std::uint64_t samples = r.u64("aggregate log");
+    r.need_elements(samples, kAggregateSampleBytes, "aggregate log");
+    std::vector<AggregateSample> log(samples);
+    for (AggregateSample& a : log) a = read_aggregate_sample(r);
+    aggregate_log_ = std::move(log);
+  } else {
+    r.expect("particles");
+    dem_->restore_state(r);
+    r.expect("bucket contacts");
+    split_->restore_state(r);
+  }
   r.expect("effects");
   effects_.restore_state(r);
   r.expect("end");

@@ -151,8 +151,7 @@ struct ParticleState {
 /// on the same build and device (docs/embedding.md, "Saved states").
 ///
 /// Model extensions (SimulationOptions::effects) change the machine and its sensors as `talus run
-/// --effect` does. Not in this version: saving a type-G level's state or a run with a plug-in's
-/// effect
+/// --effect` does. Not in this version: saving a run with a plug-in's effect
 /// (docs/embedding.md, "Not yet").
 class Simulation {
  public:

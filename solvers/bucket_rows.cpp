@@ -3,7 +3,9 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <string>
 
+#include "host/error.hpp"
 #include "solvers/contact_law.hpp"
 #include "solvers/dem_world.hpp"
 
@@ -186,6 +188,38 @@ BucketBody from_device(const TlBucketBody& d) {
   for (int i = 0; i < 6; ++i)
     for (int j = 0; j < 6; ++j) b.mobility(i, j) = d.mobility[6 * i + j];
   return b;
+}
+
+void write_bucket_impulses(ByteWriter& w, const std::vector<BucketImpulse>& impulses) {
+  w.u64(impulses.size());
+  for (const BucketImpulse& b : impulses) {
+    w.i64(b.particle);
+    write_matrix(w, b.normal);
+    w.f64(b.impulse_n);
+    write_matrix(w, b.impulse_t);
+    write_matrix(w, b.impulse_r);
+  }
+}
+
+std::vector<BucketImpulse> read_bucket_impulses(ByteReader& r, size_t particles) {
+  // what write_bucket_impulses writes per impulse: the particle index, the normal, the normal
+  // impulse, the friction and rolling impulses
+  constexpr std::uint64_t kImpulseBytes = 8 * (1 + 3 + 1 + 3 + 3);
+  const std::uint64_t n = r.u64("bucket impulses");
+  r.need_elements(n, kImpulseBytes, "bucket impulses");
+  std::vector<BucketImpulse> impulses(n);
+  for (BucketImpulse& b : impulses) {
+    const std::int64_t particle = r.i64("bucket impulses");
+    if (particle < 0 || particle >= static_cast<std::int64_t>(particles))
+      throw InputError(r.where() + ": a bucket contact with particle " + std::to_string(particle) +
+                       " of " + std::to_string(particles) + " (corrupt)");
+    b.particle = static_cast<int>(particle);
+    read_matrix(r, b.normal, "bucket impulses");
+    b.impulse_n = r.f64("bucket impulses");
+    read_matrix(r, b.impulse_t, "bucket impulses");
+    read_matrix(r, b.impulse_r, "bucket impulses");
+  }
+  return impulses;
 }
 
 namespace reference {

@@ -18,6 +18,7 @@
 #pragma once
 #include <vector>
 
+#include "host/binary.hpp"
 #include "host/device.hpp"
 #include "kernels/common.h"
 #include "kernels/dem_types.h"
@@ -56,6 +57,12 @@ struct BucketImpulse {
   Vec3 impulse_t = Vec3::Zero();
   Vec3 impulse_r = Vec3::Zero();
 };
+
+// a saved state's list of bucket impulses (digging/saved_state): the particle index, the normal
+// and the three impulses per contact. Reading refuses (InputError naming the reader's place) a
+// particle index outside [0, particles)
+void write_bucket_impulses(ByteWriter& w, const std::vector<BucketImpulse>& impulses);
+std::vector<BucketImpulse> read_bucket_impulses(ByteReader& r, size_t particles);
 
 // warm-start matching: for each new contact, the previous contact of the same particle whose
 // normal is closest to the new one (and within 37 degrees, cos 0.8), each used at most once;

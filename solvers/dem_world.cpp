@@ -195,10 +195,12 @@ void DemWorld::save_state(ByteWriter& w) const {
       w, b.n_contacts > 0 ? b.contacts[prev].download(b.n_contacts) : std::vector<TlContact>());
 }
 
-void DemWorld::restore_state(ByteReader& r) {
+void DemWorld::restore_state(ByteReader& r, bool any_count) {
   DemBuffers& b = buffers_;
   const std::uint64_t n = r.u64("particle count");
-  if (n != particle_count_)
+  // each particle is four float4 words at least: a count the file cannot hold is corrupt
+  r.need_elements(n, 4 * sizeof(cl_float4), "particle count");
+  if (!any_count && n != particle_count_)
     throw InputError(
         r.where() + ": the saved state has " + std::to_string(n) + " particles, this simulation " +
         std::to_string(particle_count_) +
@@ -238,6 +240,7 @@ void DemWorld::restore_state(ByteReader& r) {
     b.omega.upload(w);
     b.rotation.upload(q);
   }
+  particle_count_ = n;
   max_radius_ = max_radius;
   time_ = time;
   b.current = 0;

@@ -40,10 +40,11 @@ class DemWorld {
   // device holds them (float bit for bit), last step's contacts with their impulses (the next
   // warm start), the largest radius and the clock. restore_state reads it into a world made with
   // the same material, settings, bounds and geometry and as many particles (InputError naming
-  // the reader's file otherwise); the world then steps on bit-identically to the saved one on
-  // the same device and work-group size
+  // the reader's file otherwise; with `any_count` the saved particles replace however many the
+  // world holds, as the type-G terrain's, whose particles come and go); the world then steps on
+  // bit-identically to the saved one on the same device and work-group size
   void save_state(ByteWriter& w) const;
-  void restore_state(ByteReader& r);
+  void restore_state(ByteReader& r, bool any_count = false);
   // replaces the static geometry (e.g. walls removed or moved). Contacts with static geometry
   // are matched by its index, so warm starting goes on only when `same_layout` says the
   // geometries kept their order (moved, not added or removed)

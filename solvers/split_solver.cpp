@@ -214,36 +214,8 @@ Vec6 SplitSolver::solve_coupled(std::vector<ContactRow>& rows, const Vec6& warm_
   return impulse;
 }
 
-void SplitSolver::save_state(ByteWriter& w) const {
-  w.u64(previous_.size());
-  for (const BucketImpulse& b : previous_) {
-    w.i64(b.particle);
-    write_matrix(w, b.normal);
-    w.f64(b.impulse_n);
-    write_matrix(w, b.impulse_t);
-    write_matrix(w, b.impulse_r);
-  }
-}
+void SplitSolver::save_state(ByteWriter& w) const { write_bucket_impulses(w, previous_); }
 
-void SplitSolver::restore_state(ByteReader& r) {
-  // what save_state writes per impulse: the particle index, the normal, the normal impulse, the
-  // friction and rolling impulses
-  constexpr std::uint64_t kImpulseBytes = 8 * (1 + 3 + 1 + 3 + 3);
-  const std::uint64_t n = r.u64("bucket impulses");
-  r.need_elements(n, kImpulseBytes, "bucket impulses");
-  std::vector<BucketImpulse> previous(n);
-  for (BucketImpulse& b : previous) {
-    const std::int64_t particle = r.i64("bucket impulses");
-    if (particle < 0 || particle >= static_cast<std::int64_t>(dem_.size()))
-      throw InputError(r.where() + ": a bucket contact with particle " + std::to_string(particle) +
-                       " of " + std::to_string(dem_.size()) + " (corrupt)");
-    b.particle = static_cast<int>(particle);
-    read_matrix(r, b.normal, "bucket impulses");
-    b.impulse_n = r.f64("bucket impulses");
-    read_matrix(r, b.impulse_t, "bucket impulses");
-    read_matrix(r, b.impulse_r, "bucket impulses");
-  }
-  previous_ = std::move(previous);
-}
+void SplitSolver::restore_state(ByteReader& r) { previous_ = read_bucket_impulses(r, dem_.size()); }
 
 }  // namespace talus

@@ -64,6 +64,57 @@ void ToolWorld::forget_contacts() {
   for (auto& side : sides_) side->previous.clear();
 }
 
+void ToolWorld::save_state(ByteWriter& w) const {
+  w.u64(sides_.size());
+  for (const auto& side : sides_) {
+    const Tool& t = side->tool;
+    write_matrix(w, t.position);
+    write_matrix(w, t.orientation.coeffs());
+    write_matrix(w, t.velocity);
+    write_matrix(w, t.omega);
+    write_bucket_impulses(w, side->previous);
+    write_matrix(w, side->load.wrench);
+    w.i64(side->load.contacts);
+    w.f64(side->load.max_overlap_rel);
+  }
+}
+
+void ToolWorld::restore_state(ByteReader& r) {
+  const std::uint64_t n = r.u64("tools");
+  if (n != sides_.size())
+    throw InputError(r.where() + ": the saved state has " + std::to_string(n) +
+                     " tools, this world " + std::to_string(sides_.size()));
+  // everything read first, then the world changed: a bad entry leaves it as it was
+  struct Saved {
+    Vec3 position, velocity, omega;
+    Eigen::Vector4d rotation;
+    std::vector<BucketImpulse> previous;
+    ToolLoad load;
+  };
+  std::vector<Saved> saved(n);
+  for (Saved& s : saved) {
+    read_matrix(r, s.position, "tool pose");
+    read_matrix(r, s.rotation, "tool pose");
+    read_matrix(r, s.velocity, "tool twist");
+    read_matrix(r, s.omega, "tool twist");
+    s.previous = read_bucket_impulses(r, dem_.size());
+    read_matrix(r, s.load.wrench, "tool load");
+    s.load.contacts = static_cast<int>(r.i64("tool load"));
+    s.load.max_overlap_rel = r.f64("tool load");
+    if (!(std::abs(s.rotation.norm() - 1.0) < 1e-9))
+      throw InputError(r.where() + ": a tool's orientation is not a unit quaternion (corrupt)");
+  }
+  for (size_t i = 0; i < n; ++i) {
+    Tool& t = sides_[i]->tool;
+    t.position = saved[i].position;
+    t.orientation.coeffs() = saved[i].rotation;
+    t.velocity = saved[i].velocity;
+    t.omega = saved[i].omega;
+    sides_[i]->previous = std::move(saved[i].previous);
+    sides_[i]->load = saved[i].load;
+  }
+}
+
 size_t ToolWorld::size() const { return sides_.size(); }
 Tool& ToolWorld::tool(size_t i) { return sides_.at(i)->tool; }
 const Tool& ToolWorld::tool(size_t i) const { return sides_.at(i)->tool; }

@@ -72,6 +72,13 @@ class ToolWorld {
   // renumbered the particles, a warm start by particle index would hand impulses to strangers
   void forget_contacts();
 
+  // the state a step carries to the next (digging/saved_state): per tool its pose and twist (a
+  // loaded tool moves itself), last step's contact impulses (the warm start) and load.
+  // restore_state reads it into a world made with the same tools over a DemWorld restored first
+  // (the impulses name its particles); InputError for another number of tools or a bad entry
+  void save_state(ByteWriter& w) const;
+  void restore_state(ByteReader& r);
+
   size_t size() const;
   // the tools; a kinematic tool's velocity may be changed between steps (its prescribed motion)
   Tool& tool(size_t i);

@@ -4,6 +4,9 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <string>
+
+#include "host/error.hpp"
 
 namespace talus {
 namespace {
@@ -197,6 +200,47 @@ void AggregateCoupling::after_step(double dt) {
     const double parting = aggregate.point_velocity(centre(gb.points)).dot(gb.normal);
     depth_b_ = std::max(0.0, depth_b_ - dt * parting);
   }
+}
+
+void AggregateCoupling::save_state(ByteWriter& w) const {
+  w.i64(aggregate_.particles);
+  w.f64(aggregate_.mass);
+  write_matrix(w, aggregate_.centre);
+  write_matrix(w, aggregate_.inertia);
+  write_matrix(w, aggregate_.velocity);
+  write_matrix(w, aggregate_.omega);
+  w.f64(depth_a_);
+  w.f64(depth_b_);
+  w.u8(engaged_now_ ? 1 : 0);
+  w.u8(engaged_before_ ? 1 : 0);
+  write_matrix(w, solved_velocity_);
+  write_matrix(w, solved_omega_);
+}
+
+void AggregateCoupling::restore_state(ByteReader& r) {
+  Aggregate a;
+  a.particles = static_cast<int>(r.i64("aggregate"));
+  a.mass = r.f64("aggregate");
+  read_matrix(r, a.centre, "aggregate");
+  read_matrix(r, a.inertia, "aggregate");
+  read_matrix(r, a.velocity, "aggregate");
+  read_matrix(r, a.omega, "aggregate");
+  const double depth_a = r.f64("aggregate interfaces"), depth_b = r.f64("aggregate interfaces");
+  if (a.particles < 0 || !(a.mass >= 0.0) || !(depth_a >= 0.0) || !(depth_b >= 0.0))
+    throw InputError(r.where() + ": an aggregate of " + std::to_string(a.particles) +
+                     " particles, " + std::to_string(a.mass) + " kg, pressed in by " +
+                     std::to_string(depth_a) + " and " + std::to_string(depth_b) + " m (corrupt)");
+  const bool now = r.u8("aggregate") != 0, before = r.u8("aggregate") != 0;
+  Vec3 velocity, omega;
+  read_matrix(r, velocity, "aggregate");
+  read_matrix(r, omega, "aggregate");
+  aggregate_ = a;
+  depth_a_ = depth_a;
+  depth_b_ = depth_b;
+  engaged_now_ = now;
+  engaged_before_ = before;
+  solved_velocity_ = velocity;
+  solved_omega_ = omega;
 }
 
 }  // namespace talus

@@ -111,6 +111,13 @@ class AggregateCoupling {
   const vehicle::PlaneContact& interface_a() const { return *a_; }
   const vehicle::PlaneContact& interface_b() const { return *b_; }
 
+  // what the coupling carries from one step to the next, for a saved state: the aggregate of the
+  // last update, the interfaces' depths, whether the zone was engaged, and the motion the last
+  // solve gave the body (the body itself, its rows' forces and the brake are the machine's
+  // system's and saved with it; the interfaces' places are set anew by the next update)
+  void save_state(ByteWriter& w) const;
+  void restore_state(ByteReader& r);
+
  private:
   vehicle::MultibodySystem& system_;
   int bucket_;

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
+#include <string>
 #include <unordered_map>
 
 #include "host/error.hpp"
@@ -325,6 +327,116 @@ std::vector<StaticGeom> MultiscaleTerrain::geometry(const Particles& particles) 
           Vec3(0.5 * h, 0.5 * h, 0.5 * (top - bottom)), Eigen::Matrix3d::Identity()));
     }
   return geoms;
+}
+
+namespace {
+// the zone's fields, in their declaration order
+void write_zone(ByteWriter& w, const ActiveZone& z) {
+  w.u8(z.active ? 1 : 0);
+  write_matrix(w, z.tip);
+  write_matrix(w, z.along);
+  write_matrix(w, z.forward);
+  for (double v :
+       {z.width, z.depth, z.speed, z.rake_deg, z.failure_angle_deg, z.reach_ahead, z.reach_behind})
+    w.f64(v);
+}
+ActiveZone read_zone(ByteReader& r) {
+  ActiveZone z;
+  z.active = r.u8("active zone") != 0;
+  read_matrix(r, z.tip, "active zone");
+  read_matrix(r, z.along, "active zone");
+  read_matrix(r, z.forward, "active zone");
+  for (double* v : {&z.width, &z.depth, &z.speed, &z.rake_deg, &z.failure_angle_deg, &z.reach_ahead,
+                    &z.reach_behind})
+    *v = r.f64("active zone");
+  return z;
+}
+}  // namespace
+
+void MultiscaleTerrain::save_state(ByteWriter& w) const {
+  w.tag("voxels");
+  voxels_.save_state(w);
+  w.tag("zone particles");
+  dem_->save_state(w);
+  tools_->save_state(w);
+  w.u64(ledger_.size());
+  w.f64s(ledger_.data(), ledger_.size());
+  w.f64(pool_);
+  w.u64(sites_.size());
+  for (const ExcavatedColumn& c : sites_) {
+    w.i64(c.i);
+    w.i64(c.j);
+    w.f64(c.z_lo);
+    w.f64(c.z_hi);
+    w.f64(c.mass);
+  }
+  // the generator's whole state, as the standard library writes it (decimal words)
+  std::ostringstream generator;
+  generator << sizes_;
+  w.str(generator.str());
+  w.f64(time_);
+  w.tag("last step");
+  write_zone(w, last_.zone);
+  w.f64(last_.excavated);
+  w.i64(last_.spawned);
+  w.i64(last_.merged);
+  w.f64(last_.avalanched);
+  write_matrix(w, last_.bucket_wrench);
+}
+
+void MultiscaleTerrain::restore_state(ByteReader& r) {
+  r.expect("voxels");
+  voxels_.restore_state(r);
+  r.expect("zone particles");
+  dem_->restore_state(r, true);
+  tools_->restore_state(r);
+  const std::uint64_t n = r.u64("particle masses");
+  r.need_elements(n, 8, "particle masses");
+  if (n != dem_->size())
+    throw InputError(r.where() + ": " + std::to_string(n) + " particle masses for " +
+                     std::to_string(dem_->size()) + " particles (corrupt)");
+  std::vector<double> ledger(n);
+  r.f64s(ledger.data(), ledger.size(), "particle masses");
+  const double pool = r.f64("pool");
+  const std::uint64_t sites = r.u64("excavated columns");
+  r.need_elements(sites, 8 * 5, "excavated columns");
+  std::vector<ExcavatedColumn> columns(sites);
+  for (ExcavatedColumn& c : columns) {
+    c.i = static_cast<int>(r.i64("excavated columns"));
+    c.j = static_cast<int>(r.i64("excavated columns"));
+    c.z_lo = r.f64("excavated columns");
+    c.z_hi = r.f64("excavated columns");
+    c.mass = r.f64("excavated columns");
+    if (c.i < 0 || c.i >= voxels_.nx() || c.j < 0 || c.j >= voxels_.ny())
+      throw InputError(r.where() + ": an excavated column outside the grid (corrupt)");
+  }
+  std::istringstream generator(r.str("size generator"));
+  std::mt19937_64 sizes;
+  generator >> sizes;
+  if (generator.fail())
+    throw InputError(r.where() + ": the particle-size generator's state does not read (corrupt)");
+  for (double m : ledger)
+    if (!(m > 0.0 && std::isfinite(m)))
+      throw InputError(r.where() + ": a particle mass of " + std::to_string(m) + " kg (corrupt)");
+  if (!(pool >= 0.0 && std::isfinite(pool)))
+    throw InputError(r.where() + ": a pool of " + std::to_string(pool) + " kg (corrupt)");
+  const double time = r.f64("terrain clock");
+  r.expect("last step");
+  MultiscaleStep last;
+  last.zone = read_zone(r);
+  last.excavated = r.f64("last step");
+  last.spawned = static_cast<int>(r.i64("last step"));
+  last.merged = static_cast<int>(r.i64("last step"));
+  last.avalanched = r.f64("last step");
+  read_matrix(r, last.bucket_wrench, "last step");
+  ledger_ = std::move(ledger);
+  pool_ = pool;
+  sites_ = std::move(columns);
+  sizes_ = sizes;
+  time_ = time;
+  last_ = last;
+  // the host copy every reader uses, as the step leaves it
+  state_ = ledger_.empty() ? Particles{} : dem_->particles();
 }
 
 }  // namespace talus

@@ -114,6 +114,16 @@ class MultiscaleTerrain {
   double time() const { return time_; }
   const FidelityPreset& level() const { return level_; }
 
+  // the state a step carries to the next, for a saved state (digging/saved_state): the voxels'
+  // soil, the pool, the zone's particles with their contacts and masses (the ledger), the
+  // bucket's contact impulses, where the pool's soil came from, the size generator, the clock
+  // and what the last step did (its zone is what the aggregate reads next). restore_state reads
+  // it into a terrain made with the same profile, level, bucket and options; the terrain then
+  // steps on bit-identically to the saved one on the same device. InputError (naming the
+  // reader's place) for a state of another grid or a ledger that does not match the particles
+  void save_state(ByteWriter& w) const;
+  void restore_state(ByteReader& r);
+
  private:
   // step 2: particles from the pool in the excavated cells; returns how many
   int spawn(Particles& particles, const std::vector<ExcavatedColumn>& columns,

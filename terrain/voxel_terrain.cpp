@@ -228,4 +228,33 @@ void VoxelTerrain::deposit(int i, int j, double mass, double compaction) {
   restack(i, j, layers);
 }
 
+void VoxelTerrain::save_state(ByteWriter& w) const {
+  w.i64(nx_);
+  w.i64(ny_);
+  w.i64(nz_);
+  w.u64(mass_.size());
+  w.f64s(mass_.data(), mass_.size());
+  w.f64s(volume_.data(), volume_.size());
+}
+
+void VoxelTerrain::restore_state(ByteReader& r) {
+  const std::int64_t nx = r.i64("voxel grid"), ny = r.i64("voxel grid"), nz = r.i64("voxel grid");
+  const std::uint64_t cells = r.u64("voxel grid");
+  if (nx != nx_ || ny != ny_ || nz != nz_ || cells != mass_.size())
+    throw InputError(r.where() + ": the saved voxel grid is " + std::to_string(nx) + " x " +
+                     std::to_string(ny) + " x " + std::to_string(nz) + ", this terrain's " +
+                     std::to_string(nx_) + " x " + std::to_string(ny_) + " x " +
+                     std::to_string(nz_) +
+                     "; restore into a simulation of the same pile and level");
+  std::vector<double> mass(cells), volume(cells);
+  r.f64s(mass.data(), mass.size(), "voxel masses");
+  r.f64s(volume.data(), volume.size(), "voxel volumes");
+  for (size_t c = 0; c < cells; ++c)
+    if (!(mass[c] >= 0.0 && volume[c] >= 0.0 && std::isfinite(mass[c]) && std::isfinite(volume[c])))
+      throw InputError(r.where() + ": a voxel with mass " + std::to_string(mass[c]) +
+                       " kg and volume " + std::to_string(volume[c]) + " m^3 (corrupt)");
+  mass_ = std::move(mass);
+  volume_ = std::move(volume);
+}
+
 }  // namespace talus

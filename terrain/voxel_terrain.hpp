@@ -25,6 +25,7 @@
 #pragma once
 #include <vector>
 
+#include "host/binary.hpp"
 #include "solvers/embree.hpp"
 #include "terrain/heightmap.hpp"
 #include "terrain/pile.hpp"
@@ -105,6 +106,12 @@ class VoxelTerrain {
   // rho_bank times the volume both fill, so the volumes add). Throws talus::Error when the column
   // would overflow the grid (the caller keeps the mass; nothing is changed)
   void deposit(int i, int j, double mass, double compaction);
+
+  // the cells' soil (mass and volume), for a saved state (digging/saved_state); restore_state
+  // reads it into a terrain made from the same profile and cell (InputError naming the reader's
+  // place for another grid, a negative or non-finite value)
+  void save_state(ByteWriter& w) const;
+  void restore_state(ByteReader& r);
 
  private:
   size_t index(int i, int j, int k) const {

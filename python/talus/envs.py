@@ -25,7 +25,7 @@ import numpy as np
 import gymnasium as gym
 from gymnasium import spaces
 
-from . import CHANNELS, Error, Simulation
+from . import CHANNELS, Simulation
 
 # the most piles whose fill start a reset keeps (Simulation.state bytes, one per pile seed)
 MAX_SAVED_STARTS = 16
@@ -83,8 +83,8 @@ class BucketFillingEnv(gym.Env):
 
     # the simulation at the start of the fill, on pile `seed`. The first episode on a pile drives
     # the approach and saves the state at the fill's start (Simulation.state); later ones restore
-    # it, bit for bit the same start, without building the machine's approach again. A type-G
-    # level's state cannot be saved yet: there every reset drives the approach
+    # it, bit for bit the same start, without building the machine's approach again (type D and
+    # type G alike)
     def _start(self, seed):
         if self.sim is not None and self._sim_seed == seed and seed in self._fill_states:
             self.sim.set_state(self._fill_states[seed])
@@ -106,10 +106,7 @@ class BucketFillingEnv(gym.Env):
             raise RuntimeError(f"BucketFillingEnv: the loading cycle never reached the pile "
                                f"(phase {self.sim.cycle_phase!r} at t = {self.sim.time:.2f} s); "
                                "give a longer max_cycle_time or a shorter approach")
-        try:
-            self._fill_states[seed] = self.sim.state()
-        except Error:
-            pass  # a type-G level: its state cannot be saved yet, each reset drives the approach
+        self._fill_states[seed] = self.sim.state()
         # the oldest start goes first beyond the cap (a D50 state is tens of megabytes)
         while len(self._fill_states) > MAX_SAVED_STARTS:
             del self._fill_states[next(iter(self._fill_states))]
