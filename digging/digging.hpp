@@ -130,12 +130,14 @@ class DiggingSimulation {
   // the state between two steps (issue 16, docs/embedding.md "Saved states"): the machine (bodies,
   // warm start, constraints), the particles with last step's contacts and impulses, the bucket
   // contacts' impulses, the clock, the sensor log, what the sensors read, the coupling counters
-  // and the effects' memories (vehicle::EffectSet::save_state). restore_state reads it into a
+  // and the effects' memories (vehicle::EffectSet::save_state); at a type-G level the terrain
+  // (MultiscaleTerrain::save_state), the aggregate's memory and its log instead of the particle
+  // pile and the bucket impulses. restore_state reads it into a
   // simulation made with the same scenario, level, pile and options, which then steps on
   // bit-identically to the one saved (same device and work-group size). What the constructor sets
   // (scenario, level, material, settings) is not saved; the caller checks that it is the same
-  // (embed/talus.cpp keys the file by it). talus::Error ("not yet") at a type-G level and with a
-  // plug-in's effect: their state is not saved yet
+  // (embed/talus.cpp keys the file by it). talus::Error ("not yet") with a plug-in's effect: its
+  // state is not saved yet
   void save_state(ByteWriter& w) const;
   void restore_state(ByteReader& r);
 

@@ -224,10 +224,11 @@ class Simulation {
   /// the direct solver's warm start, joints and contacts), the particles with last step's
   /// contacts and their impulses (the next warm start), the bucket contacts' impulses, the clock,
   /// the 100 Hz sensor log, what the sensors read now, the effects' memories (lags, delay lines)
-  /// and a loading cycle's phase. The file is
+  /// and a loading cycle's phase; at a type-G level the voxels, the zone's particles with their
+  /// masses and contacts and the aggregate instead of the particle pile. The file is
   /// keyed by what made this simulation (scenario and machine files by content, level, seed,
   /// loading-cycle options, particle count) and closed by a checksum. talus::Error naming the
-  /// path when it cannot be written, and ("not yet") at a type-G level
+  /// path when it cannot be written, and ("not yet") with a plug-in's effect
   void save_state(const std::string& path) const;
   /// restores a state save_state wrote into this simulation, which must have been made with the
   /// same options (scenario, level, seed, loading cycle): stepping then continues exactly as the

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "host/error.hpp"
 
@@ -99,7 +100,11 @@ void ToolWorld::restore_state(ByteReader& r) {
     read_matrix(r, s.omega, "tool twist");
     s.previous = read_bucket_impulses(r, dem_.size());
     read_matrix(r, s.load.wrench, "tool load");
-    s.load.contacts = static_cast<int>(r.i64("tool load"));
+    const std::int64_t contacts = r.i64("tool load");
+    if (contacts < 0 || contacts > std::numeric_limits<int>::max())
+      throw InputError(r.where() + ": a tool with " + std::to_string(contacts) +
+                       " contacts (corrupt)");
+    s.load.contacts = static_cast<int>(contacts);
     s.load.max_overlap_rel = r.f64("tool load");
     if (!(std::abs(s.rotation.norm() - 1.0) < 1e-9))
       throw InputError(r.where() + ": a tool's orientation is not a unit quaternion (corrupt)");

@@ -3,6 +3,7 @@
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <string>
 
@@ -219,14 +220,18 @@ void AggregateCoupling::save_state(ByteWriter& w) const {
 
 void AggregateCoupling::restore_state(ByteReader& r) {
   Aggregate a;
-  a.particles = static_cast<int>(r.i64("aggregate"));
+  const std::int64_t particles = r.i64("aggregate");
+  if (particles < 0 || particles > std::numeric_limits<int>::max())
+    throw InputError(r.where() + ": an aggregate of " + std::to_string(particles) +
+                     " particles (corrupt)");
+  a.particles = static_cast<int>(particles);
   a.mass = r.f64("aggregate");
   read_matrix(r, a.centre, "aggregate");
   read_matrix(r, a.inertia, "aggregate");
   read_matrix(r, a.velocity, "aggregate");
   read_matrix(r, a.omega, "aggregate");
   const double depth_a = r.f64("aggregate interfaces"), depth_b = r.f64("aggregate interfaces");
-  if (a.particles < 0 || !(a.mass >= 0.0) || !(depth_a >= 0.0) || !(depth_b >= 0.0))
+  if (!(a.mass >= 0.0) || !(depth_a >= 0.0) || !(depth_b >= 0.0))
     throw InputError(r.where() + ": an aggregate of " + std::to_string(a.particles) +
                      " particles, " + std::to_string(a.mass) + " kg, pressed in by " +
                      std::to_string(depth_a) + " and " + std::to_string(depth_b) + " m (corrupt)");

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <locale>
 #include <sstream>
 #include <string>
 #include <unordered_map>
@@ -121,9 +123,17 @@ MultiscaleTerrain::MultiscaleTerrain(Device& dev, const PileProfile& profile,
   // step (the aggregate) sees the real cutting edge and not an empty default: a zone of zero
   // width gave the aggregate's interfaces zero stiffness, and the machine's first step lurched
   // back at up to 1 m/s (docs/multiscale.md)
-  const std::vector<double> surface = voxels_.surface_heights();
-  last_.zone =
-      predict_active_zone(voxels_, bucket_edges(bucket_mesh_, start), options_.soil, &surface);
+  last_.zone = zone_for(start, state_);
+}
+
+ActiveZone MultiscaleTerrain::zone_for(const KinematicBucket& bucket,
+                                       const Particles& particles) const {
+  const std::vector<double> surface = soil_surface(particles);
+  return predict_active_zone(voxels_, bucket_edges(bucket_mesh_, bucket), options_.soil, &surface);
+}
+
+void MultiscaleTerrain::download_particles() {
+  state_ = ledger_.empty() ? Particles{} : dem_->particles();
 }
 
 MultiscaleTerrain::~MultiscaleTerrain() = default;
@@ -142,9 +152,7 @@ void MultiscaleTerrain::step(const KinematicBucket& bucket) {
   // 1. the zone on the soil's surface (the voxels, raised to the tops of the particles heaped on
   // them), and its solid soil into the pool
   Particles particles = state_;
-  const std::vector<double> surface = soil_surface(particles);
-  last_.zone =
-      predict_active_zone(voxels_, bucket_edges(bucket_mesh_, bucket), options_.soil, &surface);
+  last_.zone = zone_for(bucket, particles);
   std::vector<ExcavatedColumn> columns;
   const DynamicSoil dynamic = excavate(voxels_, last_.zone, options_.soil, &columns);
   pool_ += dynamic.mass;
@@ -171,7 +179,7 @@ void MultiscaleTerrain::step(const KinematicBucket& bucket) {
     last_.bucket_wrench = tools_->load(0).wrench;
   }
   // the particles as the step left them, downloaded once for everyone who reads them
-  state_ = ledger_.empty() ? Particles{} : dem_->particles();
+  download_particles();
 
   // 5. the surface relaxes
   last_.avalanched = avalanche(voxels_, level_.dt, options_.avalanche).moved_mass;
@@ -349,6 +357,13 @@ ActiveZone read_zone(ByteReader& r) {
   for (double* v : {&z.width, &z.depth, &z.speed, &z.rake_deg, &z.failure_angle_deg, &z.reach_ahead,
                     &z.reach_behind})
     *v = r.f64("active zone");
+  // what predict_active_zone guarantees: an edge of at least 1 mm, unit directions, finite values
+  bool ok = z.width >= 1e-3 && z.tip.allFinite() && std::abs(z.along.norm() - 1.0) < 1e-9 &&
+            std::abs(z.forward.norm() - 1.0) < 1e-9;
+  for (double v :
+       {z.width, z.depth, z.speed, z.rake_deg, z.failure_angle_deg, z.reach_ahead, z.reach_behind})
+    ok = ok && std::isfinite(v);
+  if (!ok) throw InputError(r.where() + ": the last step's active zone is not one (corrupt)");
   return z;
 }
 }  // namespace
@@ -372,6 +387,7 @@ void MultiscaleTerrain::save_state(ByteWriter& w) const {
   }
   // the generator's whole state, as the standard library writes it (decimal words)
   std::ostringstream generator;
+  generator.imbue(std::locale::classic());  // the same bytes whatever locale the program set
   generator << sizes_;
   w.str(generator.str());
   w.f64(time_);
@@ -402,15 +418,17 @@ void MultiscaleTerrain::restore_state(ByteReader& r) {
   r.need_elements(sites, 8 * 5, "excavated columns");
   std::vector<ExcavatedColumn> columns(sites);
   for (ExcavatedColumn& c : columns) {
-    c.i = static_cast<int>(r.i64("excavated columns"));
-    c.j = static_cast<int>(r.i64("excavated columns"));
+    const std::int64_t i = r.i64("excavated columns"), j = r.i64("excavated columns");
+    if (i < 0 || i >= voxels_.nx() || j < 0 || j >= voxels_.ny())
+      throw InputError(r.where() + ": an excavated column outside the grid (corrupt)");
+    c.i = static_cast<int>(i);
+    c.j = static_cast<int>(j);
     c.z_lo = r.f64("excavated columns");
     c.z_hi = r.f64("excavated columns");
     c.mass = r.f64("excavated columns");
-    if (c.i < 0 || c.i >= voxels_.nx() || c.j < 0 || c.j >= voxels_.ny())
-      throw InputError(r.where() + ": an excavated column outside the grid (corrupt)");
   }
   std::istringstream generator(r.str("size generator"));
+  generator.imbue(std::locale::classic());
   std::mt19937_64 sizes;
   generator >> sizes;
   if (generator.fail())
@@ -425,8 +443,13 @@ void MultiscaleTerrain::restore_state(ByteReader& r) {
   MultiscaleStep last;
   last.zone = read_zone(r);
   last.excavated = r.f64("last step");
-  last.spawned = static_cast<int>(r.i64("last step"));
-  last.merged = static_cast<int>(r.i64("last step"));
+  const std::int64_t spawned = r.i64("last step"), merged = r.i64("last step");
+  if (spawned < 0 || spawned > static_cast<std::int64_t>(n) || merged < 0 ||
+      merged > std::numeric_limits<int>::max())
+    throw InputError(r.where() + ": the last step spawned " + std::to_string(spawned) +
+                     " and merged " + std::to_string(merged) + " particles (corrupt)");
+  last.spawned = static_cast<int>(spawned);
+  last.merged = static_cast<int>(merged);
   last.avalanched = r.f64("last step");
   read_matrix(r, last.bucket_wrench, "last step");
   ledger_ = std::move(ledger);
@@ -436,7 +459,7 @@ void MultiscaleTerrain::restore_state(ByteReader& r) {
   time_ = time;
   last_ = last;
   // the host copy every reader uses, as the step leaves it
-  state_ = ledger_.empty() ? Particles{} : dem_->particles();
+  download_particles();
 }
 
 }  // namespace talus

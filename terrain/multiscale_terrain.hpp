@@ -78,7 +78,7 @@ struct MassBalance {
   double total() const { return solid + pool + particles; }
 };
 
-// what one step did
+// what one step did (before the first step: the zone where the bucket starts, nothing done)
 struct MultiscaleStep {
   ActiveZone zone;
   double excavated = 0.0;   // soil turned dynamic [kg]
@@ -120,7 +120,9 @@ class MultiscaleTerrain {
   // and what the last step did (its zone is what the aggregate reads next). restore_state reads
   // it into a terrain made with the same profile, level, bucket and options; the terrain then
   // steps on bit-identically to the saved one on the same device. InputError (naming the
-  // reader's place) for a state of another grid or a ledger that does not match the particles
+  // reader's place) for a state of another grid or a ledger that does not match the particles;
+  // the checks run as the parts are read, so a failed restore may leave the terrain half
+  // restored: the caller keeps a copy to undo it (embed/talus.cpp does)
   void save_state(ByteWriter& w) const;
   void restore_state(ByteReader& r);
 
@@ -130,6 +132,10 @@ class MultiscaleTerrain {
             const BucketPose& pose);
   // step 4: resting particles back into the voxels; returns how many
   int merge(Particles& particles, const KinematicBucket& bucket);
+  // step 1's zone: predicted from the bucket's edges on the soil's surface under `particles`
+  ActiveZone zone_for(const KinematicBucket& bucket, const Particles& particles) const;
+  // the host copy of the device's particles that every reader uses (empty without particles)
+  void download_particles();
   // the soil's surface: the voxels' columns raised to the tops of the particles heaped on them
   std::vector<double> soil_surface(const Particles& particles) const;
   // step 3's static geometry: the container and a box per voxel column near the particles

@@ -249,8 +249,12 @@ void VoxelTerrain::restore_state(ByteReader& r) {
   std::vector<double> mass(cells), volume(cells);
   r.f64s(mass.data(), mass.size(), "voxel masses");
   r.f64s(volume.data(), volume.size(), "voxel volumes");
+  // a cell holds at most its cube (h^3; rounding of the volumes that add up to it allowed) and
+  // soil only with a volume
+  const double cube = h_ * h_ * h_;
   for (size_t c = 0; c < cells; ++c)
-    if (!(mass[c] >= 0.0 && volume[c] >= 0.0 && std::isfinite(mass[c]) && std::isfinite(volume[c])))
+    if (!(mass[c] >= 0.0 && volume[c] >= 0.0 && std::isfinite(mass[c]) &&
+          volume[c] <= cube * (1.0 + 1e-9) && (mass[c] == 0.0 || volume[c] > 0.0)))
       throw InputError(r.where() + ": a voxel with mass " + std::to_string(mass[c]) +
                        " kg and volume " + std::to_string(volume[c]) + " m^3 (corrupt)");
   mass_ = std::move(mass);

@@ -1,5 +1,10 @@
 #include "vehicle/constraint.hpp"
 
+#include <cmath>
+#include <string>
+
+#include "host/error.hpp"
+
 namespace talus::vehicle {
 
 void Constraint::store_forces(const double* impulse, int count, double h) {
@@ -55,6 +60,25 @@ Mat3 frame_from_axis(const Vec3& axis) {
   Mat3 m;
   m << x, y, z;
   return m;
+}
+
+void check_stiffness(double stiffness, const std::string& what) {
+  if (!(stiffness > 0.0 && std::isfinite(stiffness)))
+    throw Error(what + ": stiffness " + std::to_string(stiffness) +
+                " N/m is not a positive finite number");
+}
+
+double point_rows_normal_force(const std::vector<double>& forces) {
+  double f = 0.0;
+  for (size_t k = 0; k < forces.size(); k += 3) f += forces[k];
+  return f;
+}
+
+Vec3 point_rows_force(const std::vector<double>& forces, const Mat3& frame) {
+  Vec3 f = Vec3::Zero();
+  for (size_t k = 0; k + 2 < forces.size(); k += 3)
+    f += forces[k] * frame.col(2) + forces[k + 1] * frame.col(0) + forces[k + 2] * frame.col(1);
+  return f;
 }
 
 ConstraintRow point_row(const std::vector<RigidBody>& bodies, const BodyFrame& a, const BodyFrame& b,

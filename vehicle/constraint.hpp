@@ -87,6 +87,16 @@ struct BodyFrame {
 // an orthonormal frame whose z axis is the given direction
 Mat3 frame_from_axis(const Vec3& axis);
 
+// the forces of point contacts whose rows come in threes per point (normal along frame column 2,
+// then friction along columns 0 and 1: vehicle/ground_contact, vehicle/plane_contact): the sum of
+// the normal forces, and the whole force in the world [N]
+double point_rows_normal_force(const std::vector<double>& forces);
+// a contact's stiffness [N/m] must be positive and finite: its rows' compliance is its inverse,
+// and an infinite compliance corrupts the machine's solve whether the rows are active or not;
+// talus::Error naming `what` otherwise
+void check_stiffness(double stiffness, const std::string& what);
+Vec3 point_rows_force(const std::vector<double>& forces, const Mat3& frame);
+
 // row helpers: the velocity of a world point p on frame b minus that on frame a, along direction n
 ConstraintRow point_row(const std::vector<RigidBody>& bodies, const BodyFrame& a, const BodyFrame& b,
                         const Vec3& point_a, const Vec3& point_b, const Vec3& n);

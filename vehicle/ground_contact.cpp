@@ -25,9 +25,7 @@ PointGroundContact::PointGroundContact(int body, std::vector<Vec3> points,
                                        int max_points)
     : body_(body), points_(std::move(points)), p_(p), plane_(plane) {
   if (points_.empty()) throw Error("point-plane contact: no points");
-  if (!(p_.stiffness > 0.0 && std::isfinite(p_.stiffness)))
-    throw Error("point-plane contact: stiffness " + std::to_string(p_.stiffness) +
-                " N/m is not a positive finite number");
+  check_stiffness(p_.stiffness, "point-plane contact");
   if (!(std::abs(plane_.normal.norm() - 1.0) < 1e-9))
     throw Error("point-plane contact: the plane's normal is not a unit vector");
   const int n = static_cast<int>(points_.size());
@@ -52,8 +50,15 @@ void PointGroundContact::add_rows(const std::vector<RigidBody>& bodies,
   std::vector<int> chosen(n);
   std::iota(chosen.begin(), chosen.end(), 0);
   if (rows_points_ < n) {
-    std::stable_sort(chosen.begin(), chosen.end(), [&](int a, int b) { return gap[a] < gap[b]; });
+    // (a NaN gap sorts last: the comparison stays a strict weak order)
+    const auto key = [&](int k) {
+      return std::isnan(gap[k]) ? std::numeric_limits<double>::infinity() : gap[k];
+    };
+    std::stable_sort(chosen.begin(), chosen.end(), [&](int a, int b) { return key(a) < key(b); });
     chosen.resize(rows_points_);
+    // rows in index order: while the same points stay nearest, each row keeps its point and the
+    // direct solver's warm start (row by row) stays with it
+    std::sort(chosen.begin(), chosen.end());
   }
   clearance_ = std::numeric_limits<double>::infinity();
   for (int k : chosen) clearance_ = std::min(clearance_, gap[k]);
@@ -81,18 +86,8 @@ void PointGroundContact::add_rows(const std::vector<RigidBody>& bodies,
   }
 }
 
-double PointGroundContact::normal_force() const {
-  double f = 0.0;
-  for (size_t k = 0; k < forces_.size(); k += kRowsPerPoint) f += forces_[k];
-  return f;
-}
+double PointGroundContact::normal_force() const { return point_rows_normal_force(forces_); }
 
-Vec3 PointGroundContact::force_on_body() const {
-  Vec3 f = Vec3::Zero();
-  for (size_t k = 0; k + 2 < forces_.size(); k += kRowsPerPoint)
-    f += forces_[k] * frame_.col(2) + forces_[k + 1] * frame_.col(0) +
-         forces_[k + 2] * frame_.col(1);
-  return f;
-}
+Vec3 PointGroundContact::force_on_body() const { return point_rows_force(forces_, frame_); }
 
 }  // namespace talus::vehicle

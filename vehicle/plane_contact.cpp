@@ -11,18 +11,14 @@ constexpr int kRowsPerPoint = 3;  // normal, two friction
 }
 
 PlaneContact::PlaneContact(int body_a, int body_b, int points, PlaneContactParameters p)
-    : a_(body_a), b_(body_b), points_(points), p_(p) {
+    : a_(body_a), b_(body_b), points_(points) {
   if (points < 1) throw Error("plane contact: a patch needs at least one point");
   g_.points.assign(points, Vec3::Zero());
   set_parameters(p);
 }
 
 void PlaneContact::set_parameters(const PlaneContactParameters& p) {
-  // the rows' compliance is points / stiffness: a stiffness of zero (or NaN) would put an
-  // infinite compliance into the machine's system, active or not, and corrupt its solve
-  if (!(p.stiffness > 0.0 && std::isfinite(p.stiffness)))
-    throw Error("plane contact '" + name + "': stiffness " + std::to_string(p.stiffness) +
-                " N/m is not a positive finite number");
+  check_stiffness(p.stiffness, "plane contact '" + name + "'");
   p_ = p;
 }
 
@@ -64,18 +60,8 @@ void PlaneContact::add_rows(const std::vector<RigidBody>& bodies,
   }
 }
 
-double PlaneContact::normal_force() const {
-  double f = 0.0;
-  for (size_t k = 0; k < forces_.size(); k += kRowsPerPoint) f += forces_[k];
-  return f;
-}
+double PlaneContact::normal_force() const { return point_rows_normal_force(forces_); }
 
-Vec3 PlaneContact::force_on_b() const {
-  Vec3 f = Vec3::Zero();
-  for (size_t k = 0; k + 2 < forces_.size(); k += kRowsPerPoint)
-    f += forces_[k] * frame_.col(2) + forces_[k + 1] * frame_.col(0) +
-         forces_[k + 2] * frame_.col(1);
-  return f;
-}
+Vec3 PlaneContact::force_on_b() const { return point_rows_force(forces_, frame_); }
 
 }  // namespace talus::vehicle

@@ -85,8 +85,10 @@ class WheelLoader {
   // into a pile (the tyres and frame stay behind it on the straight paths of the scenarios)
   void add_bucket_walls(const std::vector<RigidPlane>& walls);
   const std::vector<PointGroundContact*>& bucket_walls() const { return bucket_walls_; }
-  // rows per wall: four points hold a face of the hull flat against a wall, as the ground's four
-  // corners do
+  // rows per wall: the four hull vertices nearest it, a face when one lies flat against the wall
+  // (the curled bucket's bottom: tip and heel ends), two points of an edge when the bucket meets
+  // it edge first. The walls are planes without end, as the particles' are: a bucket lifted above
+  // a real wall's top would pass over it, here it cannot
   static constexpr int kWallPoints = 4;
   const CylinderSpec& lift_spec() const { return lift_spec_; }
   const CylinderSpec& tilt_spec() const { return tilt_spec_; }

@@ -55,8 +55,9 @@ TEST(SavedStateFile, DamagedFilesAreRefusedByName) {
     EXPECT_THROW((void)open_state(flipped, "s.state", nullptr), InputError) << "byte " << k;
   }
   std::string version = bytes;
-  version[8] = 2;
-  refused(version, "state format version 2, this talus reads 1");
+  version[8] = static_cast<char>(kStateFormatVersion + 1);
+  refused(version, "state format version " + std::to_string(kStateFormatVersion + 1) +
+                       ", this talus reads " + std::to_string(kStateFormatVersion));
 }
 
 TEST(SavedStateFile, KeyDifferenceNamesTheFirstLine) {

@@ -133,6 +133,39 @@ TEST(PointGroundContact, TheFlatGroundCarriesABlocksWeight) {
   EXPECT_NEAR(ground.clearance(), 0.0, 1e-4);
 }
 
+// the flat ground's rows are what they were before the contact took any plane: per point a normal
+// row along +z with the gap z - ground_height, then friction along world x and y, exactly
+TEST(PointGroundContact, TheGroundsRowsAreTheFlatGroundsExactly) {
+  std::vector<RigidBody> bodies(1);
+  bodies[0].mass = 100.0;
+  bodies[0].inertia = Mat3::Identity();
+  bodies[0].position = Vec3(0.3, -0.2, 0.7);
+  bodies[0].orientation = Eigen::Quaterniond(Eigen::AngleAxisd(0.4, Vec3(1, 2, 3).normalized()));
+  GroundContactParameters p;
+  p.ground_height = 0.25;
+  const std::vector<Vec3> points{Vec3(0.5, 0.1, -0.6), Vec3(-0.4, 0.3, -0.5)};
+  PointGroundContact ground(0, points, p);
+  std::vector<ConstraintRow> rows;
+  ground.add_rows(bodies, rows);
+  ASSERT_EQ(rows.size(), 6u);
+  for (size_t k = 0; k < points.size(); ++k) {
+    const Vec3 at = bodies[0].point_to_world(points[k]);
+    const ConstraintRow& n = rows[3 * k];
+    EXPECT_EQ(n.violation, at.z() - p.ground_height);
+    EXPECT_EQ(n.force_min, 0.0);
+    EXPECT_EQ(n.compliance, 1.0 / p.stiffness);
+    ASSERT_EQ(n.blocks.size(), 1u);
+    EXPECT_EQ(Vec3(n.blocks[0].jacobian.head<3>()), Vec3::UnitZ());
+    EXPECT_EQ(Vec3(rows[3 * k + 1].blocks[0].jacobian.head<3>()), Vec3::UnitX());
+    EXPECT_EQ(Vec3(rows[3 * k + 2].blocks[0].jacobian.head<3>()), Vec3::UnitY());
+    EXPECT_EQ(rows[3 * k + 1].friction_normal, static_cast<int>(3 * k));
+    EXPECT_EQ(rows[3 * k + 1].friction_coefficient, p.friction);
+  }
+  EXPECT_EQ(ground.clearance(), std::min(bodies[0].point_to_world(points[0]).z(),
+                                         bodies[0].point_to_world(points[1]).z()) -
+                                    p.ground_height);
+}
+
 TEST(PointGroundContact, BadPlanesAndStiffnessesAreRefused) {
   GroundContactParameters p;
   const std::vector<Vec3> one{Vec3::Zero()};
