@@ -13,6 +13,12 @@
 namespace talus {
 namespace {
 
+// FB35's pile at a level, placed 5 m ahead (paper §7.1) with a 40 s cycle
+CyclePile fb35_cycle_pile(const FidelityPreset& level, const DiggingOptions& options) {
+  return build_cycle_pile(test::shared_device(), vehicle::load_scenario("fb35"), 5.0, 40.0, level,
+                          options, nullptr);
+}
+
 CycleResult result(double s, double mass, double time, bool completed = true) {
   CycleResult r;
   r.s = s;
@@ -60,8 +66,7 @@ TEST(FeedbackSweep, FeedbackScenarioStartsFiveMetresFromThePile) {
 TEST(FeedbackSweep, ACycleOnTheTypeGTerrainCompletesAndFills) {
   const FidelityPreset& g400 = level_preset("G400");
   const DiggingOptions options;
-  const CyclePile cycle = build_cycle_pile(test::shared_device(), vehicle::load_scenario("fb35"),
-                                           5.0, 40.0, g400, options, nullptr);
+  const CyclePile cycle = fb35_cycle_pile(g400, options);
   ASSERT_GT(cycle.surface.back().second, 1.5);  // the scan sees the pile, not bare ground
   const CycleResult r = run_feedback_cycle(test::shared_device(), cycle, g400, options, 0.0);
   std::printf(
@@ -76,8 +81,7 @@ TEST(FeedbackSweep, ACycleOnTheTypeGTerrainCompletesAndFills) {
 TEST(FeedbackSweep, ACallerCommandingTheFillWithTheControllersTargetsGivesTheSameCycle) {
   const FidelityPreset& g400 = level_preset("G400");
   const DiggingOptions options;
-  const CyclePile cycle = build_cycle_pile(test::shared_device(), vehicle::load_scenario("fb35"),
-                                           5.0, 40.0, g400, options, nullptr);
+  const CyclePile cycle = fb35_cycle_pile(g400, options);
   const double s = 0.7;
   const CycleResult own = run_feedback_cycle(test::shared_device(), cycle, g400, options, s);
 
@@ -113,8 +117,7 @@ TEST(FeedbackSweep, ACallerCommandingTheFillWithTheControllersTargetsGivesTheSam
 TEST(FeedbackSweep, ABucketDrivenIntoThePilesRearWallStopsThereWithItsLoad) {
   const FidelityPreset& g400 = level_preset("G400");
   const DiggingOptions options;
-  const CyclePile cycle = build_cycle_pile(test::shared_device(), vehicle::load_scenario("fb35"),
-                                           5.0, 40.0, g400, options, nullptr);
+  const CyclePile cycle = fb35_cycle_pile(g400, options);
   const double wall_x = scenario_pile_profile(cycle.scenario).rear_wall_x;
   LoadingCycle run(test::shared_device(), cycle, g400, options,
                    vehicle::gains_on_search_line(0.35));
@@ -147,8 +150,7 @@ TEST(FeedbackSweep, ABucketDrivenIntoThePilesRearWallStopsThereWithItsLoad) {
 TEST(FeedbackSweep, TheTypeGApproachStartsAsTheMachineAlone) {
   const FidelityPreset& g400 = level_preset("G400");
   const DiggingOptions options;
-  const CyclePile cycle = build_cycle_pile(test::shared_device(), vehicle::load_scenario("fb35"),
-                                           5.0, 40.0, g400, options, nullptr);
+  const CyclePile cycle = fb35_cycle_pile(g400, options);
   LoadingCycle run(test::shared_device(), cycle, g400, options, vehicle::gains_on_search_line(0.0));
   run.step();
   const vehicle::WheelLoader& in_cycle = run.simulation().loader();

@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <functional>
 
 #include "host/error.hpp"
 #include "vehicle/multibody.hpp"
@@ -36,6 +37,26 @@ struct Block {
       for (double y : {-0.5, 0.5})
         for (double z : {-0.5, 0.5}) corners.emplace_back(x, y, z);
   }
+  // its corners against `plane` with friction mu, rows for the four nearest
+  PointGroundContact& add_wall(const RigidPlane& plane, double mu) {
+    GroundContactParameters p;
+    p.friction = mu;
+    auto& c =
+        system.add_constraint(std::make_unique<PointGroundContact>(body, corners, p, plane, 4));
+    c.name = "wall";
+    return c;
+  }
+  // `steps` steps of 10 ms under the force f [N] at the centre; `after(k)` after step k
+  void push(const Vec3& f, int steps, const std::function<void(int)>& after = {}) {
+    Vec6 wrench = Vec6::Zero();
+    wrench.head<3>() = f;
+    for (int k = 0; k < steps; ++k) {
+      system.set_external_wrench(body, wrench);
+      system.step(0.01);
+      if (after) after(k);
+    }
+  }
+  const RigidBody& state() const { return system.body(body); }
 };
 
 // the wall x = 2 facing -x (free side x < 2)
@@ -43,26 +64,17 @@ const RigidPlane kWall{Vec3(-1.0, 0.0, 0.0), -2.0};
 
 TEST(PointGroundContact, ABlockPushedIntoAWallStopsThereAndTheWallCarriesThePush) {
   Block b(Vec3(0.0, 0.0, 1.0), Eigen::Quaterniond::Identity(), false);
-  GroundContactParameters p;
-  p.friction = 0.0;
-  auto& wall =
-      b.system.add_constraint(std::make_unique<PointGroundContact>(b.body, b.corners, p, kWall, 4));
-  wall.name = "wall";
+  auto& wall = b.add_wall(kWall, 0.0);
   // a push of 2 kN along +x for 2 s: it reaches the wall (1 m away) within about a second
   const double push = 2000.0;
-  Vec6 f = Vec6::Zero();
-  f(0) = push;
   double front = 0.0;
-  for (int k = 0; k < 200; ++k) {
-    b.system.set_external_wrench(b.body, f);
-    b.system.step(0.01);
-    front = std::max(front, b.system.body(b.body).position.x() + 0.5);
-  }
+  b.push(Vec3(push, 0.0, 0.0), 200,
+         [&](int) { front = std::max(front, b.state().position.x() + 0.5); });
   std::printf("[ measured ] deepest front %.5f m (wall at 2), wall force %.1f N (push %.0f N)\n",
               front, wall.normal_force(), push);
   // stiff (1e8 N/m per point): 2 kN over 4 points presses it in by 5 micrometres
   EXPECT_LT(front, 2.0 + 1e-3);
-  EXPECT_NEAR(b.system.body(b.body).velocity.x(), 0.0, 1e-4);
+  EXPECT_NEAR(b.state().velocity.x(), 0.0, 1e-4);
   EXPECT_NEAR(wall.normal_force(), push, 1e-3 * push);
   EXPECT_NEAR(wall.force_on_body().x(), -push, 1e-3 * push);
   EXPECT_NEAR(wall.clearance(), 0.0, 1e-4);
@@ -72,21 +84,12 @@ TEST(PointGroundContact, SlidingAlongAWallFeelsCoulombFriction) {
   // pressed on the wall with 2 kN and pulled along it (y) with 1 kN at mu 0.2: it slides with
   // (1000 - 0.2 * 2000) / 100 = 6 m/s^2
   Block b(Vec3(1.5, 0.0, 1.0), Eigen::Quaterniond::Identity(), false);
-  GroundContactParameters p;
-  p.friction = 0.2;
-  auto& wall =
-      b.system.add_constraint(std::make_unique<PointGroundContact>(b.body, b.corners, p, kWall, 4));
-  wall.name = "wall";
-  Vec6 f = Vec6::Zero();
-  f(0) = 2000.0;
-  f(1) = 1000.0;
+  b.add_wall(kWall, 0.2);
   double v_half = 0.0;
-  for (int k = 0; k < 100; ++k) {
-    b.system.set_external_wrench(b.body, f);
-    b.system.step(0.01);
-    if (k == 49) v_half = b.system.body(b.body).velocity.y();
-  }
-  const double a = (b.system.body(b.body).velocity.y() - v_half) / 0.5;
+  b.push(Vec3(2000.0, 1000.0, 0.0), 100, [&](int k) {
+    if (k == 49) v_half = b.state().velocity.y();
+  });
+  const double a = (b.state().velocity.y() - v_half) / 0.5;
   std::printf("[ measured ] along the wall: %.4f m/s^2 (expected 6)\n", a);
   EXPECT_NEAR(a, 6.0, 6e-3);
 }
@@ -96,20 +99,10 @@ TEST(PointGroundContact, TheRowsGoToTheHullPointsNearestTheWall) {
   // it stops on that edge, whichever four of its eight corners the rows then hold
   const Eigen::Quaterniond turned(Eigen::AngleAxisd(M_PI / 4.0, Vec3::UnitZ()));
   Block b(Vec3(0.0, 0.0, 1.0), turned, false);
-  GroundContactParameters p;
-  p.friction = 0.0;
-  auto& wall =
-      b.system.add_constraint(std::make_unique<PointGroundContact>(b.body, b.corners, p, kWall, 4));
-  wall.name = "wall";
-  Vec6 f = Vec6::Zero();
-  f(0) = 2000.0;
-  for (int k = 0; k < 200; ++k) {
-    b.system.set_external_wrench(b.body, f);
-    b.system.step(0.01);
-  }
+  auto& wall = b.add_wall(kWall, 0.0);
+  b.push(Vec3(2000.0, 0.0, 0.0), 200);
   double front = -INFINITY;
-  for (const Vec3& c : b.corners)
-    front = std::max(front, b.system.body(b.body).point_to_world(c).x());
+  for (const Vec3& c : b.corners) front = std::max(front, b.state().point_to_world(c).x());
   std::printf("[ measured ] turned cube: leading edge at %.5f m, wall force %.1f N\n", front,
               wall.normal_force());
   EXPECT_LT(front, 2.0 + 1e-3);
