@@ -33,6 +33,7 @@ struct DiagnoseArgs {
   int max_effects = 2;
   int validation = -1;
   unsigned pile_seed = 1;
+  int threads = 0;
   bool quiet = false;
   bool discover = false;
 };
@@ -49,6 +50,7 @@ void diagnose_command(const DiagnoseArgs& a) {
   options.validation_runs = a.validation;
   options.plugins = vehicle::load_effect_plugins(a.plugins);
   options.discover = a.discover;
+  options.threads = a.threads;
   if (!a.out.empty()) make_output_dir(a.out);
   check_output_file(a.json, "--json");
   const bool piles = std::any_of(runs.begin(), runs.end(), [](const MeasuredRun& r) { return measured_scenario(r).pile; });
@@ -113,6 +115,12 @@ void add_diagnose_command(CLI::App& app) {
       "--discover", a->discover,
       "fit a learned correction (a sparse model of the residual, docs/discovery.md) even when the "
       "candidates leave nothing beyond noise; by default it is fitted only when they do");
+  cmd->add_option("--threads", a->threads,
+                  "simulations of the machine alone run at once (default 0: every hardware thread; "
+                  "runs on a pile share the device and run one at a time); any count gives the "
+                  "same diagnosis")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 1024));
   cmd->add_flag("--quiet", a->quiet, "no progress on stderr");
   cmd->callback([a] { diagnose_command(*a); });
 }

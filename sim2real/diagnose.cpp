@@ -3,6 +3,7 @@
 #include <nlopt.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -12,6 +13,7 @@
 
 #include "host/error.hpp"
 #include "host/interrupt.hpp"
+#include "host/parallel.hpp"
 
 namespace talus::sim2real {
 
@@ -266,6 +268,12 @@ struct Scanned {
   int parameters = 0;
 };
 
+// a task of a parallel loop that failed with an exception other than an interrupt: what it said
+struct Failure {
+  bool failed = false;
+  std::string what;
+};
+
 // The search of diagnose(), stage by stage: the replays and their noise, the baseline, then per
 // round the signature screen, the coarse scan, the fits with validation, and the decision. It
 // holds the model under test (the effects found so far) and every run's current simulation.
@@ -292,12 +300,15 @@ class Search {
     for (std::size_t i = 0; i < n; ++i) all_[i] = i;
     // soil effects show only where there are particles
     any_pile_ = std::any_of(replays_.begin(), replays_.end(), [](const auto& r) { return r->scenario().pile; });
+    // the machine alone runs on every thread; a pile on the one device, one simulation at a time
+    threads_ = any_pile_ ? 1 : (options.threads > 0 ? options.threads : hardware_threads());
   }
 
   // the baseline: residuals and the paper's error rows; the current model is the baseline
   void baseline() {
+    const std::vector<Run> simulated = simulate_all(nullptr);
     for (std::size_t i = 0; i < runs_.size(); ++i) {
-      Run r = simulate(i, nullptr);
+      Run r = simulated[i];
       r.summary.fidelity = "baseline";
       d_.simulated_before.push_back(r);
       d_.residuals_before.push_back(compute_residuals(r, runs_[i].run, sigma_[i]));
@@ -330,16 +341,30 @@ class Search {
     say("round " + std::to_string(number) + ": " + std::to_string(screened.size()) + " candidates to scan, " +
         std::to_string(dr.screened_out.size()) + " screened out by their signature");
     std::vector<Scanned> scanned = scan(screened, dr);
-    // 3. fit the best few; 4. validate them with the parameter penalty
-    for (std::size_t j = 0; j < scanned.size() && j < static_cast<std::size_t>(kFitted); ++j) {
-      if (!(scanned[j].score.excess < current_cal_)) break;  // no better than the model without it
+    // 3. fit the best few (those better than the model without them), each fit on its own thread;
+    // 4. validate them with the parameter penalty. Reported in rank order, as a serial loop would
+    std::size_t fitted = 0;
+    while (fitted < scanned.size() && fitted < static_cast<std::size_t>(kFitted) &&
+           scanned[fitted].score.excess < current_cal_)
+      ++fitted;
+    std::vector<FittedEffect> fits(fitted);
+    std::vector<Failure> fit_failures(fitted);
+    parallel_for(fitted, threads_, [&](std::size_t j) {
       try {
-        dr.fitted.push_back(fit(scanned[j]));
+        fits[j] = fit(scanned[j]);
       } catch (const Interrupted&) {
         throw;
       } catch (const std::exception& e) {
-        failed(dr, scanned[j].c->label(), e.what());
+        fit_failures[j] = {true, e.what()};
       }
+    });
+    for (std::size_t j = 0; j < fitted; ++j) {
+      if (fit_failures[j].failed) {
+        failed(dr, scanned[j].c->label(), fit_failures[j].what);
+        continue;
+      }
+      say_fit(fits[j]);
+      dr.fitted.push_back(fits[j]);
     }
     std::sort(dr.fitted.begin(), dr.fitted.end(), [](const auto& a, const auto& b) { return a.score < b.score; });
     // 5. add the winner only when it explains enough of what is left; else the best pair, if it
@@ -466,10 +491,10 @@ class Search {
   // the correction simulated on every run: its excess, the share it explains (counted as a
   // candidate's) and the channels whose excess it lowers
   void evaluate(DiscoveredCorrection& c) {
+    const std::vector<Run> simulated = simulate_all(&c.spec);
     std::vector<Residuals> after(runs_.size());
     for (std::size_t i = 0; i < runs_.size(); ++i)
-      after[i] = compute_residuals(simulate(i, vehicle::make_effect(c.spec, options_.plugins)),
-                                   runs_[i].run, sigma_[i]);
+      after[i] = compute_residuals(simulated[i], runs_[i].run, sigma_[i]);
     c.simulated = true;
     c.excess_calibration = mean_excess(after, d_.calibration);
     c.excess_validation = mean_excess(after, d_.validation);
@@ -523,6 +548,7 @@ class Search {
 
   // after: the runs with the effects found (the last round's simulations)
   Diagnosis finish() {
+    d_.simulations = simulations_;
     d_.simulated_after = current_runs_;
     d_.residuals_after = current_residuals_;
     if (d_.found.empty()) {
@@ -576,8 +602,18 @@ class Search {
     if (extra) effects.push_back(std::move(extra));
     vehicle::EffectSet set = in_hook_order(std::move(effects));
     Run r = replays_[i]->simulate(set);
-    ++d_.simulations;
+    ++simulations_;
     return r;
+  }
+
+  // every run simulated with the effects found so far plus, optionally, the effect `extra` (a
+  // spec), the runs at once
+  std::vector<Run> simulate_all(const std::string* extra) {
+    std::vector<Run> simulated(runs_.size());
+    parallel_for(runs_.size(), threads_, [&](std::size_t i) {
+      simulated[i] = simulate(i, extra ? vehicle::make_effect(*extra, options_.plugins) : nullptr);
+    });
+    return simulated;
   }
 
   // the mean excess and log-ratio per run of the runs `which` with the candidate at x
@@ -628,33 +664,68 @@ class Search {
     return screened;
   }
 
-  // 2. the coarse scan on the calibration runs: each candidate's best grid point, best first
+  // 2. the coarse scan on the calibration runs: each candidate's best grid point, best first. All
+  // candidates' points are one list of independent simulations, run on the threads at once; each
+  // candidate's best is then read in point order, as a serial scan would
   std::vector<Scanned> scan(const std::vector<const Candidate*>& screened, DiagnosisRound& dr) {
-    std::vector<Scanned> scanned;
-    for (const Candidate* c : screened) {
-      const int k = parameter_count(*c, options_.plugins);
-      if (k == 0) {
-        say("  " + c->label() + ": no parameters to fit, skipped");
-        continue;
+    struct Point {
+      std::size_t candidate;
+      std::vector<double> x;
+    };
+    std::vector<int> parameters(screened.size());
+    std::vector<Failure> setup(screened.size());
+    std::vector<Point> points;
+    std::vector<std::size_t> first_point(screened.size() + 1, 0);
+    for (std::size_t k = 0; k < screened.size(); ++k) {
+      first_point[k] = points.size();
+      parameters[k] = parameter_count(*screened[k], options_.plugins);
+      if (parameters[k] == 0) continue;
+      try {
+        for (auto& x : scan_points(zero_based(*screened[k], options_.plugins)))
+          points.push_back({k, std::move(x)});
+      } catch (const std::exception& e) {
+        setup[k] = {true, e.what()};
       }
+    }
+    first_point[screened.size()] = points.size();
+    std::vector<Score> scores(points.size());
+    std::vector<Failure> failures(points.size());
+    parallel_for(points.size(), threads_, [&](std::size_t p) {
       // a candidate whose simulation fails is reported and skipped, not the whole diagnosis
       try {
-        const std::vector<std::vector<double>> points =
-            scan_points(zero_based(*c, options_.plugins));
-        Scanned best{c, points[0], Score{}, k};
-        for (const auto& x : points) {
-          const Score e = score_runs(d_.calibration, c, x);
-          if (e < best.score) best = {c, x, e, k};
-        }
-        say("  scan " + c->label() + ": best excess " + format_number(best.score.excess) +
-            " (now " + format_number(current_cal_) + ", " + std::to_string(points.size()) +
-            " points)");
-        scanned.push_back(best);
+        scores[p] = score_runs(d_.calibration, screened[points[p].candidate], points[p].x);
       } catch (const Interrupted&) {
         throw;
       } catch (const std::exception& e) {
-        failed(dr, c->label(), e.what());
+        failures[p] = {true, e.what()};
       }
+    });
+    std::vector<Scanned> scanned;
+    for (std::size_t k = 0; k < screened.size(); ++k) {
+      const Candidate* c = screened[k];
+      if (parameters[k] == 0) {
+        say("  " + c->label() + ": no parameters to fit, skipped");
+        continue;
+      }
+      if (setup[k].failed) {
+        failed(dr, c->label(), setup[k].what);
+        continue;
+      }
+      // its first failure in point order, or its best point
+      const std::size_t begin = first_point[k], end = first_point[k + 1];
+      const auto failure = std::find_if(failures.begin() + static_cast<std::ptrdiff_t>(begin),
+                                        failures.begin() + static_cast<std::ptrdiff_t>(end),
+                                        [](const Failure& f) { return f.failed; });
+      if (failure != failures.begin() + static_cast<std::ptrdiff_t>(end)) {
+        failed(dr, c->label(), failure->what);
+        continue;
+      }
+      Scanned best{c, points[begin].x, Score{}, parameters[k]};
+      for (std::size_t p = begin; p < end; ++p)
+        if (scores[p] < best.score) best = {c, points[p].x, scores[p], parameters[k]};
+      say("  scan " + c->label() + ": best excess " + format_number(best.score.excess) + " (now " +
+          format_number(current_cal_) + ", " + std::to_string(end - begin) + " points)");
+      scanned.push_back(best);
     }
     std::sort(scanned.begin(), scanned.end(), [](const auto& a, const auto& b) { return a.score < b.score; });
     return scanned;
@@ -663,16 +734,19 @@ class Search {
   // 3. and 4.: the likelihood's optimum from the best scan point (kept only if its excess is no
   // worse), then its excess on the held-out runs, the share it explains and its penalised score
   FittedEffect fit(Scanned& s) {
-    const int before = d_.simulations;
+    int simulations = 0;  // counted here: other fits run beside this one
+    const auto score = [&](const std::vector<std::size_t>& which, const std::vector<double>& x) {
+      simulations += static_cast<int>(which.size());
+      return score_runs(which, s.c, x);
+    };
     const bool disjoint = d_.validation != d_.calibration;
     const double step = 0.5 / (s.parameters == 1 ? kScanPoints : kScanPointsPerAxis2);
     std::vector<double> x = s.x;
     const int evaluations =
         s.parameters == 1 ? kFitEvaluations : kFitEvaluationsPerParameter * s.parameters;
-    minimise(
-        [&](const std::vector<double>& y) { return score_runs(d_.calibration, s.c, y).log_ratio; },
-        x, step, evaluations);
-    const Score fitted = score_runs(d_.calibration, s.c, x);
+    minimise([&](const std::vector<double>& y) { return score(d_.calibration, y).log_ratio; }, x,
+             step, evaluations);
+    const Score fitted = score(d_.calibration, x);
     if (fitted.excess <= s.score.excess) s.x = x;
     FittedEffect f;
     f.candidate = *s.c;
@@ -682,7 +756,7 @@ class Search {
     f.parameters = s.parameters;
     f.x = s.x;
     f.excess_calibration = std::min(fitted.excess, s.score.excess);
-    f.excess_validation = disjoint ? score_runs(d_.validation, s.c, s.x).excess : f.excess_calibration;
+    f.excess_validation = disjoint ? score(d_.validation, s.x).excess : f.excess_calibration;
     // the share it explains of what is left
     const Share share = share_explained(f.excess_calibration, f.excess_validation);
     f.explained = share.explained;
@@ -693,11 +767,15 @@ class Search {
     f.score = harmless ? (f.explained_on == "validation" ? f.excess_validation : f.excess_calibration) +
                              kParameterPenalty * f.parameters
                        : HUGE_VAL;
-    f.simulations = d_.simulations - before;
-    say("  fit " + f.spec + ": excess calibration " + format_number(f.excess_calibration) + ", validation " +
-        format_number(f.excess_validation) + " (explains " + format_number(100.0 * f.explained) + " % on the " +
-        f.explained_on + " runs)");
+    f.simulations = simulations;
     return f;
+  }
+
+  // a fit's line in the notes (said by the caller, in rank order, once the fits beside it are done)
+  void say_fit(const FittedEffect& f) const {
+    say("  fit " + f.spec + ": excess calibration " + format_number(f.excess_calibration) +
+        ", validation " + format_number(f.excess_validation) + " (explains " +
+        format_number(100.0 * f.explained) + " % on the " + f.explained_on + " runs)");
   }
 
   // run i simulated with the effects found so far plus the candidates at their normalised values
@@ -709,7 +787,7 @@ class Search {
     for (const auto& [c, x] : extras) effects.push_back(make_candidate(*c, x, options_.plugins));
     vehicle::EffectSet set = in_hook_order(std::move(effects));
     Run r = replays_[i]->simulate(set);
-    ++d_.simulations;
+    ++simulations_;
     return r;
   }
 
@@ -732,8 +810,9 @@ class Search {
   }
 
   // pairs (step 5): each of the best singles provisionally in the model, a second candidate
-  // searched on top of it, then both refitted jointly and validated against the excess before
-  // either; dr.pairs holds them, best score first
+  // searched on top of it (its scan on the threads), then both refitted jointly, the joint fits
+  // of all the firsts on the threads at once, and validated against the excess before either;
+  // dr.pairs holds them, best score first
   void search_pairs(const std::vector<Candidate>& candidates, DiagnosisRound& dr) {
     const Model before = model();
     const bool disjoint = d_.validation != d_.calibration;
@@ -742,12 +821,21 @@ class Search {
       if (std::isfinite(f.score) && f.explained > 0.0 &&
           static_cast<int>(firsts.size()) < kPairCandidates)
         firsts.push_back(&f);
+    // the second candidate of each first, searched with the first in the model
+    struct Trial {
+      const Candidate* ca = nullptr;  // the first
+      const Candidate* cb = nullptr;  // the second: the best of the scan on top of it
+      std::vector<double> x;          // both candidates' values, the first's first
+      std::size_t ka = 0;             // how many of x are the first's
+    };
+    std::vector<Trial> trials;
     for (const FittedEffect* a : firsts) {
+      Trial t;
       try {
         // a provisionally in the model: the screen and the scan see what it leaves
         found_specs_.push_back(a->spec);
+        current_runs_ = simulate_all(nullptr);
         for (std::size_t i = 0; i < runs_.size(); ++i) {
-          current_runs_[i] = simulate(i, nullptr);
           current_residuals_[i] = compute_residuals(current_runs_[i], runs_[i].run, sigma_[i]);
         }
         current_cal_ = mean_excess(current_residuals_, d_.calibration);
@@ -762,62 +850,13 @@ class Search {
         for (const auto& f : inner.failed) dr.failed.push_back(f);
         restore(before);
         if (scanned.empty()) continue;
-        // both refitted together from their own values, on the calibration runs
-        const Candidate* ca = nullptr;
         for (const auto& c : candidates)
-          if (c.label() == a->candidate.label()) ca = &c;
-        const Candidate* cb = scanned[0].c;
-        const std::size_t ka = a->x.size();
-        auto split = [&](const std::vector<double>& x) {
-          return std::vector<std::pair<const Candidate*, std::vector<double>>>{
-              {ca, std::vector<double>(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(ka))},
-              {cb, std::vector<double>(x.begin() + static_cast<std::ptrdiff_t>(ka), x.end())}};
-        };
-        auto score_pair = [&](const std::vector<std::size_t>& which, const std::vector<double>& x) {
-          std::vector<double> e, l;
-          for (std::size_t i : which) {
-            const Residuals res =
-                compute_residuals(simulate_with(i, split(x)), runs_[i].run, sigma_[i]);
-            e.push_back(res.excess);
-            l.push_back(res.log_ratio);
-          }
-          return Score{mean_of(e), mean_of(l)};
-        };
-        std::vector<double> x = a->x;
-        x.insert(x.end(), scanned[0].x.begin(), scanned[0].x.end());
-        const std::vector<double> start = x;
-        minimise(
-            [&](const std::vector<double>& y) { return score_pair(d_.calibration, y).log_ratio; },
-            x, 0.5 / kScanPointsPerAxis2, kFitEvaluationsPerParameter * static_cast<int>(x.size()));
-        if (score_pair(d_.calibration, start).excess < score_pair(d_.calibration, x).excess)
-          x = start;
-        // the pair as one model: its shares against the excess before either
-        FittedPair p;
-        const auto parts = split(x);
-        p.first = as_fitted(*ca, parts[0].second);
-        p.second = as_fitted(*cb, parts[1].second);
-        p.excess_calibration = score_pair(d_.calibration, x).excess;
-        p.excess_validation = disjoint ? score_pair(d_.validation, x).excess : p.excess_calibration;
-        const Share share = share_explained(p.excess_calibration, p.excess_validation);
-        p.explained = share.explained;
-        p.explained_on = share.on;
-        const bool harmless =
-            p.explained_on == "validation" || p.excess_validation < kSignificantExcess;
-        p.score = harmless ? (p.explained_on == "validation" ? p.excess_validation
-                                                             : p.excess_calibration) +
-                                 kParameterPenalty * static_cast<double>(x.size())
-                           : HUGE_VAL;
-        // each effect reports the pair's shares (they are added together or not at all)
-        for (FittedEffect* f : {&p.first, &p.second}) {
-          f->excess_calibration = p.excess_calibration;
-          f->excess_validation = p.excess_validation;
-          f->explained = p.explained;
-          f->explained_on = p.explained_on;
-          f->score = p.score;
-        }
-        say("  pair " + p.first.spec + " + " + p.second.spec + ": explains " +
-            format_number(100.0 * p.explained) + " % on the " + p.explained_on + " runs");
-        dr.pairs.push_back(p);
+          if (c.label() == a->candidate.label()) t.ca = &c;
+        t.cb = scanned[0].c;
+        t.ka = a->x.size();
+        t.x = a->x;
+        t.x.insert(t.x.end(), scanned[0].x.begin(), scanned[0].x.end());
+        trials.push_back(std::move(t));
       } catch (const Interrupted&) {
         throw;
       } catch (const std::exception& e) {
@@ -825,8 +864,81 @@ class Search {
         failed(dr, "pair with " + a->candidate.label(), e.what());
       }
     }
+    // both refitted together from their own values, on the calibration runs: each first's fit on
+    // its own thread (the model is the one before the round again, and stays so)
+    std::vector<FittedPair> pairs(trials.size());
+    std::vector<Failure> failures(trials.size());
+    parallel_for(trials.size(), threads_, [&](std::size_t k) {
+      try {
+        pairs[k] = fit_pair(trials[k].ca, trials[k].cb, trials[k].x, trials[k].ka, disjoint);
+      } catch (const Interrupted&) {
+        throw;
+      } catch (const std::exception& e) {
+        failures[k] = {true, e.what()};
+      }
+    });
+    for (std::size_t k = 0; k < trials.size(); ++k) {
+      if (failures[k].failed) {
+        failed(dr, "pair with " + trials[k].ca->label(), failures[k].what);
+        continue;
+      }
+      const FittedPair& p = pairs[k];
+      say("  pair " + p.first.spec + " + " + p.second.spec + ": explains " +
+          format_number(100.0 * p.explained) + " % on the " + p.explained_on + " runs");
+      dr.pairs.push_back(p);
+    }
     std::sort(dr.pairs.begin(), dr.pairs.end(),
               [](const auto& a, const auto& b) { return a.score < b.score; });
+  }
+
+  // the pair (ca at x[0, ka), cb at x[ka, end)) fitted jointly from x on the calibration runs and
+  // validated as one model: its shares against the excess before either
+  FittedPair fit_pair(const Candidate* ca, const Candidate* cb, std::vector<double> x,
+                      std::size_t ka, bool disjoint) {
+    auto split = [&](const std::vector<double>& y) {
+      return std::vector<std::pair<const Candidate*, std::vector<double>>>{
+          {ca, std::vector<double>(y.begin(), y.begin() + static_cast<std::ptrdiff_t>(ka))},
+          {cb, std::vector<double>(y.begin() + static_cast<std::ptrdiff_t>(ka), y.end())}};
+    };
+    auto score_pair = [&](const std::vector<std::size_t>& which, const std::vector<double>& y) {
+      std::vector<double> e, l;
+      for (std::size_t i : which) {
+        const Residuals res =
+            compute_residuals(simulate_with(i, split(y)), runs_[i].run, sigma_[i]);
+        e.push_back(res.excess);
+        l.push_back(res.log_ratio);
+      }
+      return Score{mean_of(e), mean_of(l)};
+    };
+    const std::vector<double> start = x;
+    minimise([&](const std::vector<double>& y) { return score_pair(d_.calibration, y).log_ratio; },
+             x, 0.5 / kScanPointsPerAxis2,
+             kFitEvaluationsPerParameter * static_cast<int>(x.size()));
+    if (score_pair(d_.calibration, start).excess < score_pair(d_.calibration, x).excess) x = start;
+    FittedPair p;
+    const auto parts = split(x);
+    p.first = as_fitted(*ca, parts[0].second);
+    p.second = as_fitted(*cb, parts[1].second);
+    p.excess_calibration = score_pair(d_.calibration, x).excess;
+    p.excess_validation = disjoint ? score_pair(d_.validation, x).excess : p.excess_calibration;
+    const Share share = share_explained(p.excess_calibration, p.excess_validation);
+    p.explained = share.explained;
+    p.explained_on = share.on;
+    const bool harmless =
+        p.explained_on == "validation" || p.excess_validation < kSignificantExcess;
+    p.score = harmless
+                  ? (p.explained_on == "validation" ? p.excess_validation : p.excess_calibration) +
+                        kParameterPenalty * static_cast<double>(x.size())
+                  : HUGE_VAL;
+    // each effect reports the pair's shares (they are added together or not at all)
+    for (FittedEffect* f : {&p.first, &p.second}) {
+      f->excess_calibration = p.excess_calibration;
+      f->excess_validation = p.excess_validation;
+      f->explained = p.explained;
+      f->explained_on = p.explained_on;
+      f->score = p.score;
+    }
+    return p;
   }
 
   // a candidate at normalised values as a FittedEffect (its spec, JSON and parameters)
@@ -847,8 +959,8 @@ class Search {
     found_specs_.push_back(f.spec);
     current_cal_ = f.excess_calibration;
     current_val_ = f.excess_validation;
+    current_runs_ = simulate_all(nullptr);
     for (std::size_t i = 0; i < runs_.size(); ++i) {
-      current_runs_[i] = simulate(i, nullptr);
       current_runs_[i].summary.fidelity = "with-effects";
       current_residuals_[i] = compute_residuals(current_runs_[i], runs_[i].run, sigma_[i]);
     }
@@ -861,6 +973,8 @@ class Search {
   std::vector<std::vector<double>> sigma_;  // every run's channel noise
   std::vector<std::size_t> all_;            // 0 .. n-1
   bool any_pile_ = false;
+  int threads_ = 1;                  // simulations at once
+  std::atomic<int> simulations_{0};  // every simulation of the search, on any thread
   Diagnosis d_;
   // the model under test and every run's simulation and residuals under it
   std::vector<std::string> found_specs_;

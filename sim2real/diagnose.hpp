@@ -100,6 +100,10 @@ struct DiagnoseOptions {
   vehicle::EffectPlugins plugins;  // their effects join the candidates
   // run the discovery even when the candidates leave nothing beyond noise
   bool discover = false;
+  // simulations of the machine alone run at once (0: the host's hardware threads); runs on a pile
+  // share the one OpenCL device and run one at a time. Any count gives the same diagnosis, bit
+  // for bit: the parallel loops keep their results by index (host/parallel.hpp)
+  int threads = 0;
 };
 
 struct FittedEffect {

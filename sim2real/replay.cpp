@@ -143,9 +143,20 @@ Run Replay::simulate(vehicle::EffectSet& effects) {
     run = dig_run(scenario_, preset.name, sim);
   }
   run.dir = measured_.run.dir;
+  const std::lock_guard<std::mutex> lock(count_mutex_);
   ++simulations_;
   wall_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return run;
+}
+
+int Replay::simulations() const {
+  const std::lock_guard<std::mutex> lock(count_mutex_);
+  return simulations_;
+}
+
+double Replay::wall_s() const {
+  const std::lock_guard<std::mutex> lock(count_mutex_);
+  return wall_s_;
 }
 
 }  // namespace talus::sim2real

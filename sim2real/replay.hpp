@@ -8,6 +8,7 @@
 // difference is reported, not hidden.
 #pragma once
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
@@ -57,7 +58,9 @@ class Replay {
   Replay& operator=(const Replay&) = delete;
 
   // the measured inputs simulated with the effects (empty set: the baseline); the run carries the
-  // summary fields the metrics read (loaded mass, work of the digging phase, phase marks)
+  // summary fields the metrics read (loaded mass, work of the digging phase, phase marks). A
+  // scenario without a pile may be simulated from several threads at once (each call builds its
+  // own machine; the diagnosis runs its scans so); a pile scenario from one thread at a time
   Run simulate(vehicle::EffectSet& effects);
 
   const vehicle::Scenario& scenario() const { return scenario_; }
@@ -65,8 +68,8 @@ class Replay {
   // the root-mean-square height difference [m] between the measured scan and the simulated pile's
   // scan over their common x range; nullopt before the first pile simulation or without a pile
   std::optional<double> scan_rms_m() const { return scan_rms_; }
-  int simulations() const { return simulations_; }
-  double wall_s() const { return wall_s_; }  // time spent in simulate(), pile build included
+  int simulations() const;
+  double wall_s() const;  // time spent in simulate(), pile build included (summed over threads)
 
  private:
   MeasuredRun measured_;
@@ -75,6 +78,7 @@ class Replay {
   Device* device_ = nullptr;
   std::unique_ptr<PileBuild> pile_;
   std::optional<double> scan_rms_;
+  mutable std::mutex count_mutex_;  // guards the two counts below
   int simulations_ = 0;
   double wall_s_ = 0.0;
 };
