@@ -11,6 +11,9 @@ namespace talus {
 namespace {
 
 constexpr double kDegree = M_PI / 180.0;
+// the columns' heights are sums of cell volumes over h^2: 1 nm is far above their rounding and far
+// below a grain [m]
+constexpr double kOverlapRounding = 1e-9;
 
 // the soil's surface under a point: the given heights (dynamic soil included) or the voxels'
 // columns, interpolated bilinearly between the column centres (as terrain/heightmap's surface),
@@ -187,6 +190,62 @@ DynamicSoil excavate(VoxelTerrain& terrain, const ActiveZone& zone, const BulkSo
         columns->push_back({i, j, lo,
                             std::min(hi, lo + taken.volume / (terrain.cell() * terrain.cell())),
                             taken.mass});
+      dynamic.mass += taken.mass;
+      dynamic.bank_volume += taken.bank_volume;
+    }
+  dynamic.volume = dynamic.bank_volume * soil.swell;
+  return dynamic;
+}
+
+DynamicSoil displace_by_tool(VoxelTerrain& terrain, const std::vector<Vec3>& vertices,
+                             const std::vector<std::array<int, 3>>& triangles, const BulkSoil& soil,
+                             std::vector<ExcavatedColumn>* columns) {
+  DynamicSoil dynamic;
+  const int nx = terrain.nx(), ny = terrain.ny();
+  const double h = terrain.cell();
+  // the tool's lowest point over each column centre it passes over (+inf: none)
+  std::vector<double> lowest(static_cast<size_t>(nx) * ny, INFINITY);
+  int i_lo = nx, i_hi = -1, j_lo = ny, j_hi = -1;
+  for (const auto& t : triangles) {
+    const Vec3 &a = vertices[t[0]], &b = vertices[t[1]], &c = vertices[t[2]];
+    // the projection's signed double area; edge-on from above: no column centre inside
+    const double area = (b.x() - a.x()) * (c.y() - a.y()) - (c.x() - a.x()) * (b.y() - a.y());
+    if (std::abs(area) < 1e-12) continue;
+    // the column centres in the projection's box
+    const double xlo = std::min({a.x(), b.x(), c.x()}), xhi = std::max({a.x(), b.x(), c.x()});
+    const double ylo = std::min({a.y(), b.y(), c.y()}), yhi = std::max({a.y(), b.y(), c.y()});
+    const int i0 = std::max(0, static_cast<int>(std::ceil((xlo - terrain.x0()) / h - 0.5)));
+    const int i1 = std::min(nx - 1, static_cast<int>(std::floor((xhi - terrain.x0()) / h - 0.5)));
+    const int j0 = std::max(0, static_cast<int>(std::ceil((ylo - terrain.y0()) / h - 0.5)));
+    const int j1 = std::min(ny - 1, static_cast<int>(std::floor((yhi - terrain.y0()) / h - 0.5)));
+    for (int j = j0; j <= j1; ++j)
+      for (int i = i0; i <= i1; ++i) {
+        // barycentric coordinates of the centre in the projection, edges included
+        const double x = terrain.column_x(i), y = terrain.column_y(j);
+        const double u = ((b.x() - x) * (c.y() - y) - (c.x() - x) * (b.y() - y)) / area;
+        const double v = ((c.x() - x) * (a.y() - y) - (a.x() - x) * (c.y() - y)) / area;
+        const double w = 1.0 - u - v;
+        if (u < -1e-12 || v < -1e-12 || w < -1e-12) continue;
+        const double z = u * a.z() + v * b.z() + w * c.z();
+        double& low = lowest[static_cast<size_t>(j) * nx + i];
+        low = std::min(low, z);
+        i_lo = std::min(i_lo, i);
+        i_hi = std::max(i_hi, i);
+        j_lo = std::min(j_lo, j);
+        j_hi = std::max(j_hi, j);
+      }
+  }
+  // column by column in a fixed order, so the same bits on every run
+  for (int j = j_lo; j <= j_hi; ++j)
+    for (int i = i_lo; i <= i_hi; ++i) {
+      const double low = lowest[static_cast<size_t>(j) * nx + i];
+      const double lo = std::max(low, terrain.z0()), hi = terrain.surface_height(i, j);
+      // an overlap within the columns' rounding is none (a column cut to the tool's underside
+      // stands a few 1e-16 m above it)
+      if (!(hi > lo + kOverlapRounding)) continue;
+      const SoilTaken taken = terrain.take(i, j, lo, hi);
+      if (columns && taken.mass > 0.0)
+        columns->push_back({i, j, lo, std::min(hi, lo + taken.volume / (h * h)), taken.mass});
       dynamic.mass += taken.mass;
       dynamic.bank_volume += taken.bank_volume;
     }

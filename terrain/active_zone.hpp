@@ -26,6 +26,7 @@
 // surface and its speed into the wedge in the excavation plane (forward, or up) is above the
 // activation speed (0.1 m/s, the reference engine's documented threshold, SPEC §2.5).
 #pragma once
+#include <array>
 #include <vector>
 
 #include "solvers/particles.hpp"
@@ -112,5 +113,19 @@ struct ExcavatedColumn {
 // taken (by row j, then i)
 DynamicSoil excavate(VoxelTerrain& terrain, const ActiveZone& zone, const BulkSoil& soil,
                      std::vector<ExcavatedColumn>* columns = nullptr);
+
+// the soil the tool's body overlaps leaves the terrain as dynamic soil: in every column whose
+// centre the tool's surface passes over below the column's surface, the soil from the tool's
+// lowest point there upwards (what lay above that point drops into the gap, so the column ends
+// where the tool's underside is). The active zone fails the soil ahead of the cutting edge; this
+// takes what the rest of the tool sweeps, which no zone predicts: a bucket's heel dragged back
+// through the pile, its body pressed in where the zone is not active. Without it the voxel
+// columns stood inside the bucket and scraped its load out (docs/multiscale.md, "The retreat").
+// The tool is its triangles in the world (`vertices` indexed by `triangles`); a triangle seen
+// edge-on from above (a vertical side plate) covers no column centre and is skipped, its
+// neighbours cover its columns. `columns` as for excavate()
+DynamicSoil displace_by_tool(VoxelTerrain& terrain, const std::vector<Vec3>& vertices,
+                             const std::vector<std::array<int, 3>>& triangles, const BulkSoil& soil,
+                             std::vector<ExcavatedColumn>* columns = nullptr);
 
 }  // namespace talus

@@ -155,8 +155,14 @@ void MultiscaleTerrain::step(const KinematicBucket& bucket) {
   last_.zone = zone_for(bucket, particles);
   std::vector<ExcavatedColumn> columns;
   const DynamicSoil dynamic = excavate(voxels_, last_.zone, options_.soil, &columns);
-  pool_ += dynamic.mass;
-  last_.excavated = dynamic.mass;
+  // and the soil the rest of the bucket overlaps (its heel, its body outside the zone)
+  std::vector<Vec3> bucket_vertices;
+  bucket_vertices.reserve(bucket_scene_.vertices().size());
+  for (const Vec3& v : bucket_scene_.vertices()) bucket_vertices.push_back(pose.to_world(v));
+  const DynamicSoil displaced = displace_by_tool(
+      voxels_, bucket_vertices, bucket_scene_.triangles(), options_.soil, &columns);
+  pool_ += dynamic.mass + displaced.mass;
+  last_.excavated = dynamic.mass + displaced.mass;
 
   // 2. particles from the pool; 4. resting particles back (on the state the last step left)
   last_.merged = merge(particles, bucket);

@@ -1,11 +1,14 @@
 // terrain/active_zone: the predicted wedge against the analytic one of the fundamental earthmoving
 // equation on a level bed (depth, rake, failure angle, reaches, soil mass); the same wedge turned
 // a quarter round; excavation hands the zone's soil on with its swell and keeps the mass balance;
-// a slow tool or one above the surface turns nothing dynamic.
+// a slow tool or one above the surface turns nothing dynamic; the soil a tool's body overlaps
+// turns dynamic down to the body's underside.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
+#include <vector>
 
 #include "terrain/active_zone.hpp"
 #include "terrain/earthmoving_equation.hpp"
@@ -124,6 +127,63 @@ TEST(ActiveZone, ASlowToolOrOneAboveTheSurfaceTurnsNothingDynamic) {
   EXPECT_EQ(excavate(t, zs, soil).mass, 0.0);
   EXPECT_EQ(excavate(t, za, soil).mass, 0.0);
   EXPECT_EQ(t.total_mass(), before);
+}
+
+// a horizontal plate 1 m square at `z` (two triangles) and a side plate standing on its edge
+// (seen edge-on from above, it covers no column), as the triangles of a tool's mesh in the world
+struct Plate {
+  std::vector<Vec3> vertices;
+  std::vector<std::array<int, 3>> triangles;
+};
+Plate plate_at(double z) {
+  Plate p;
+  p.vertices = {{-0.5, -0.5, z}, {0.5, -0.5, z},        {0.5, 0.5, z},
+                {-0.5, 0.5, z},  {-0.5, -0.5, z + 0.5}, {0.5, -0.5, z + 0.5}};
+  p.triangles = {{0, 1, 2}, {0, 2, 3}, {0, 1, 5}, {0, 5, 4}};
+  return p;
+}
+
+// the plate 0.4 m under a 1 m bed takes 0.4 m of soil from each of the 100 columns whose centres
+// it covers (cells of 0.1 m), leaves every other column as it was and keeps the mass balance; a
+// second, higher plate over the first changes nothing (the lowest point counts); above the bed
+// nothing is taken, below its floor the whole column
+TEST(ActiveZone, TheSoilABodyOverlapsTurnsDynamicDownToItsUnderside) {
+  const BulkSoil soil;
+  const double h = 0.1;
+  VoxelTerrain t = level_bed(h, 1.0);
+  const double before = t.total_mass();
+  Plate p = plate_at(0.6);
+  const Plate upper = plate_at(0.8);
+  for (const auto& tri : upper.triangles)
+    p.triangles.push_back({tri[0] + 6, tri[1] + 6, tri[2] + 6});
+  p.vertices.insert(p.vertices.end(), upper.vertices.begin(), upper.vertices.end());
+  std::vector<ExcavatedColumn> columns;
+  const DynamicSoil d = displace_by_tool(t, p.vertices, p.triangles, soil, &columns);
+  EXPECT_NEAR(d.mass, 100 * 0.4 * h * h * kFieldBulkDensity, 1e-9);
+  EXPECT_NEAR(t.total_mass() + d.mass, before, 1e-12 * before);
+  EXPECT_NEAR(d.volume, soil.swell * d.bank_volume, 1e-12);
+  ASSERT_EQ(columns.size(), 100u);
+  // by row, then column; each from the plate up to where the surface stood
+  EXPECT_LT(columns[0].j * 1000 + columns[0].i, columns[1].j * 1000 + columns[1].i);
+  for (const ExcavatedColumn& c : columns) {
+    EXPECT_NEAR(c.z_lo, 0.6, 1e-12);
+    EXPECT_NEAR(c.z_hi, 1.0, 1e-12);
+    EXPECT_NEAR(t.surface_height(c.i, c.j), 0.6, 1e-12);
+    EXPECT_LT(std::abs(t.column_x(c.i)), 0.5);
+    EXPECT_LT(std::abs(t.column_y(c.j)), 0.5);
+  }
+  int i = 0, j = 0;
+  ASSERT_TRUE(t.column_at(0.55, 0.0, &i, &j));  // beside the plate
+  EXPECT_DOUBLE_EQ(t.surface_height(i, j), 1.0);
+  // the same plate again takes nothing: the columns end at its underside now
+  EXPECT_EQ(displace_by_tool(t, p.vertices, p.triangles, soil).mass, 0.0);
+  const Plate high = plate_at(1.2);
+  EXPECT_EQ(displace_by_tool(t, high.vertices, high.triangles, soil).mass, 0.0);
+  const Plate deep = plate_at(-0.5);
+  const double left = t.total_mass();
+  EXPECT_NEAR(displace_by_tool(t, deep.vertices, deep.triangles, soil).mass,
+              100 * 0.6 * h * h * kFieldBulkDensity, 1e-9);
+  EXPECT_NEAR(t.total_mass(), left - 100 * 0.6 * h * h * kFieldBulkDensity, 1e-9);
 }
 
 }  // namespace
