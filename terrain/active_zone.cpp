@@ -197,15 +197,11 @@ DynamicSoil excavate(VoxelTerrain& terrain, const ActiveZone& zone, const BulkSo
   return dynamic;
 }
 
-DynamicSoil displace_by_tool(VoxelTerrain& terrain, const std::vector<Vec3>& vertices,
-                             const std::vector<std::array<int, 3>>& triangles, const BulkSoil& soil,
-                             std::vector<ExcavatedColumn>* columns) {
-  DynamicSoil dynamic;
+std::vector<double> tool_underside(const VoxelTerrain& terrain, const std::vector<Vec3>& vertices,
+                                   const std::vector<std::array<int, 3>>& triangles) {
   const int nx = terrain.nx(), ny = terrain.ny();
   const double h = terrain.cell();
-  // the tool's lowest point over each column centre it passes over (+inf: none)
   std::vector<double> lowest(static_cast<size_t>(nx) * ny, INFINITY);
-  int i_lo = nx, i_hi = -1, j_lo = ny, j_hi = -1;
   for (const auto& t : triangles) {
     const Vec3 &a = vertices[t[0]], &b = vertices[t[1]], &c = vertices[t[2]];
     // the projection's signed double area; edge-on from above: no column centre inside
@@ -226,31 +222,71 @@ DynamicSoil displace_by_tool(VoxelTerrain& terrain, const std::vector<Vec3>& ver
         const double v = ((c.x() - x) * (a.y() - y) - (a.x() - x) * (c.y() - y)) / area;
         const double w = 1.0 - u - v;
         if (u < -1e-12 || v < -1e-12 || w < -1e-12) continue;
-        const double z = u * a.z() + v * b.z() + w * c.z();
         double& low = lowest[static_cast<size_t>(j) * nx + i];
-        low = std::min(low, z);
-        i_lo = std::min(i_lo, i);
-        i_hi = std::max(i_hi, i);
-        j_lo = std::min(j_lo, j);
-        j_hi = std::max(j_hi, j);
+        low = std::min(low, u * a.z() + v * b.z() + w * c.z());
       }
   }
+  return lowest;
+}
+
+std::vector<char> closed_columns(const VoxelTerrain& terrain,
+                                 const std::vector<double>& underside) {
+  const int nx = terrain.nx(), ny = terrain.ny();
+  if (underside.size() != static_cast<size_t>(nx) * ny)
+    throw Error("tool underside: " + std::to_string(underside.size()) +
+                " columns for the terrain's " + std::to_string(nx * ny));
+  std::vector<char> closed(underside.size(), 0);
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      const size_t c = static_cast<size_t>(j) * nx + i;
+      closed[c] = underside[c] <= terrain.surface_height(i, j) + terrain.cell();
+    }
+  return closed;
+}
+
+PushedSoil push_aside(VoxelTerrain& terrain, const std::vector<double>& underside,
+                      const BulkSoil& soil) {
+  const std::vector<char> closed = closed_columns(terrain, underside);
+  const int nx = terrain.nx(), ny = terrain.ny();
+  const double h = terrain.cell();
+  const double capacity = terrain.nz() * h * h * h;  // a column's volume [m^3]
+  PushedSoil pushed;
   // column by column in a fixed order, so the same bits on every run
-  for (int j = j_lo; j <= j_hi; ++j)
-    for (int i = i_lo; i <= i_hi; ++i) {
-      const double low = lowest[static_cast<size_t>(j) * nx + i];
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      const double low = underside[static_cast<size_t>(j) * nx + i];
+      if (!std::isfinite(low)) continue;
       const double lo = std::max(low, terrain.z0()), hi = terrain.surface_height(i, j);
       // an overlap within the columns' rounding is none (a column cut to the tool's underside
       // stands a few 1e-16 m above it)
       if (!(hi > lo + kOverlapRounding)) continue;
       const SoilTaken taken = terrain.take(i, j, lo, hi);
-      if (columns && taken.mass > 0.0)
-        columns->push_back({i, j, lo, std::min(hi, lo + taken.volume / (h * h)), taken.mass});
-      dynamic.mass += taken.mass;
-      dynamic.bank_volume += taken.bank_volume;
+      if (!(taken.mass > 0.0)) continue;
+      const double compaction =
+          std::min(kMaxCompaction, taken.mass / (terrain.bank_density() * taken.volume));
+      // the nearest open column with room for all of it, ring by ring
+      int to_i = -1, to_j = -1;
+      for (int r = 1; r <= kPushReach && to_i < 0; ++r) {
+        double best = INFINITY;
+        for (int b = std::max(0, j - r); b <= std::min(ny - 1, j + r); ++b)
+          for (int a = std::max(0, i - r); a <= std::min(nx - 1, i + r); ++a) {
+            if (std::max(std::abs(a - i), std::abs(b - j)) != r) continue;  // the ring only
+            if (closed[static_cast<size_t>(b) * nx + a]) continue;
+            if (terrain.column_volume(a, b) + taken.volume > capacity) continue;
+            const double d2 = (a - i) * (a - i) + (b - j) * (b - j);
+            if (d2 < best) best = d2, to_i = a, to_j = b;
+          }
+      }
+      if (to_i >= 0) {
+        terrain.deposit(to_i, to_j, taken.mass, compaction);
+        pushed.moved += taken.mass;
+      } else {
+        pushed.left.mass += taken.mass;
+        pushed.left.bank_volume += taken.bank_volume;
+      }
     }
-  dynamic.volume = dynamic.bank_volume * soil.swell;
-  return dynamic;
+  pushed.left.volume = pushed.left.bank_volume * soil.swell;
+  return pushed;
 }
 
 }  // namespace talus

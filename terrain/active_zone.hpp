@@ -114,18 +114,39 @@ struct ExcavatedColumn {
 DynamicSoil excavate(VoxelTerrain& terrain, const ActiveZone& zone, const BulkSoil& soil,
                      std::vector<ExcavatedColumn>* columns = nullptr);
 
-// the soil the tool's body overlaps leaves the terrain as dynamic soil: in every column whose
-// centre the tool's surface passes over below the column's surface, the soil from the tool's
-// lowest point there upwards (what lay above that point drops into the gap, so the column ends
-// where the tool's underside is). The active zone fails the soil ahead of the cutting edge; this
-// takes what the rest of the tool sweeps, which no zone predicts: a bucket's heel dragged back
-// through the pile, its body pressed in where the zone is not active. Without it the voxel
-// columns stood inside the bucket and scraped its load out (docs/multiscale.md, "The retreat").
-// The tool is its triangles in the world (`vertices` indexed by `triangles`); a triangle seen
-// edge-on from above (a vertical side plate) covers no column centre and is skipped, its
-// neighbours cover its columns. `columns` as for excavate()
-DynamicSoil displace_by_tool(VoxelTerrain& terrain, const std::vector<Vec3>& vertices,
-                             const std::vector<std::array<int, 3>>& triangles, const BulkSoil& soil,
-                             std::vector<ExcavatedColumn>* columns = nullptr);
+// the tool's underside over the terrain: per column (index j nx + i) the lowest point of the
+// tool's surface over the column's centre, +inf where the tool does not pass over it. The tool is
+// its triangles in the world (`vertices` indexed by `triangles`); a triangle seen edge-on from
+// above (a vertical side plate) covers no column centre and is skipped, its neighbours cover its
+// columns
+std::vector<double> tool_underside(const VoxelTerrain& terrain, const std::vector<Vec3>& vertices,
+                                   const std::vector<std::array<int, 3>>& triangles);
+
+// the columns a tool stands on: those whose top lies within a cell below the tool's underside
+// (or above it). Soil neither slides into them (terrain/avalanche) nor is pushed into them
+std::vector<char> closed_columns(const VoxelTerrain& terrain, const std::vector<double>& underside);
+
+// what push_aside moved: the soil taken from under the tool's body and laid on open columns [kg],
+// and what found no open column with room within kPushReach and is handed on as dynamic soil
+struct PushedSoil {
+  double moved = 0.0;
+  DynamicSoil left;
+};
+
+// how far push_aside looks for an open column with room [cells]
+inline constexpr int kPushReach = 8;
+
+// the soil the tool's body overlaps is pushed aside: in every column whose centre the tool passes
+// over below the column's surface (`underside`, from tool_underside), the soil from the tool's
+// lowest point there upwards is taken (what lay above that point drops into the gap, so the
+// column ends where the tool's underside is) and laid, with its compaction, on the nearest open
+// column (closed_columns) with room, the nearest by centre distance, ties in row order, searched
+// ring by ring out to kPushReach cells. The active zone fails the soil ahead of the cutting edge;
+// this moves what the rest of the tool sweeps, which no zone predicts: a bucket's heel dragged back
+// through the pile (a berm forms behind it), its body pressed in where the zone is not active.
+// Without it the voxel columns stood inside the bucket and scraped its load out
+// (docs/multiscale.md). Columns are taken in row order, so the same bits on every run
+PushedSoil push_aside(VoxelTerrain& terrain, const std::vector<double>& underside,
+                      const BulkSoil& soil);
 
 }  // namespace talus

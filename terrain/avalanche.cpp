@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 #include <vector>
 
 #include "host/error.hpp"
@@ -21,7 +22,8 @@ struct Outflow {
 
 }  // namespace
 
-AvalancheStep avalanche(VoxelTerrain& terrain, double dt, const AvalancheOptions& options) {
+AvalancheStep avalanche(VoxelTerrain& terrain, double dt, const AvalancheOptions& options,
+                        const std::vector<char>* closed) {
   if (!(dt > 0.0) || !(options.rate >= 0.0) ||
       !(options.repose_deg > 0.0 && options.repose_deg < 90.0))
     throw Error(
@@ -29,6 +31,9 @@ AvalancheStep avalanche(VoxelTerrain& terrain, double dt, const AvalancheOptions
         "(0, 90) deg");
   AvalancheStep step;
   const int nx = terrain.nx(), ny = terrain.ny();
+  if (closed && closed->size() != static_cast<size_t>(nx) * ny)
+    throw Error("avalanche: " + std::to_string(closed->size()) + " closed flags for " +
+                std::to_string(nx * ny) + " columns");
   const double h = terrain.cell();
   const double stable = h * std::tan(options.repose_deg * kDegree);  // the steepest height step
   const double f = std::min(kMaxFraction, 1.0 - std::exp(-options.rate * dt));
@@ -43,6 +48,7 @@ AvalancheStep avalanche(VoxelTerrain& terrain, double dt, const AvalancheOptions
     if (!(excess > 0.0)) return;
     ++step.slopes;
     const int from = dh > 0.0 ? a : b, to = dh > 0.0 ? b : a;
+    if (closed && (*closed)[to]) return;  // nothing slides into a tool's body
     const double t = 0.5 * f * excess;
     out[from].thickness += t;
     out[from].to.emplace_back(to, t);

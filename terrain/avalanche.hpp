@@ -19,6 +19,8 @@
 // every deposit, by column index), so the result does not depend on a sweep order and is the same
 // on every run.
 #pragma once
+#include <vector>
+
 #include "terrain/voxel_terrain.hpp"
 
 namespace talus {
@@ -35,7 +37,11 @@ struct AvalancheStep {
 };
 
 // one step of avalanching over the whole terrain; throws talus::Error for a non-positive timestep,
-// a negative rate or a repose angle outside (0, 90) deg
-AvalancheStep avalanche(VoxelTerrain& terrain, double dt, const AvalancheOptions& options = {});
+// a negative rate or a repose angle outside (0, 90) deg. `closed` (one flag per column, index
+// j nx + i), when given, marks the columns that take no soil: where a tool's body stands on the
+// surface (terrain/multiscale_terrain), the slope into it does not relax, as soil cannot slide
+// into the space the body fills; a closed column still gives soil to open lower neighbours
+AvalancheStep avalanche(VoxelTerrain& terrain, double dt, const AvalancheOptions& options = {},
+                        const std::vector<char>* closed = nullptr);
 
 }  // namespace talus

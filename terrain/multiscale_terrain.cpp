@@ -155,14 +155,19 @@ void MultiscaleTerrain::step(const KinematicBucket& bucket) {
   last_.zone = zone_for(bucket, particles);
   std::vector<ExcavatedColumn> columns;
   const DynamicSoil dynamic = excavate(voxels_, last_.zone, options_.soil, &columns);
-  // and the soil the rest of the bucket overlaps (its heel, its body outside the zone)
+  pool_ += dynamic.mass;
+  last_.excavated = dynamic.mass;
+  // the soil the rest of the bucket overlaps (its heel, its body outside the zone) pushed aside
+  // onto the nearest open columns; what finds no room turns dynamic
   std::vector<Vec3> bucket_vertices;
   bucket_vertices.reserve(bucket_scene_.vertices().size());
   for (const Vec3& v : bucket_scene_.vertices()) bucket_vertices.push_back(pose.to_world(v));
-  const DynamicSoil displaced = displace_by_tool(
-      voxels_, bucket_vertices, bucket_scene_.triangles(), options_.soil, &columns);
-  pool_ += dynamic.mass + displaced.mass;
-  last_.excavated = dynamic.mass + displaced.mass;
+  const std::vector<double> underside =
+      tool_underside(voxels_, bucket_vertices, bucket_scene_.triangles());
+  const PushedSoil pushed = push_aside(voxels_, underside, options_.soil);
+  pool_ += pushed.left.mass;
+  last_.pushed = pushed.moved;
+  last_.excavated += pushed.left.mass;
 
   // 2. particles from the pool; 4. resting particles back (on the state the last step left)
   last_.merged = merge(particles, bucket);
@@ -187,8 +192,12 @@ void MultiscaleTerrain::step(const KinematicBucket& bucket) {
   // the particles as the step left them, downloaded once for everyone who reads them
   download_particles();
 
-  // 5. the surface relaxes
-  last_.avalanched = avalanche(voxels_, level_.dt, options_.avalanche).moved_mass;
+  // 5. the surface relaxes, but not into the columns the bucket stands on: the slopes into the
+  // pit under the bucket would refill it every step, and the bucket would move the same soil
+  // again (measured with the soil turned dynamic instead of pushed: 30 kg a step at G200, s =
+  // 0.755, the bucket standing still against the rear wall)
+  const std::vector<char> closed = closed_columns(voxels_, underside);
+  last_.avalanched = avalanche(voxels_, level_.dt, options_.avalanche, &closed).moved_mass;
   time_ += level_.dt;
 }
 

@@ -1,8 +1,8 @@
 // terrain/active_zone: the predicted wedge against the analytic one of the fundamental earthmoving
 // equation on a level bed (depth, rake, failure angle, reaches, soil mass); the same wedge turned
 // a quarter round; excavation hands the zone's soil on with its swell and keeps the mass balance;
-// a slow tool or one above the surface turns nothing dynamic; the soil a tool's body overlaps
-// turns dynamic down to the body's underside.
+// a slow tool or one above the surface turns nothing dynamic; the soil a tool's body overlaps is
+// pushed aside down to the body's underside.
 #include <gtest/gtest.h>
 
 #include <array>
@@ -143,11 +143,12 @@ Plate plate_at(double z) {
   return p;
 }
 
-// the plate 0.4 m under a 1 m bed takes 0.4 m of soil from each of the 100 columns whose centres
-// it covers (cells of 0.1 m), leaves every other column as it was and keeps the mass balance; a
-// second, higher plate over the first changes nothing (the lowest point counts); above the bed
-// nothing is taken, below its floor the whole column
-TEST(ActiveZone, TheSoilABodyOverlapsTurnsDynamicDownToItsUnderside) {
+// the plate 0.4 m under a 1 m bed: its underside covers exactly the 100 column centres under it
+// (cells of 0.1 m; a second, higher plate over it changes nothing, the lowest point counts), those
+// columns are closed, and push_aside cuts each to the plate and lays its soil on open columns
+// nearby, keeping the mass; a second push moves nothing, a plate above the bed nothing, and where
+// no column has room the soil turns dynamic
+TEST(ActiveZone, TheSoilABodyOverlapsIsPushedAsideDownToItsUnderside) {
   const BulkSoil soil;
   const double h = 0.1;
   VoxelTerrain t = level_bed(h, 1.0);
@@ -157,33 +158,52 @@ TEST(ActiveZone, TheSoilABodyOverlapsTurnsDynamicDownToItsUnderside) {
   for (const auto& tri : upper.triangles)
     p.triangles.push_back({tri[0] + 6, tri[1] + 6, tri[2] + 6});
   p.vertices.insert(p.vertices.end(), upper.vertices.begin(), upper.vertices.end());
-  std::vector<ExcavatedColumn> columns;
-  const DynamicSoil d = displace_by_tool(t, p.vertices, p.triangles, soil, &columns);
-  EXPECT_NEAR(d.mass, 100 * 0.4 * h * h * kFieldBulkDensity, 1e-9);
-  EXPECT_NEAR(t.total_mass() + d.mass, before, 1e-12 * before);
-  EXPECT_NEAR(d.volume, soil.swell * d.bank_volume, 1e-12);
-  ASSERT_EQ(columns.size(), 100u);
-  // by row, then column; each from the plate up to where the surface stood
-  EXPECT_LT(columns[0].j * 1000 + columns[0].i, columns[1].j * 1000 + columns[1].i);
-  for (const ExcavatedColumn& c : columns) {
-    EXPECT_NEAR(c.z_lo, 0.6, 1e-12);
-    EXPECT_NEAR(c.z_hi, 1.0, 1e-12);
-    EXPECT_NEAR(t.surface_height(c.i, c.j), 0.6, 1e-12);
-    EXPECT_LT(std::abs(t.column_x(c.i)), 0.5);
-    EXPECT_LT(std::abs(t.column_y(c.j)), 0.5);
+  const std::vector<double> under = tool_underside(t, p.vertices, p.triangles);
+  const std::vector<char> closed = closed_columns(t, under);
+  int covered = 0, shut = 0;
+  for (size_t c = 0; c < under.size(); ++c) {
+    shut += closed[c];
+    if (!std::isfinite(under[c])) continue;
+    ++covered;
+    EXPECT_NEAR(under[c], 0.6, 1e-12);
+    EXPECT_TRUE(closed[c]);
   }
-  int i = 0, j = 0;
-  ASSERT_TRUE(t.column_at(0.55, 0.0, &i, &j));  // beside the plate
-  EXPECT_DOUBLE_EQ(t.surface_height(i, j), 1.0);
-  // the same plate again takes nothing: the columns end at its underside now
-  EXPECT_EQ(displace_by_tool(t, p.vertices, p.triangles, soil).mass, 0.0);
-  const Plate high = plate_at(1.2);
-  EXPECT_EQ(displace_by_tool(t, high.vertices, high.triangles, soil).mass, 0.0);
-  const Plate deep = plate_at(-0.5);
-  const double left = t.total_mass();
-  EXPECT_NEAR(displace_by_tool(t, deep.vertices, deep.triangles, soil).mass,
-              100 * 0.6 * h * h * kFieldBulkDensity, 1e-9);
-  EXPECT_NEAR(t.total_mass(), left - 100 * 0.6 * h * h * kFieldBulkDensity, 1e-9);
+  EXPECT_EQ(covered, 100);
+  EXPECT_EQ(shut, 100);
+  const PushedSoil pushed = push_aside(t, under, soil);
+  EXPECT_NEAR(pushed.moved, 100 * 0.4 * h * h * kFieldBulkDensity, 1e-9);
+  EXPECT_EQ(pushed.left.mass, 0.0);
+  EXPECT_NEAR(t.total_mass(), before, 1e-12 * before);
+  // the plate's columns end at it; the soil went to open columns within reach, none beyond
+  double gained = 0.0;
+  for (int j = 0; j < t.ny(); ++j)
+    for (int i = 0; i < t.nx(); ++i) {
+      const double x = t.column_x(i), y = t.column_y(j), top = t.surface_height(i, j);
+      if (std::abs(x) < 0.5 && std::abs(y) < 0.5) {
+        EXPECT_NEAR(top, 0.6, 1e-12);
+        continue;
+      }
+      EXPECT_GE(top, 1.0 - 1e-12);
+      gained += (top - 1.0) * h * h * kFieldBulkDensity;
+      if (std::max(std::abs(x), std::abs(y)) > 0.5 + kPushReach * h) {
+        EXPECT_NEAR(top, 1.0, 1e-12);
+      }
+    }
+  EXPECT_NEAR(gained, pushed.moved, 1e-9);
+  // nothing left to push; nothing under a plate above the bed
+  EXPECT_EQ(push_aside(t, under, soil).moved, 0.0);
+  const Plate high = plate_at(1.5);
+  EXPECT_EQ(push_aside(t, tool_underside(t, high.vertices, high.triangles), soil).moved, 0.0);
+  // a full grid (10 cells of a 1 m bed) has no room: the soil turns dynamic
+  VoxelTerrain full(-3.0, -3.0, 0.0, h, 60, 60, 10, kFieldBulkDensity);
+  for (int j = 0; j < 60; ++j)
+    for (int i = 0; i < 60; ++i) full.deposit(i, j, 1.0 * h * h * kFieldBulkDensity, 1.0);
+  const double full_mass = full.total_mass();
+  const PushedSoil stuck = push_aside(full, tool_underside(full, p.vertices, p.triangles), soil);
+  EXPECT_EQ(stuck.moved, 0.0);
+  EXPECT_NEAR(stuck.left.mass, 100 * 0.4 * h * h * kFieldBulkDensity, 1e-9);
+  EXPECT_NEAR(stuck.left.volume, soil.swell * stuck.left.bank_volume, 1e-12);
+  EXPECT_NEAR(full.total_mass() + stuck.left.mass, full_mass, 1e-12 * full_mass);
 }
 
 }  // namespace

@@ -1,10 +1,13 @@
 // terrain/avalanche: a pair's excess slope decays at the stated rate; a slope under the repose
-// angle stays put; a tower of soil slumps to the repose angle symmetrically, keeping its mass.
+// angle stays put; a tower of soil slumps to the repose angle symmetrically, keeping its mass; no
+// soil slides into a closed column (where a tool's body stands).
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
+#include <vector>
 
+#include "host/error.hpp"
 #include "terrain/avalanche.hpp"
 
 namespace talus {
@@ -85,6 +88,31 @@ TEST(Avalanche, ATowerSlumpsToTheReposeAngleSymmetrically) {
   // the heap's top stands lower than the tower's, its foot wider
   EXPECT_LT(t.surface_height(n / 2, n / 2), 1.8);
   EXPECT_GT(t.surface_height(n / 2 + 4, n / 2), 0.2);
+}
+
+// a pit between two tall columns, closed (a bucket stands in it): its neighbours' slopes into it
+// stay as they are, while the same neighbours still give soil to an open lower column beyond;
+// the mass is kept and a wrong-sized mask is refused
+TEST(Avalanche, NoSoilSlidesIntoAClosedColumn) {
+  VoxelTerrain t(0.0, 0.0, 0.0, 0.2, 4, 1, 20, kFieldBulkDensity);
+  const double column = 0.04 * kFieldBulkDensity;  // kg per metre of height
+  t.deposit(0, 0, 1.5 * column, 1.0);
+  t.deposit(1, 0, 0.1 * column, 1.0);  // the pit
+  t.deposit(2, 0, 1.5 * column, 1.0);
+  t.deposit(3, 0, 0.2 * column, 1.0);  // open and low
+  const std::vector<char> closed = {0, 1, 0, 0};
+  const double mass = t.total_mass();
+  const double pit = t.surface_height(1, 0), left = t.surface_height(0, 0);
+  const double right = t.surface_height(2, 0);
+  const AvalancheStep s = avalanche(t, 0.02, {}, &closed);
+  EXPECT_EQ(s.slopes, 3);  // all three are steep; one of them may move
+  EXPECT_EQ(t.surface_height(1, 0), pit);
+  EXPECT_EQ(t.surface_height(0, 0), left);  // its only lower neighbour is the pit
+  EXPECT_LT(t.surface_height(2, 0), right);
+  EXPECT_GT(t.surface_height(3, 0), 0.2);
+  EXPECT_NEAR(t.total_mass(), mass, 1e-12 * mass);
+  const std::vector<char> wrong(3, 0);
+  EXPECT_THROW(avalanche(t, 0.02, {}, &wrong), Error);
 }
 
 }  // namespace
