@@ -120,6 +120,7 @@ void add_diagnose_command(CLI::App& app) {
                   "runs on a pile share the device and run one at a time); any count gives the "
                   "same diagnosis")
       ->capture_default_str()
+      // a bound far above any host's hardware threads, that catches a typo before threads start
       ->check(CLI::Range(0, 1024));
   cmd->add_flag("--quiet", a->quiet, "no progress on stderr");
   cmd->callback([a] { diagnose_command(*a); });

@@ -125,6 +125,12 @@ TEST(CliErrors, UnknownSubcommandAndRangeErrorsSayWhatIsWrong) {
   o = run("", "compare --sim a --ref b --l-norm 0");
   EXPECT_EQ(o.code, 2) << o.err;
   EXPECT_NE(o.err.find("--l-norm"), std::string::npos) << o.err;
+  // the diagnosis's thread count: a whole number from 0 (every hardware thread) to 1024
+  for (const char* threads : {"-1", "2000", "nan", "two"}) {
+    o = run("", std::string("diagnose --data /tmp --threads ") + threads);
+    EXPECT_EQ(o.code, 2) << threads << ": " << o.err;
+    EXPECT_NE(o.err.find("--threads"), std::string::npos) << o.err;
+  }
 }
 
 // a vehicle-only scenario: its flags are checked though it uses no particles (--fidelity D37 and
