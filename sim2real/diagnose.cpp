@@ -274,6 +274,24 @@ struct Failure {
   std::string what;
 };
 
+// task(0) .. task(n - 1) on the threads (host/parallel); a task that throws is recorded by index
+// and the others run on (a candidate whose simulation fails is reported and skipped, not the whole
+// diagnosis). An interrupt stops the loop and is rethrown
+std::vector<Failure> run_tasks(std::size_t n, int threads,
+                               const std::function<void(std::size_t)>& task) {
+  std::vector<Failure> failures(n);
+  parallel_for(n, threads, [&](std::size_t i) {
+    try {
+      task(i);
+    } catch (const Interrupted&) {
+      throw;
+    } catch (const std::exception& e) {
+      failures[i] = {true, e.what()};
+    }
+  });
+  return failures;
+}
+
 // The search of diagnose(), stage by stage: the replays and their noise, the baseline, then per
 // round the signature screen, the coarse scan, the fits with validation, and the decision. It
 // holds the model under test (the effects found so far) and every run's current simulation.
@@ -348,16 +366,8 @@ class Search {
            scanned[fitted].score.excess < current_cal_)
       ++fitted;
     std::vector<FittedEffect> fits(fitted);
-    std::vector<Failure> fit_failures(fitted);
-    parallel_for(fitted, threads_, [&](std::size_t j) {
-      try {
-        fits[j] = fit(scanned[j]);
-      } catch (const Interrupted&) {
-        throw;
-      } catch (const std::exception& e) {
-        fit_failures[j] = {true, e.what()};
-      }
-    });
+    const std::vector<Failure> fit_failures =
+        run_tasks(fitted, threads_, [&](std::size_t j) { fits[j] = fit(scanned[j]); });
     for (std::size_t j = 0; j < fitted; ++j) {
       if (fit_failures[j].failed) {
         failed(dr, scanned[j].c->label(), fit_failures[j].what);
@@ -689,16 +699,8 @@ class Search {
     }
     first_point[screened.size()] = points.size();
     std::vector<Score> scores(points.size());
-    std::vector<Failure> failures(points.size());
-    parallel_for(points.size(), threads_, [&](std::size_t p) {
-      // a candidate whose simulation fails is reported and skipped, not the whole diagnosis
-      try {
-        scores[p] = score_runs(d_.calibration, screened[points[p].candidate], points[p].x);
-      } catch (const Interrupted&) {
-        throw;
-      } catch (const std::exception& e) {
-        failures[p] = {true, e.what()};
-      }
+    const std::vector<Failure> failures = run_tasks(points.size(), threads_, [&](std::size_t p) {
+      scores[p] = score_runs(d_.calibration, screened[points[p].candidate], points[p].x);
     });
     std::vector<Scanned> scanned;
     for (std::size_t k = 0; k < screened.size(); ++k) {
@@ -867,15 +869,8 @@ class Search {
     // both refitted together from their own values, on the calibration runs: each first's fit on
     // its own thread (the model is the one before the round again, and stays so)
     std::vector<FittedPair> pairs(trials.size());
-    std::vector<Failure> failures(trials.size());
-    parallel_for(trials.size(), threads_, [&](std::size_t k) {
-      try {
-        pairs[k] = fit_pair(trials[k].ca, trials[k].cb, trials[k].x, trials[k].ka, disjoint);
-      } catch (const Interrupted&) {
-        throw;
-      } catch (const std::exception& e) {
-        failures[k] = {true, e.what()};
-      }
+    const std::vector<Failure> failures = run_tasks(trials.size(), threads_, [&](std::size_t k) {
+      pairs[k] = fit_pair(trials[k].ca, trials[k].cb, trials[k].x, trials[k].ka, disjoint);
     });
     for (std::size_t k = 0; k < trials.size(); ++k) {
       if (failures[k].failed) {

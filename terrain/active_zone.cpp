@@ -14,6 +14,12 @@ constexpr double kDegree = M_PI / 180.0;
 // the columns' heights are sums of cell volumes over h^2: 1 nm is far above their rounding and far
 // below a grain [m]
 constexpr double kOverlapRounding = 1e-9;
+// a triangle whose projection onto the ground is under 1e-12 m^2 (twice its area) is seen edge-on
+// from above: far below any plate of a bucket, far above the rounding of a vertical plate's
+constexpr double kEdgeOnArea = 1e-12;
+// a column centre on a triangle's edge, within rounding of the barycentric coordinates, belongs to
+// it (so two triangles sharing the edge both see it)
+constexpr double kOnEdge = 1e-12;
 
 // the soil's surface under a point: the given heights (dynamic soil included) or the voxels'
 // columns, interpolated bilinearly between the column centres (as terrain/heightmap's surface),
@@ -206,7 +212,7 @@ std::vector<double> tool_underside(const VoxelTerrain& terrain, const std::vecto
     const Vec3 &a = vertices[t[0]], &b = vertices[t[1]], &c = vertices[t[2]];
     // the projection's signed double area; edge-on from above: no column centre inside
     const double area = (b.x() - a.x()) * (c.y() - a.y()) - (c.x() - a.x()) * (b.y() - a.y());
-    if (std::abs(area) < 1e-12) continue;
+    if (std::abs(area) < kEdgeOnArea) continue;
     // the column centres in the projection's box
     const double xlo = std::min({a.x(), b.x(), c.x()}), xhi = std::max({a.x(), b.x(), c.x()});
     const double ylo = std::min({a.y(), b.y(), c.y()}), yhi = std::max({a.y(), b.y(), c.y()});
@@ -221,7 +227,7 @@ std::vector<double> tool_underside(const VoxelTerrain& terrain, const std::vecto
         const double u = ((b.x() - x) * (c.y() - y) - (c.x() - x) * (b.y() - y)) / area;
         const double v = ((c.x() - x) * (a.y() - y) - (a.x() - x) * (c.y() - y)) / area;
         const double w = 1.0 - u - v;
-        if (u < -1e-12 || v < -1e-12 || w < -1e-12) continue;
+        if (u < -kOnEdge || v < -kOnEdge || w < -kOnEdge) continue;
         double& low = lowest[static_cast<size_t>(j) * nx + i];
         low = std::min(low, u * a.z() + v * b.z() + w * c.z());
       }

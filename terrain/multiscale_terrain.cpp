@@ -166,7 +166,6 @@ void MultiscaleTerrain::step(const KinematicBucket& bucket) {
       tool_underside(voxels_, bucket_vertices, bucket_scene_.triangles());
   const PushedSoil pushed = push_aside(voxels_, underside, options_.soil);
   pool_ += pushed.left.mass;
-  last_.pushed = pushed.moved;
   last_.excavated += pushed.left.mass;
 
   // 2. particles from the pool; 4. resting particles back (on the state the last step left)

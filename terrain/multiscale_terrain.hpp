@@ -82,7 +82,6 @@ struct MassBalance {
 struct MultiscaleStep {
   ActiveZone zone;
   double excavated = 0.0;   // soil turned dynamic [kg]
-  double pushed = 0.0;      // soil the bucket's body pushed aside, solid to solid [kg]
   int spawned = 0;          // particles made from the pool
   int merged = 0;           // particles merged back into the voxels
   double avalanched = 0.0;  // soil that slid [kg]
