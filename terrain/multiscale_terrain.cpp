@@ -10,6 +10,7 @@
 
 #include "host/error.hpp"
 #include "solvers/tool_world.hpp"
+#include "terrain/bucket_fill.hpp"
 
 namespace talus {
 namespace {
@@ -128,7 +129,13 @@ MultiscaleTerrain::MultiscaleTerrain(Device& dev, const PileProfile& profile,
 
 ActiveZone MultiscaleTerrain::zone_for(const KinematicBucket& bucket,
                                        const Particles& particles) const {
-  const std::vector<double> surface = soil_surface(particles);
+  // the bucket's own load is not soil over its edge: counted, it read the heap in a full bucket
+  // standing at the rear wall as 1.6-1.8 m of soil over an edge that stood above the terrain, and
+  // the penetration resistance and the interfaces held the curled bucket down while the lift
+  // raised the machine's rear (docs/multiscale.md, "The bucket's load is not soil over its edge")
+  std::vector<char> held(particles.size(), 0);
+  for (int k : particles_in_bucket(particles, bucket_mesh_, pose_of(bucket))) held[k] = 1;
+  const std::vector<double> surface = soil_surface(particles, held);
   return predict_active_zone(voxels_, bucket_edges(bucket_mesh_, bucket), options_.soil, &surface);
 }
 
@@ -299,14 +306,17 @@ int MultiscaleTerrain::spawn(Particles& particles, const std::vector<ExcavatedCo
   return made;
 }
 
-std::vector<double> MultiscaleTerrain::soil_surface(const Particles& particles) const {
+std::vector<double> MultiscaleTerrain::soil_surface(const Particles& particles,
+                                                    const std::vector<char>& held) const {
   std::vector<double> surface = voxels_.surface_heights();
   // a particle raises its column to its top if it rests on the soil there, within a cell of the
-  // surface found so far (bottom up): the heap in front of a tool counts, a grain in the bucket or
-  // in flight does not
+  // surface found so far (bottom up): the heap in front of a tool counts, a grain in flight does
+  // not, nor one the bucket holds (a cell is coarser than the bucket's floor, so its load would
+  // otherwise stack on the heap under it)
   const int nx = voxels_.nx();
   std::vector<std::vector<std::pair<double, double>>> by_column(surface.size());
   for (size_t k = 0; k < particles.size(); ++k) {
+    if (held[k]) continue;
     int i = 0, j = 0;
     if (!voxels_.column_at(particles.position[k].x(), particles.position[k].y(), &i, &j)) continue;
     const double r = particles.radius[k];

@@ -136,8 +136,9 @@ class MultiscaleTerrain {
   ActiveZone zone_for(const KinematicBucket& bucket, const Particles& particles) const;
   // the host copy of the device's particles that every reader uses (empty without particles)
   void download_particles();
-  // the soil's surface: the voxels' columns raised to the tops of the particles heaped on them
-  std::vector<double> soil_surface(const Particles& particles) const;
+  // the soil's surface: the voxels' columns raised to the tops of the particles heaped on them,
+  // leaving out the particles marked `held` (those in the bucket)
+  std::vector<double> soil_surface(const Particles& particles, const std::vector<char>& held) const;
   // step 3's static geometry: the container and a box per voxel column near the particles
   std::vector<StaticGeom> geometry(const Particles& particles) const;
 

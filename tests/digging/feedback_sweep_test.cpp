@@ -144,6 +144,33 @@ TEST(FeedbackSweep, ABucketDrivenIntoThePilesRearWallStopsThereWithItsLoad) {
   EXPECT_GT(r.loaded_mass_kg, 3000.0);
 }
 
+// the zone's soil surface once counted the bucket's own load: a full bucket at the rear wall, its
+// edge above the terrain, read as 1.6-1.8 m of soil over its edge, so the penetration resistance
+// (about 100 kN) and the interfaces held it while the controller lifted, the chassis pitched nose
+// down to -38 degrees in the fill and -56 in the retreat, and the uncurled bucket spilled all but
+// 0.33 t (s = 0.40, docs/multiscale.md). The machine now stays on its wheels and keeps its load
+TEST(FeedbackSweep, AFullBucketAtTheRearWallDoesNotTipTheMachineOntoIt) {
+  constexpr double kS = 0.40;  // the cycle that stood on its bucket
+  const FidelityPreset& g400 = level_preset("G400");
+  const DiggingOptions options;
+  const CyclePile cycle = fb35_cycle_pile(g400, options);
+  LoadingCycle run(test::shared_device(), cycle, g400, options, vehicle::gains_on_search_line(kS));
+  double most_nose_down = 0.0;
+  while (!run.done()) {
+    run.step();
+    most_nose_down = std::min(most_nose_down, run.simulation().sensors().pitch_deg);
+  }
+  const CycleResult r = run.result(kS);
+  std::printf(
+      "[ measured ] FB35-G400 s = %.2f: %.0f kg in %.1f s, pitch at most %.1f deg nose down\n", kS,
+      r.loaded_mass_kg, r.cycle_time_s, -most_nose_down);
+  EXPECT_TRUE(r.completed);
+  // a loader pitches a few degrees as it pushes and lifts into the pile (the G400 sweep's
+  // 21 cycles: at most 10.3); the handstand reached 56
+  EXPECT_GT(most_nose_down, -15.0);
+  EXPECT_GT(r.loaded_mass_kg, 3000.0);
+}
+
 // before the terrain's first step the aggregate's interfaces stood on an empty zone of zero width:
 // zero stiffness, an infinite compliance in the machine's system, and the first step of every
 // type-G run pushed the machine back at up to 1 m/s. Now the first step of the approach is the
