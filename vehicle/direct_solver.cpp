@@ -18,6 +18,11 @@ struct DirectSolver::Impl {
   Eigen::SparseMatrix<double> lower;  // lower triangle of A, diagonal always stored
   std::vector<int> cached_outer, cached_inner;
   std::vector<RowState> factor_state;  // active set the factor belongs to
+  // whether the factor is of the matrix set last (set_matrix makes it stale): within one solve the
+  // friction passes change only the bounds, and a pass that starts on the active set the last one
+  // ended on reuses its factor instead of factorising the same numbers again (measured on
+  // load-carry: 3.35 factorisations per solve, one per friction pass, for 3.35 iterations)
+  bool factor_current = false;
   int analyses = 0;
 
   Impl() {
@@ -35,6 +40,7 @@ struct DirectSolver::Impl {
 
   // lower triangle with an explicit diagonal; new symbolic analysis only if the pattern changed
   void set_matrix(const Eigen::SparseMatrix<double>& A) {
+    factor_current = false;
     const int n = static_cast<int>(A.rows());
     std::vector<Eigen::Triplet<double>> t;
     t.reserve(A.nonZeros() / 2 + n);
@@ -67,6 +73,7 @@ struct DirectSolver::Impl {
 
   // numeric factorisation of A with rows outside the free set replaced by identity
   void factorise(const std::vector<RowState>& state) {
+    factor_current = false;  // until this factorisation succeeds
     const int n = static_cast<int>(lower.rows());
     double* x = static_cast<double*>(matrix->x);
     const double* v = lower.valuePtr();
@@ -86,6 +93,7 @@ struct DirectSolver::Impl {
                   "): the constraint system is singular; give redundant rows a compliance");
     }
     factor_state = state;
+    factor_current = true;
   }
 
   Eigen::MatrixXd solve(const Eigen::MatrixXd& rhs) {
@@ -124,7 +132,7 @@ struct DirectSolver::Impl {
       for (Eigen::SparseMatrix<double>::InnerIterator it(p.A, j); it; ++it) a_max = std::max(a_max, std::abs(it.value()));
     }
     converged = false;
-    bool need_factor = true;
+    bool need_factor = !(factor_current && state == factor_state);
     int it = 0;
     for (; it < max_iterations; ++it) {
       if (need_factor) {
