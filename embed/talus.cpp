@@ -20,6 +20,7 @@
 #include "host/files.hpp"
 #include "host/progress.hpp"
 #include "host/version.hpp"
+#include "terrain/multiscale_terrain.hpp"
 #include "terrain/pile.hpp"
 #include "vehicle/data_file.hpp"
 #include "vehicle/effect.hpp"
@@ -503,6 +504,22 @@ ParticleState Simulation::particles() const {
     }
   }
   return state;
+}
+
+SoilMass Simulation::soil_mass() const {
+  SoilMass m;
+  const DiggingSimulation* dig = impl_->dig();
+  if (!dig) return m;
+  if (dig->multiscale()) {
+    const MassBalance b = dig->terrain().mass_balance();
+    m.solid = b.solid;
+    m.pool = b.pool;
+    m.particles = b.particles;
+    return m;
+  }
+  const Particles p = dig->particles();
+  for (std::size_t i = 0; i < p.size(); ++i) m.particles += p.mass(i);
+  return m;
 }
 
 std::string Simulation::state() const {

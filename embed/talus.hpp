@@ -133,6 +133,17 @@ struct ParticleState {
   std::size_t size() const { return radius.size(); }
 };
 
+/// \brief the soil's mass by where it is now [kg]. Its total stays constant over a run to
+/// round-off: type-D particles are never made or removed; at a type-G level excavation, spawning
+/// and merging move mass between the three parts and lose none (docs/multiscale.md).
+struct SoilMass {
+  double solid = 0.0;      ///< type G: the voxels' solid soil (0 at a type-D level)
+  double pool = 0.0;       ///< type G: soil excavated and not yet made particles (0 at type D)
+  double particles = 0.0;  ///< the particles': the pile's (type D) or the active zone's (type G)
+  /// solid + pool + particles
+  double total() const { return solid + pool + particles; }
+};
+
 /// \brief a scenario's run, stepped by the caller.
 ///
 /// Construction loads the scenario and, when it has a pile, builds and settles the pile at the
@@ -219,6 +230,8 @@ class Simulation {
   std::size_t particle_count() const;
   /// the particles now, downloaded from the device (empty arrays without a pile)
   ParticleState particles() const;
+  /// the soil's mass by where it is now (all zero without a pile; type D downloads the particles)
+  SoilMass soil_mass() const;
 
   /// saves the whole state between two steps to `path`, written atomically: the machine (bodies,
   /// the direct solver's warm start, joints and contacts), the particles with last step's

@@ -210,6 +210,19 @@ SimulationOptions. Errors: talus.InputError (ValueError) for bad options or data
             return d;
           },
           "the particles now: position, velocity, angular_velocity (N, 3) and radius (N,) [SI]")
+      .def_property_readonly(
+          "soil_mass",
+          [](const talus::Simulation& s) {
+            const talus::SoilMass m = s.soil_mass();
+            py::dict d;
+            d["solid"] = m.solid;
+            d["pool"] = m.pool;
+            d["particles"] = m.particles;
+            d["total"] = m.total();
+            return d;
+          },
+          "the soil's mass by where it is [kg]: solid and pool (type G's voxels and excavated "
+          "soil), particles, and their total, constant over a run to round-off")
       // saved states (docs/embedding.md "Saved states")
       .def(
           "state",

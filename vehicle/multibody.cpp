@@ -155,7 +155,8 @@ void MultibodySystem::solve() {
     ++bound_passes_;
     if (!result_.converged) {
       throw Error("multibody step at t = " + std::to_string(time_) +
-                  " s: the direct solver did not converge (" + std::to_string(result_.iterations) + " iterations)");
+                  " s: the direct solver did not converge (" + std::to_string(result_.iterations) +
+                  " iterations, " + std::to_string(result_.friction_passes) + " friction passes)");
     }
     warm_lambda_ = result_.lambda;
     warm_state_ = result_.state;
