@@ -1,5 +1,5 @@
-"""bench/soak.py, CI-sized (docs/reliability.md, "Soak"): half a minute of digging cycles at D400
-and a minute of the machine alone, every check passing and the figures written."""
+"""bench/soak.py, CI-sized (docs/reliability.md, "Soak"): half a minute of digging cycles at D400,
+a minute at G400 and a minute of the machine alone, every check passing and the figures written."""
 import json
 import os
 import subprocess
@@ -28,10 +28,18 @@ def test_the_machine_alone_soaks(tmp_path):
     assert r["failure"] is None and r["simulated_s"] >= 60.0
 
 
-def test_a_type_g_level_is_refused(tmp_path):
-    r = subprocess.run([sys.executable, SOAK, "--level", "G400", "--minutes", "0.1"], capture_output=True,
-                       text=True)
-    assert r.returncode == 2 and "type-D" in r.stderr
+def test_type_g_cycles_keep_the_terrains_mass_while_particles_come_and_go(tmp_path):
+    r = soak(tmp_path, "--level", "G400", "--minutes", "1")
+    assert r["failure"] is None and r["simulated_s"] >= 60.0 and r["cycles"] >= 2
+    assert r["max_abs_mass_drift"] <= 1e-9
+    assert r["particles_min_max"][1] > 0  # the zone made particles
+    assert max(r["peak_load_kg_per_cycle"]) > 1000.0
+
+
+def test_a_level_that_is_not_one_is_refused(tmp_path):
+    r = subprocess.run([sys.executable, SOAK, "--level", "G37", "--minutes", "0.1"], capture_output=True,
+                       text=True, timeout=60)
+    assert r.returncode == 2 and "G37" in r.stderr and "Traceback" not in r.stderr, r.stderr
 
 
 def test_bad_length_and_unwritable_outputs_are_refused_before_the_soak():
