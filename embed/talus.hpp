@@ -139,7 +139,9 @@ struct ParticleState {
 struct SoilMass {
   double solid = 0.0;      ///< type G: the voxels' solid soil (0 at a type-D level)
   double pool = 0.0;       ///< type G: soil excavated and not yet made particles (0 at type D)
-  double particles = 0.0;  ///< the particles': the pile's (type D) or the active zone's (type G)
+  /// the particles': the pile's (type D: from the device's masses) or the active zone's (type G:
+  /// the terrain's double-precision ledger of the masses it gave its particles)
+  double particles = 0.0;
   /// solid + pool + particles
   double total() const { return solid + pool + particles; }
 };

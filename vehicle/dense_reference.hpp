@@ -10,7 +10,7 @@ namespace talus::vehicle {
 
 struct DenseReferenceOptions {
   int max_iterations = 0;        // 0: 50 n + 100
-  int max_friction_passes = 50;  // fixed-point passes over friction bounds
+  int max_friction_passes = kMaxFrictionPasses;  // fixed-point passes over friction bounds
   double friction_tolerance = 1e-12;  // relative change of friction bounds that ends the passes
 };
 

@@ -249,8 +249,10 @@ McpResult DirectSolver::solve(const BoundedMcp& problem, const Eigen::VectorXd* 
 }
 
 Eigen::MatrixXd DirectSolver::solve_free(const Eigen::MatrixXd& rhs) const {
-  if (!impl_->factor || rhs.rows() != static_cast<int>(impl_->factor_state.size())) {
-    throw Error("direct solver: solve_free needs a previous solve of the same size");
+  // a factorisation that threw leaves the factor half made (factor_current false): refuse it
+  if (!impl_->factor || !impl_->factor_current ||
+      rhs.rows() != static_cast<int>(impl_->factor_state.size())) {
+    throw Error("direct solver: solve_free needs a previous successful solve of the same size");
   }
   Eigen::MatrixXd r = rhs;
   for (int i = 0; i < r.rows(); ++i) {

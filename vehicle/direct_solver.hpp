@@ -19,12 +19,7 @@ namespace talus::vehicle {
 
 struct DirectSolverOptions {
   int max_iterations = 0;             // active-set iterations per friction pass; 0: 20 n + 100
-  // fixed-point passes over friction bounds. Each updates the bounds from the last normal impulses
-  // (a Picard iteration): where the friction rows push back on their own normals it converges
-  // linearly: a step of a G400 soak (bench/soak.py, 135 rows, at 153 s) closed 6 % a pass and
-  // needed about 270, where the former cap of 50 stopped the run. A pass on an unchanged active
-  // set costs one solve with the kept factor, so the cap is generous
-  int max_friction_passes = 1000;
+  int max_friction_passes = kMaxFrictionPasses;  // fixed-point passes over friction bounds
   double friction_tolerance = 1e-12;  // relative change of friction bounds that ends the passes
 };
 

@@ -39,6 +39,14 @@ struct McpResult {
 // throws talus::Error when sizes disagree, a bound is NaN, lo > hi, or A is not square
 void check_mcp(const BoundedMcp& p);
 
+// fixed-point passes over the friction bounds, for every solver of the MCP. Each updates the bounds
+// from the last normal impulses (a Picard iteration): where the friction rows push back on their
+// own normals it converges linearly; a step of a G400 soak (bench/soak.py, 135 rows, at 153 s)
+// closed 6 % a pass and needed about 270, where the former cap of 50 stopped the run. A pass on an
+// unchanged active set costs one solve with the kept factor (vehicle/direct_solver), so the cap is
+// generous
+inline constexpr int kMaxFrictionPasses = 1000;
+
 // set the bounds of friction rows from the normal impulses in lambda; returns the largest change
 double apply_friction_bounds(BoundedMcp& p, const Eigen::VectorXd& lambda);
 
