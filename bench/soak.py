@@ -31,9 +31,8 @@ C = {name: k for k, name in enumerate(talus.CHANNELS)}
 # test of a whole HD27 dig holds 1e-9, tests/digging/multiscale_digging_test.cpp); type D's total
 # is a fixed sum and drifts by nothing
 MASS_DRIFT = 1e-9  # type G: the terrain's ledger, so it checks the bookkeeping, not the device
-# how far below the floor a particle's bottom may be before it counts as sunk, in its own radii
-# (each grain against its own radius). Type D:
-# half a radius (the D400 soak's deepest was 7 %). Type G: its centre (a whole radius), because the
+# how far below the floor a particle's bottom may be before it counts as sunk, in its own radius.
+# Type D: half a radius (the D400 soak's deepest was 7 %). Type G: its centre (a whole radius): the
 # G400 step (50 ms, 10 sweeps) lets the kinematic bucket pinch a grain into the ground for a moment:
 # the ten-minute soak met one such grain 0.151 m deep (75 % of its radius) at 243 s, back above the
 # floor a second later, once in 600 samples (docs/reliability.md); a grain through the floor still
