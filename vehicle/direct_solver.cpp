@@ -15,15 +15,26 @@ struct DirectSolver::Impl {
   cholmod_common common{};
   cholmod_sparse* matrix = nullptr;  // lower triangle (stype -1) of A with W rows as identity
   cholmod_factor* factor = nullptr;
-  Eigen::SparseMatrix<double> lower;  // lower triangle of A, diagonal always stored
-  std::vector<int> cached_outer, cached_inner;
+  // lower triangle of A in compressed columns, the diagonal first in each column and always stored
+  std::vector<int> lower_outer, lower_inner;
+  std::vector<double> lower_value;
+  std::vector<int> next_outer, next_inner;  // set_matrix's scratch, kept to reuse its memory
+  std::vector<double> next_value;
   std::vector<RowState> factor_state;  // active set the factor belongs to
-  // whether the factor is of the matrix set last (set_matrix makes it stale): within one solve the
-  // friction passes change only the bounds, and a pass that starts on the active set the last one
-  // ended on reuses its factor instead of factorising the same numbers again (measured on
-  // load-carry: 3.35 factorisations per solve, one per friction pass, for 3.35 iterations)
+  // whether the factor is of the matrix set last (set_matrix makes it stale unless the matrix is
+  // the same): within one solve the friction passes change only the bounds, and a pass that starts
+  // on the active set the last one ended on reuses its factor instead of factorising the same
+  // numbers again (measured on load-carry: 3.35 factorisations per solve, one per friction pass,
+  // for 3.35 iterations; 0.90 once the bound passes' repeated matrices keep it too)
   bool factor_current = false;
   int analyses = 0;
+  double a_max = 0.0;  // largest |A_ij| of the matrix set last: the scale of the sign tolerance
+  // buffers of one active-set iteration, kept between solves
+  cholmod_dense* x_dense = nullptr;
+  cholmod_dense* y_work = nullptr;
+  cholmod_dense* e_work = nullptr;
+  Eigen::MatrixXd rhs, solution;
+  Eigen::VectorXd coupling;
 
   Impl() {
     cholmod_start(&common);
@@ -33,52 +44,69 @@ struct DirectSolver::Impl {
     common.print = 0;
   }
   ~Impl() {
+    for (cholmod_dense** d : {&x_dense, &y_work, &e_work}) {
+      if (*d) cholmod_free_dense(d, &common);
+    }
     if (factor) cholmod_free_factor(&factor, &common);
     if (matrix) cholmod_free_sparse(&matrix, &common);
     cholmod_finish(&common);
   }
 
-  // lower triangle with an explicit diagonal; new symbolic analysis only if the pattern changed
+  // the lower triangle with an explicit diagonal, column by column; a new symbolic analysis only if
+  // the pattern changed, and the factor kept if the matrix is the last one entry for entry (the
+  // multibody system's bound passes solve a step again with new bounds only)
   void set_matrix(const Eigen::SparseMatrix<double>& A) {
-    factor_current = false;
     const int n = static_cast<int>(A.rows());
-    std::vector<Eigen::Triplet<double>> t;
-    t.reserve(A.nonZeros() / 2 + n);
-    for (int j = 0; j < n; ++j) t.emplace_back(j, j, 0.0);
-    for (int j = 0; j < A.outerSize(); ++j) {
+    next_outer.assign(n + 1, 0);
+    next_inner.clear();
+    next_value.clear();
+    for (int j = 0; j < n; ++j) {
+      // the diagonal first, then the rows below it in Eigen's ascending order
+      next_inner.push_back(j);
+      next_value.push_back(0.0);
+      const std::size_t diagonal = next_value.size() - 1;
       for (Eigen::SparseMatrix<double>::InnerIterator it(A, j); it; ++it) {
-        if (it.row() >= it.col()) t.emplace_back(static_cast<int>(it.row()), static_cast<int>(it.col()), it.value());
+        if (it.row() == j) {
+          next_value[diagonal] += it.value();
+        } else if (it.row() > j) {
+          next_inner.push_back(static_cast<int>(it.row()));
+          next_value.push_back(it.value());
+        }
       }
+      next_outer[j + 1] = static_cast<int>(next_inner.size());
     }
-    lower.resize(n, n);
-    lower.setFromTriplets(t.begin(), t.end());
-    lower.makeCompressed();
-    const std::vector<int> outer(lower.outerIndexPtr(), lower.outerIndexPtr() + n + 1);
-    const std::vector<int> inner(lower.innerIndexPtr(), lower.innerIndexPtr() + lower.nonZeros());
-    if (matrix && factor && outer == cached_outer && inner == cached_inner) return;
+    const bool same_pattern =
+        matrix && factor && next_outer == lower_outer && next_inner == lower_inner;
+    if (!(same_pattern && next_value == lower_value)) factor_current = false;
+    std::swap(lower_outer, next_outer);
+    std::swap(lower_inner, next_inner);
+    std::swap(lower_value, next_value);
+    a_max = 0.0;
+    for (const double v : lower_value) a_max = std::max(a_max, std::abs(v));
+    if (same_pattern) return;
     if (factor) cholmod_free_factor(&factor, &common);
     if (matrix) cholmod_free_sparse(&matrix, &common);
-    matrix = cholmod_allocate_sparse(n, n, lower.nonZeros(), 1, 1, -1, CHOLMOD_REAL, &common);
+    const auto nonzeros = lower_value.size();
+    matrix = cholmod_allocate_sparse(n, n, nonzeros, 1, 1, -1, CHOLMOD_REAL, &common);
     if (!matrix) throw Error("direct solver: CHOLMOD could not allocate a " + std::to_string(n) + "-row matrix");
-    std::copy(outer.begin(), outer.end(), static_cast<int*>(matrix->p));
-    std::copy(inner.begin(), inner.end(), static_cast<int*>(matrix->i));
-    std::fill_n(static_cast<double*>(matrix->x), lower.nonZeros(), 1.0);
-    for (int j = 0; j < n; ++j) static_cast<double*>(matrix->x)[outer[j]] = 1.0;
+    std::copy(lower_outer.begin(), lower_outer.end(), static_cast<int*>(matrix->p));
+    std::copy(lower_inner.begin(), lower_inner.end(), static_cast<int*>(matrix->i));
+    std::fill_n(static_cast<double*>(matrix->x), nonzeros, 1.0);
     factor = cholmod_analyze(matrix, &common);
-    if (!factor) throw Error("direct solver: CHOLMOD analysis failed (status " + std::to_string(common.status) + ")");
-    cached_outer = outer;
-    cached_inner = inner;
+    if (!factor)
+      throw Error("direct solver: CHOLMOD analysis failed (status " +
+                  std::to_string(common.status) + ")");
     ++analyses;
   }
 
   // numeric factorisation of A with rows outside the free set replaced by identity
   void factorise(const std::vector<RowState>& state) {
     factor_current = false;  // until this factorisation succeeds
-    const int n = static_cast<int>(lower.rows());
+    const int n = static_cast<int>(lower_outer.size()) - 1;
     double* x = static_cast<double*>(matrix->x);
-    const double* v = lower.valuePtr();
-    const int* outer = lower.outerIndexPtr();
-    const int* inner = lower.innerIndexPtr();
+    const double* v = lower_value.data();
+    const int* outer = lower_outer.data();
+    const int* inner = lower_inner.data();
     for (int j = 0; j < n; ++j) {
       for (int k = outer[j]; k < outer[j + 1]; ++k) {
         const int i = inner[k];
@@ -96,20 +124,25 @@ struct DirectSolver::Impl {
     factor_current = true;
   }
 
-  Eigen::MatrixXd solve(const Eigen::MatrixXd& rhs) {
-    const int n = static_cast<int>(rhs.rows());
-    const int k = static_cast<int>(rhs.cols());
-    cholmod_dense* B = cholmod_allocate_dense(n, k, n, CHOLMOD_REAL, &common);
-    std::copy(rhs.data(), rhs.data() + static_cast<std::ptrdiff_t>(n) * k, static_cast<double*>(B->x));
-    cholmod_dense* X = cholmod_solve(CHOLMOD_A, factor, B, &common);
-    if (!X) {
-      cholmod_free_dense(&B, &common);
+  // x = A⁻¹ rhs with the current factor. CHOLMOD's solve2 keeps its dense results and workspaces
+  // (x_dense, y_work, e_work) between calls, so the friction passes' solves allocate nothing; rhs
+  // is lent to CHOLMOD as a column-major view, read only
+  const Eigen::MatrixXd& solve(const Eigen::MatrixXd& rhs) {
+    cholmod_dense b{};
+    b.nrow = static_cast<size_t>(rhs.rows());
+    b.ncol = static_cast<size_t>(rhs.cols());
+    b.nzmax = b.nrow * b.ncol;
+    b.d = b.nrow;
+    b.x = const_cast<double*>(rhs.data());
+    b.xtype = CHOLMOD_REAL;
+    b.dtype = CHOLMOD_DOUBLE;
+    if (!cholmod_solve2(CHOLMOD_A, factor, &b, nullptr, &x_dense, nullptr, &y_work, &e_work,
+                        &common)) {
       throw Error("direct solver: CHOLMOD solve failed (status " + std::to_string(common.status) + ")");
     }
-    Eigen::MatrixXd out = Eigen::Map<Eigen::MatrixXd>(static_cast<double*>(X->x), n, k);
-    cholmod_free_dense(&X, &common);
-    cholmod_free_dense(&B, &common);
-    return out;
+    solution = Eigen::Map<const Eigen::MatrixXd>(static_cast<const double*>(x_dense->x), rhs.rows(),
+                                                 rhs.cols());
+    return solution;
   }
 
   // primal active set for fixed bounds; lambda and state are the warm start and the result
@@ -126,13 +159,13 @@ struct DirectSolver::Impl {
       else if (state[i] == RowState::upper) lambda[i] = p.hi[i];
       else lambda[i] = std::clamp(lambda[i], p.lo[i], p.hi[i]);
     }
-    // scale of A for the tolerance on the multipliers' signs
-    double a_max = 0.0;
-    for (int j = 0; j < p.A.outerSize(); ++j) {
-      for (Eigen::SparseMatrix<double>::InnerIterator it(p.A, j); it; ++it) a_max = std::max(a_max, std::abs(it.value()));
-    }
     converged = false;
-    bool need_factor = !(factor_current && state == factor_state);
+    rhs.resize(n, 1);
+    // the factor depends on which rows are free, not on the bound a clamped row sits at
+    bool need_factor = !factor_current || factor_state.size() != state.size();
+    for (int i = 0; i < n && !need_factor; ++i) {
+      need_factor = (state[i] == RowState::free) != (factor_state[i] == RowState::free);
+    }
     int it = 0;
     for (; it < max_iterations; ++it) {
       if (need_factor) {
@@ -140,30 +173,32 @@ struct DirectSolver::Impl {
         ++factorisations;
         need_factor = false;
       }
-      // free rows: A_FF x_F = b_F - A_FW λ_W; clamped rows keep their value
-      Eigen::VectorXd clamped = Eigen::VectorXd::Zero(n);
-      for (int i = 0; i < n; ++i) {
-        if (state[i] != RowState::free) clamped[i] = lambda[i];
+      // free rows: A_FF x_F = b_F - A_FW λ_W; clamped rows keep their value. A_FW λ_W sums the
+      // clamped columns alone (most rows are free joint rows), in the order A * λ_W would
+      coupling.setZero(n);
+      for (int j = 0; j < n; ++j) {
+        if (state[j] == RowState::free) continue;
+        for (Eigen::SparseMatrix<double>::InnerIterator it(p.A, j); it; ++it)
+          coupling[it.row()] += it.value() * lambda[j];
       }
-      const Eigen::VectorXd coupling = p.A * clamped;
-      Eigen::VectorXd rhs(n);
-      for (int i = 0; i < n; ++i) rhs[i] = state[i] == RowState::free ? p.b[i] - coupling[i] : lambda[i];
-      const Eigen::VectorXd x = solve(rhs);
+      for (int i = 0; i < n; ++i)
+        rhs(i, 0) = state[i] == RowState::free ? p.b[i] - coupling[i] : lambda[i];
+      const Eigen::MatrixXd& x = solve(rhs);
       // ratio test: the largest step towards x that keeps every free row inside its bounds
       double alpha = 1.0;
       int blocking = -1;
       RowState blocking_side = RowState::free;
       for (int i = 0; i < n; ++i) {
         if (state[i] != RowState::free) continue;
-        const double d = x[i] - lambda[i];
-        if (x[i] < p.lo[i]) {
+        const double d = x(i, 0) - lambda[i];
+        if (x(i, 0) < p.lo[i]) {
           const double a = d < 0.0 ? std::max(0.0, (p.lo[i] - lambda[i]) / d) : 0.0;
           if (blocking < 0 ? a <= alpha : a < alpha) {
             alpha = a;
             blocking = i;
             blocking_side = RowState::lower;
           }
-        } else if (x[i] > p.hi[i]) {
+        } else if (x(i, 0) > p.hi[i]) {
           const double a = d > 0.0 ? std::max(0.0, (p.hi[i] - lambda[i]) / d) : 0.0;
           if (blocking < 0 ? a <= alpha : a < alpha) {
             alpha = a;
@@ -173,7 +208,7 @@ struct DirectSolver::Impl {
         }
       }
       for (int i = 0; i < n; ++i) {
-        if (state[i] == RowState::free) lambda[i] += alpha * (x[i] - lambda[i]);
+        if (state[i] == RowState::free) lambda[i] += alpha * (x(i, 0) - lambda[i]);
       }
       if (blocking >= 0) {
         // the blocking row joins the working set at its bound
@@ -182,14 +217,17 @@ struct DirectSolver::Impl {
         need_factor = true;
         continue;
       }
-      // full step: release the clamped row whose multiplier has the most wrong sign
-      const Eigen::VectorXd w = p.A * lambda - p.b;
+      // full step: release the clamped row whose multiplier has the most wrong sign; w_i = (A λ)_i
+      // - b_i of a clamped row is its column's dot product with λ (A is symmetric)
       const double wtol = 1e-13 * (p.b.cwiseAbs().maxCoeff() + a_max * lambda.cwiseAbs().maxCoeff());
       int release = -1;
       double worst = wtol;
       for (int i = 0; i < n; ++i) {
         if (state[i] == RowState::free || p.lo[i] == p.hi[i]) continue;
-        const double wrong = state[i] == RowState::lower ? -w[i] : w[i];
+        double w = -p.b[i];
+        for (Eigen::SparseMatrix<double>::InnerIterator it(p.A, i); it; ++it)
+          w += it.value() * lambda[it.index()];
+        const double wrong = state[i] == RowState::lower ? -w : w;
         if (wrong > worst) {
           worst = wrong;
           release = i;

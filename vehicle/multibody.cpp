@@ -60,8 +60,8 @@ void MultibodySystem::assemble(double h) {
   std::vector<Eigen::Triplet<double>> t;
   for (int r = 0; r < m; ++r) {
     for (const auto& blk : rows_[r].blocks) {
-      const int c0 = column_.at(blk.body);
-      if (c0 < 0) continue;  // fixed bodies are part of the world
+      const int c0 = blk.body == kWorld ? -1 : column_.at(blk.body);
+      if (c0 < 0) continue;  // the world and fixed bodies have no columns
       for (int k = 0; k < 6; ++k) {
         if (blk.jacobian[k] != 0.0) t.emplace_back(r, c0 + k, blk.jacobian[k]);
       }
@@ -70,11 +70,12 @@ void MultibodySystem::assemble(double h) {
   G_.resize(m, columns_);
   G_.setFromTriplets(t.begin(), t.end());
   t.clear();
+  inverse_inertia_.resize(bodies_.size());
   for (size_t i = 0; i < bodies_.size(); ++i) {
     const int c0 = column_[i];
     if (c0 < 0) continue;
     for (int k = 0; k < 3; ++k) t.emplace_back(c0 + k, c0 + k, 1.0 / bodies_[i].mass);
-    const Mat3 iinv = bodies_[i].inverse_inertia_world();
+    const Mat3& iinv = inverse_inertia_[i] = bodies_[i].inverse_inertia_world();
     for (int r = 0; r < 3; ++r) {
       for (int c = 0; c < 3; ++c) t.emplace_back(c0 + 3 + r, c0 + 3 + c, iinv(r, c));
     }
@@ -113,11 +114,7 @@ void MultibodySystem::assemble(double h) {
       }
     }
   }
-  // the Schur complement A = G M⁻¹ Gᵀ + Σ
-  Eigen::SparseMatrix<double> A = G_ * minv_ * Eigen::SparseMatrix<double>(G_.transpose());
-  for (int r = 0; r < m; ++r) A.coeffRef(r, r) += sigma_[r];
-  A.makeCompressed();
-  mcp_.A = std::move(A);
+  assemble_schur_complement();
   assembled_force_range_.resize(m);
   for (int r = 0; r < m; ++r) assembled_force_range_[r] = {rows_[r].force_min, rows_[r].force_max};
   if (warm_lambda_.size() != m) {
@@ -126,6 +123,85 @@ void MultibodySystem::assemble(double h) {
   }
   assembled_ = true;
   solved_ = false;
+}
+
+void MultibodySystem::assemble_schur_complement() {
+  // A = G M⁻¹ Gᵀ + Σ block by block: rows i and j couple only through a body both act on, with
+  // A_ij = Σ_b J_ib M_b⁻¹ J_jbᵀ. Measured on load-carry (86 rows, 13 bodies), the general sparse
+  // triple product took 22 % of a vehicle step; this takes a few microseconds. The pattern is
+  // structural (which rows share a body), not the values' zeros, so the direct solver's symbolic
+  // analysis is reused while the machine's rows stay the same, and A is exactly symmetric
+  const int m = static_cast<int>(rows_.size());
+  // per moving body, the blocks acting on it (in row order) with M_b⁻¹ J_bᵀ beside each
+  struct BodyBlock {
+    int row;
+    Vec6 jacobian, mobility;
+  };
+  std::vector<std::vector<BodyBlock>> on_body(bodies_.size());
+  for (int r = 0; r < m; ++r) {
+    for (const auto& blk : rows_[r].blocks) {
+      if (blk.body == kWorld || column_.at(blk.body) < 0) continue;  // no columns
+      const RigidBody& body = bodies_[blk.body];
+      Vec6 w;
+      w.head<3>() = blk.jacobian.head<3>() / body.mass;
+      w.tail<3>() = inverse_inertia_[blk.body] * blk.jacobian.tail<3>();
+      on_body[blk.body].push_back({r, blk.jacobian, w});
+    }
+  }
+  // the lower triangle, dense while it is summed (m is the machine's row count, about 100)
+  schur_.setZero(m, m);
+  for (const auto& blocks : on_body) {
+    for (size_t p = 0; p < blocks.size(); ++p) {
+      for (size_t q = p; q < blocks.size(); ++q) {
+        const int i = std::max(blocks[p].row, blocks[q].row);
+        const int j = std::min(blocks[p].row, blocks[q].row);
+        const double v = blocks[p].jacobian.dot(blocks[q].mobility);
+        // two blocks of one row on one body: the cross term appears as (p, q) and (q, p)
+        schur_(i, j) += p != q && i == j ? 2.0 * v : v;
+      }
+    }
+  }
+  // the pattern (which rows share a moving body, both triangles, the diagonal always stored since
+  // it carries Σ) changes only when the rows' bodies do: kept from the last step while they agree
+  std::vector<int> row_bodies;
+  for (const auto& row : rows_) {
+    for (const auto& blk : row.blocks) {
+      if (blk.body != kWorld && column_[blk.body] >= 0) row_bodies.push_back(blk.body);
+    }
+    row_bodies.push_back(kWorld);  // end of the row
+  }
+  Eigen::SparseMatrix<double>& A = mcp_.A;
+  if (row_bodies != pattern_row_bodies_ || A.rows() != m) {
+    std::vector<char> coupled(static_cast<size_t>(m) * m, 0);
+    for (const auto& blocks : on_body) {
+      for (const BodyBlock& a : blocks) {
+        for (const BodyBlock& b : blocks) coupled[static_cast<size_t>(a.row) * m + b.row] = 1;
+      }
+    }
+    std::vector<Eigen::Triplet<double>> t;
+    for (int j = 0; j < m; ++j) {
+      for (int i = 0; i < m; ++i) {
+        if (i == j || coupled[static_cast<size_t>(j) * m + i]) t.emplace_back(i, j, 0.0);
+      }
+    }
+    A.resize(m, m);
+    A.setFromTriplets(t.begin(), t.end());
+    pattern_row_bodies_ = std::move(row_bodies);
+  }
+  // the values, column by column, from the dense lower triangle
+  const int* outer = A.outerIndexPtr();
+  const int* inner = A.innerIndexPtr();
+  double* value = A.valuePtr();
+  for (int j = 0; j < m; ++j) {
+    for (int k = outer[j]; k < outer[j + 1]; ++k) {
+      const int i = inner[k];
+      value[k] = i >= j ? schur_(i, j) : schur_(j, i);
+    }
+    // the diagonal is stored: add Σ to it
+    for (int k = outer[j]; k < outer[j + 1]; ++k) {
+      if (inner[k] == j) value[k] += sigma_[j];
+    }
+  }
 }
 
 void MultibodySystem::solve() {

@@ -62,6 +62,8 @@ class MultibodySystem {
   int row_count() const { return static_cast<int>(rows_.size()); }
   const McpResult& last_result() const { return result_; }
   int bound_passes() const { return bound_passes_; }
+  // the bounded MCP of the last assemble() (A and the bounds; b once solve() has run)
+  const BoundedMcp& problem() const { return mcp_; }
   // the state between two steps, for a saved state (digging/saved_state): the bodies' poses and
   // velocities, the clock, the direct solver's warm start (impulses and active set) and every
   // constraint's own (Constraint::save_state), in the order they were added. restore_state reads
@@ -74,6 +76,9 @@ class MultibodySystem {
   double max_joint_angle_violation() const;
 
  private:
+  // mcp_.A = G M⁻¹ Gᵀ + Σ from this step's rows, Σ and the bodies' inverse masses
+  void assemble_schur_complement();
+
   std::vector<RigidBody> bodies_;
   std::vector<std::unique_ptr<Constraint>> constraints_;
   Vec3 gravity_ = Vec3(0.0, 0.0, -9.81);
@@ -87,7 +92,10 @@ class MultibodySystem {
   int columns_ = 0;
   Eigen::SparseMatrix<double> G_;
   Eigen::SparseMatrix<double> minv_;
+  std::vector<Mat3> inverse_inertia_;  // per body, world frame, this step (unset for fixed bodies)
   Eigen::VectorXd sigma_, rhs_;
+  Eigen::MatrixXd schur_;                // lower triangle of G M⁻¹ Gᵀ while it is summed
+  std::vector<int> pattern_row_bodies_;  // each row's moving bodies (row ends: kWorld) of mcp_.A
   BoundedMcp mcp_;
   // the impulse bounds as assembled: solve() starts from them, so bounds that a previous solve
   // of the same step lowered (the engine's speed-dependent torque limit) do not stick when the
