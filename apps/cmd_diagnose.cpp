@@ -9,6 +9,7 @@
 #include <iostream>
 #include <memory>
 #include <sstream>
+#include <system_error>
 
 #include "apps/commands.hpp"
 #include "host/device.hpp"
@@ -24,6 +25,9 @@ namespace {
 
 namespace fs = std::filesystem;
 using namespace talus::sim2real;
+
+// the --out folder's completion mark: the machine-readable diagnosis, written last
+constexpr const char* kDiagnosisFile = "diagnosis.json";
 
 struct DiagnoseArgs {
   std::vector<std::string> data;
@@ -51,8 +55,17 @@ void diagnose_command(const DiagnoseArgs& a) {
   options.plugins = vehicle::load_effect_plugins(a.plugins);
   options.discover = a.discover;
   options.threads = a.threads;
-  if (!a.out.empty()) make_output_dir(a.out);
   check_output_file(a.json, "--json");
+  // --out: diagnosis.json is written last and marks the folder complete, so a previous
+  // diagnosis's goes before anything runs (a diagnosis killed midway leaves a folder without it)
+  if (!a.out.empty()) {
+    make_output_dir(a.out);
+    std::error_code ec;
+    fs::remove(fs::path(a.out) / kDiagnosisFile, ec);
+    if (ec)
+      throw InputError("--out " + a.out + ": cannot remove the previous " + kDiagnosisFile + " (" +
+                       ec.message() + ")");
+  }
   const bool piles = std::any_of(runs.begin(), runs.end(), [](const MeasuredRun& r) { return measured_scenario(r).pile; });
   std::unique_ptr<Device> device = piles ? std::make_unique<Device>() : nullptr;
 
@@ -74,7 +87,6 @@ void diagnose_command(const DiagnoseArgs& a) {
   }
   if (!a.out.empty()) {
     const fs::path out(a.out);
-    write_json((out / "diagnosis.json").string(), j);
     write_file_atomically(out / "report.md", report);
     write_table_csv(out / "errors-before.csv", error_table(d.error_before));
     write_table_csv(out / "errors-after.csv", error_table(d.error_after));
@@ -83,6 +95,7 @@ void diagnose_command(const DiagnoseArgs& a) {
       channel_figure({d.simulated_before[i], d.simulated_after[i]}, &runs[i].run)
           .write_png((out / name).string(), kFigureWidth, kFigureHeight);
     }
+    write_json((out / kDiagnosisFile).string(), j);
   }
 }
 

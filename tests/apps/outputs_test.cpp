@@ -154,6 +154,51 @@ TEST(Outputs, EveryLongCommandStopsOnSigintWithOneLine) {
   fs::remove_all(base);
 }
 
+// SIGKILL cannot be caught: every command that writes a folder is killed 3 s after it starts,
+// inside its pile, settling, test, cycle or candidate search, and the folder must hold no
+// completion mark, neither its own nor the previous run's (summary.json; diagnose's is
+// diagnosis.json), so nothing can take it for a finished one
+TEST(Outputs, EveryFolderCommandKilledMidwayLeavesNoCompletionMark) {
+  const fs::path base = fs::temp_directory_path() / "talus_outputs_sigkill";
+  fs::remove_all(base);
+  fs::create_directories(base);
+  const std::string b = base.string();
+  // two short measured-like runs for diagnose
+  for (const char* sc : {"flat-lift", "load-carry"}) {
+    const std::string d = b + "/data-" + sc;
+    ASSERT_EQ(test::run_talus("", std::string("synth --scenario ") + sc +
+                                      " --effect hydraulic_lag --quiet --out " + d +
+                                      " --answer-key " + d + ".key.json")
+                  .code,
+              0);
+  }
+  struct Command {
+    std::string name, args, mark;  // mark: the file that says the folder is complete
+  };
+  const std::vector<Command> commands = {
+      {"pile", "pile --level D200", "summary.json"},
+      {"repose", "repose --diameter 0.1", "summary.json"},
+      {"soil", "soil --test shear --level D200", "summary.json"},
+      {"cut", "cut --level D200", "summary.json"},
+      {"run", "run --scenario hd27 --fidelity D200", "summary.json"},
+      {"sweep", "sweep --scenario fb35 --fidelity D200 --samples 3", "summary.json"},
+      {"synth", "synth --scenario hd27 --fidelity D200", "summary.json"},
+      {"diagnose", "diagnose --data " + b + "/data-flat-lift " + b + "/data-load-carry",
+       "diagnosis.json"}};
+  for (const Command& c : commands) {
+    SCOPED_TRACE(c.name);
+    const fs::path out = base / ("out-" + c.name);
+    fs::create_directories(out);
+    std::ofstream(out / c.mark) << R"({"stale": true})";
+    // a pile cache of its own, so that no cached pile shortens the command before the signal
+    const auto r = test::run_talus("TALUS_CACHE_DIR=" + b + "/cache timeout -s KILL 3",
+                                   c.args + " --quiet --out " + out.string());
+    EXPECT_NE(r.code, 0) << "finished before it was killed: " << r.err;
+    EXPECT_FALSE(fs::exists(out / c.mark));
+  }
+  fs::remove_all(base);
+}
+
 // synth: the data's summary comes last and carries no command line (it names the effects); the
 // answer key has the provenance
 TEST(Outputs, SynthKeepsItsCommandLineInTheAnswerKey) {
