@@ -194,6 +194,21 @@ class Snapshots {
     write_file_atomically((dir_ / snap.machine).string(), machine_vtp(sim.loader()));
     taken_.push_back(snap);
   }
+  // the snapshots still to come, at the first one's size, must fit on the output's file system
+  // (type G's zone particles grow, so there it is a lower bound)
+  void check_room_for_all(int steps_total, double interval) const {
+    if (!on() || taken_.empty()) return;
+    const auto size = [&](const std::string& file) {
+      return static_cast<double>(std::filesystem::file_size(dir_ / file));
+    };
+    const double each = size(taken_[0].particles) + size(taken_[0].machine);
+    const int still_to_come = steps_total / every_;
+    std::ostringstream what;
+    what << "--snapshot-interval " << interval << ": " << still_to_come << " more snapshots of "
+         << each / 1e6 << " MB each";
+    check_room(each * still_to_come, std::filesystem::space(dir_).available, what.str(),
+               "take fewer (a longer --snapshot-interval) or none (0)");
+  }
   // DIR/particles.pvd
   void finish() const {
     if (on()) write_file_atomically((dir_ / "particles.pvd").string(), pvd_collection(taken_));
@@ -347,6 +362,7 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
                                ? std::max(1, static_cast<int>(std::lround(snapshot_steps)))
                                : 0);
   snapshots.after_step(0, sim.time(), sim);
+  snapshots.check_room_for_all(sim.steps_total(), o.snapshot_interval);
   Progress progress("dig " + sc.name + " " + preset.name, sc.duration, !o.quiet);
   const int note_every =
       std::max(1, static_cast<int>(std::lround(kProgressNoteInterval / preset.dt)));

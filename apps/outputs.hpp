@@ -6,9 +6,12 @@
 // particles.vtp for ParaView; side.png) before their summary. Each file is written to a temporary
 // name and renamed (io/output).
 #pragma once
+#include <cstdint>
 #include <filesystem>
+#include <iomanip>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
 #include <system_error>
 
@@ -30,6 +33,21 @@ inline void start_output_folder(const std::string& out) {
   if (ec)
     throw InputError("--out " + out + ": cannot remove the previous " + sim2real::kSummaryFile +
                      " (" + ec.message() + ")");
+}
+
+// refuse output that would not fit before it is written: `bytes` estimated for `what` against the
+// `available` bytes of the file system it goes to; the InputError names the estimate, the free
+// space and `fix`. (A run whose disk fills midway loses its summary and figures after hours.)
+inline void check_room(double bytes, std::uintmax_t available, const std::string& what,
+                       const std::string& fix) {
+  if (bytes <= static_cast<double>(available)) return;
+  auto gigabytes = [](double b) {
+    std::ostringstream s;
+    s << std::setprecision(3) << b / 1e9 << " GB";
+    return s.str();
+  };
+  throw InputError(what + " would write about " + gigabytes(bytes) + ", where " +
+                   gigabytes(static_cast<double>(available)) + " is free; " + fix);
 }
 
 // which talus made a summary and how: version, git commit of the build, the command as typed

@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "apps/outputs.hpp"
+#include "host/error.hpp"
 #include "host/version.hpp"
 #include "tests/apps/cli_test_util.hpp"
 
@@ -197,6 +199,22 @@ TEST(Outputs, EveryFolderCommandKilledMidwayLeavesNoCompletionMark) {
     EXPECT_FALSE(fs::exists(out / c.mark));
   }
   fs::remove_all(base);
+}
+
+// output estimated beyond the free space is refused before it is written, with the estimate, the
+// free space and the fix in one line (talus run checks its snapshots this way after the first)
+TEST(Outputs, OutputThatWouldNotFitIsRefusedWithItsEstimate) {
+  EXPECT_NO_THROW(app::check_room(1.0e9, 2'000'000'000u, "snapshots", "take fewer"));
+  try {
+    app::check_room(2.5e9, 1'000'000'000u, "--snapshot-interval 0.01: 100 more snapshots",
+                    "take fewer");
+    FAIL() << "expected an InputError";
+  } catch (const InputError& e) {
+    EXPECT_STREQ(
+        e.what(),
+        "--snapshot-interval 0.01: 100 more snapshots would write about 2.5 GB, where 1 GB "
+        "is free; take fewer");
+  }
 }
 
 // synth: the data's summary comes last and carries no command line (it names the effects); the
