@@ -226,8 +226,7 @@ void add_bench_command(CLI::App& app) {
   dem->add_flag("--no-settle10k", opt->no_settle10k, "skip the 10k settling case");
   dem->add_option("--settle-dt", opt->settle_dt,
                   "timestep of the 10k settling case [s] (default 4e-3)")
-      ->check(finite_number())
-      ->check(positive_number());
+      ->check(number_in(kMinTimestep, kMaxTimestep, "s"));
   dem->add_option("--settle-iterations", opt->settle_iterations, "PGS sweeps of the 10k settling case (default 30)")
       ->check(CLI::Range(1, 100000));
   dem->add_flag("--quiet", opt->quiet, "no progress on stderr");

@@ -44,13 +44,13 @@ void add_cut_command(CLI::App& app, const std::string& command_line) {
       ->capture_default_str();
   cmd->add_option("--out", opt->out, "output folder (summary.json, cut.csv, cut.png, particles.csv, ...)")->required();
   cmd->add_option("--json", opt->json, "also write the summary to this file ('-' for stdout)");
+  // quasi-static (10 mm/s) to faster than a loader drives into a pile
   cmd->add_option("--speed", opt->cut.speed, "blade speed [m/s]")
-      ->check(finite_number())
-      ->check(positive_number())
+      ->check(number_in(0.01, 2.0, "m/s"))
       ->capture_default_str();
+  // the bed is built as long as the travel: up to twice a bucket's fill length in the field runs
   cmd->add_option("--travel", opt->cut.travel, "blade travel [m]")
-      ->check(finite_number())
-      ->check(positive_number())
+      ->check(number_in(0.1, 6.0, "m"))
       ->capture_default_str();
   cmd->add_option("--phi", opt->cut.internal_friction_deg, "internal friction angle of the soil for the equation [deg]")->check(finite_number())
       ->check(CLI::Range(1.0, 80.0))

@@ -28,9 +28,9 @@ void add_pile_command(CLI::App& app, const std::string& command_line) {
   cmd->add_option("--out", opt->out, "output folder (particles.csv, particles.vtp, side.png, scan.csv, summary.json)")->required();
   cmd->add_option("--profile", opt->profile, "pile profile JSON (default: data/piles/default.json)");
   cmd->add_option("--seed", opt->build.seed, "random seed of sizes and jitter");
+  // at least the settling's minimum (PileBuildOptions::min_time, 1 s); ten minutes at most
   cmd->add_option("--max-time", opt->build.max_time, "longest settling time [s]")
-      ->check(finite_number())
-      ->check(positive_number());
+      ->check(number_in(1.0, 600.0, "s"));
   cmd->add_option(
          "--form-speed", opt->build.form_speed,
          "speed the formwork withdraws at before the pile settles, 0 = removed at once [m/s]")

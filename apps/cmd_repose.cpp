@@ -22,15 +22,14 @@ void add_repose_command(CLI::App& app, const std::string& command_line) {
   auto opt = std::make_shared<Options>();
   auto* cmd = app.add_subcommand("repose", "heap test: angle of repose and bulk density of the gravel");
   cmd->add_option("--out", opt->out, "output folder (particles.csv, particles.vtp, side.png, summary.json)")->required();
+  // from fine gravel (10 mm) to a boulder (1 m): the levels' grains are 50-400 mm
   cmd->add_option("--diameter", opt->heap.diameter, "mean particle diameter D [m]")
-      ->check(finite_number())
-      ->check(positive_number());
+      ->check(number_in(0.01, 1.0, "m"));
   cmd->add_option("--columns", opt->heap.columns, "column width in particles")->check(CLI::Range(4, 200));
   cmd->add_option("--layers", opt->heap.layers, "column height in particles")->check(CLI::Range(4, 400));
   cmd->add_option("--iterations", opt->heap.iterations, "PGS sweeps per step")->check(CLI::Range(1, 100000));
   cmd->add_option("--dt", opt->heap.dt, "timestep [s]")
-      ->check(finite_number())
-      ->check(positive_number());
+      ->check(number_in(kMinTimestep, kMaxTimestep, "s"));
   cmd->add_option("--seed", opt->heap.seed, "random seed of the particle sizes and jitter");
   cmd->add_option("--friction", opt->material.friction,
                   "Coulomb friction (default: the gravel's 0.3)")
@@ -43,8 +42,9 @@ void add_repose_command(CLI::App& app, const std::string& command_line) {
       ->check(non_negative_number());
   cmd->add_option("--wall-speed", opt->heap.wall_speed,
                   "speed the walls retreat at before removal, 0 = at once [m/s]")
-      ->check(finite_number())
-      ->check(non_negative_number());
+      // slower than 10 mm/s the walls take hours to clear the heap (the pile's formwork has the
+      // same floor, terrain/pile.cpp); faster than 10 m/s they throw it
+      ->check(number_in(0.01, 10.0, "m/s", true));
   cmd->add_flag("--quiet", opt->quiet, "no progress on stderr");
   cmd->callback([opt, command_line] {
     start_output_folder(opt->out);

@@ -464,8 +464,7 @@ void add_run_command(CLI::App& app, const std::string& command_line) {
       ->check(finite_number())
       ->check(non_negative_number());
   cmd->add_option("--dt", opts->dt, "study: timestep [s] instead of the level's")
-      ->check(finite_number())
-      ->check(positive_number());
+      ->check(number_in(kMinTimestep, kMaxTimestep, "s"));
   cmd->add_option("--iterations", opts->iterations, "study: sweeps per step instead of the level's")
       ->check(CLI::Range(1, 100000));
   cmd->add_option("--form-speed", opts->form_speed,

@@ -92,9 +92,9 @@ void add_soil_command(CLI::App& app, const std::string& command_line) {
   cmd->add_option("--aspect", opt->aspect, "collapse: column height over length asked for")->check(finite_number())
       ->check(CLI::Range(0.1, 3.0))
       ->capture_default_str();
+  // from a few grains' weight (1 kPa) to a 50 m column of gravel (0.85 MPa at 1727 kg/m^3)
   cmd->add_option("--normal-stress", opt->normal_stress, "shear: the platen's normal stress [Pa]")
-      ->check(finite_number())
-      ->check(positive_number())
+      ->check(number_in(1e3, 1e6, "Pa"))
       ->capture_default_str();
   cmd->add_flag("--quiet", opt->quiet, "no progress on stderr");
   cmd->callback([opt, command_line] {

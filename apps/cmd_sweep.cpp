@@ -324,10 +324,10 @@ void add_sweep_command(CLI::App& app, const std::string& command_line) {
       ->capture_default_str()
       ->check(finite_number())
       ->check(positive_number());
+  // a cycle fills in 5-15 s (paper §7); two minutes is far beyond any that completes
   cmd->add_option("--max-time", o->max_time, "time limit of one cycle [s]")
       ->capture_default_str()
-      ->check(finite_number())
-      ->check(positive_number());
+      ->check(number_in(1.0, 120.0, "s"));
   cmd->add_option("--seed", o->seed, "random seed of the pile's particle sizes and jitter")->capture_default_str();
   cmd->add_option("--json", o->json, "also write the summary to this file ('-' for stdout)");
   cmd->add_flag("--traces", o->traces, "also write each cycle's 100 Hz time series as LEVEL/cycle-I.csv "

@@ -3,6 +3,7 @@
 #pragma once
 #include <CLI/CLI.hpp>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 #include <string>
 
@@ -56,6 +57,39 @@ inline CLI::Validator signed_number(bool allow_zero) {
 }
 inline CLI::Validator positive_number() { return signed_number(false); }
 inline CLI::Validator non_negative_number() { return signed_number(true); }
+
+// timesteps a study may ask for [s]: from 0.1 ms (a 15 s dig is then 150,000 steps, hours at D200;
+// below it the step count runs to days or overflows) to 50 ms, G400's and the coarsest preset's
+// (SPEC §2.6)
+inline constexpr double kMinTimestep = 1e-4;
+inline constexpr double kMaxTimestep = 0.05;
+
+// a numeric option within a physical range [lo, hi] in `unit` (or exactly 0, where 0 means "off"):
+// beyond such a range a timestep or speed overflows the step count, runs for days or answers
+// nonsense with exit 0 (docs/reliability.md gives each flag's range and why)
+inline CLI::Validator number_in(double lo, double hi, const std::string& unit,
+                                bool zero_allowed = false) {
+  auto bound = [](double v) {
+    char s[32];
+    std::snprintf(s, sizeof s, "%g", v);
+    return std::string(s);
+  };
+  const std::string range = (zero_allowed ? "0 or " : "") + std::string("from ") + bound(lo) +
+                            " to " + bound(hi) + " " + unit;
+  return CLI::Validator(
+      [lo, hi, zero_allowed, range](std::string& text) {
+        try {
+          size_t used = 0;
+          const double x = std::stod(text, &used);
+          if (used == text.size() && std::isfinite(x) &&
+              ((x >= lo && x <= hi) || (zero_allowed && x == 0.0)))
+            return std::string();
+        } catch (const std::exception&) {
+        }
+        return "must be a finite number " + range + ", got '" + text + "'";
+      },
+      "[" + range + "]");
+}
 
 // commands that write a folder get the command line as typed, recorded in its summary.json
 void add_pile_command(CLI::App& app, const std::string& command_line);  // build and settle a pile

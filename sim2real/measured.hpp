@@ -23,6 +23,11 @@
 
 namespace talus::sim2real {
 
+// the channel contract's sample rate [Hz] (SPEC §2.4, docs/measured-data.md): a measured run
+// states it and must be at it, since the metrics compare its samples with the simulation's one for
+// one; synthetic runs are written at it
+inline constexpr double kContractRateHz = 100.0;
+
 inline constexpr const char* kMetadataFile = "metadata.json";
 inline constexpr const char* kMeasuredFormat = "talus-measured-run";
 inline constexpr int kMeasuredVersion = 1;
@@ -32,7 +37,7 @@ using Series2 = std::vector<std::pair<double, double>>;
 struct MeasuredMetadata {
   std::string scenario;        // the scenario the inputs belong to, e.g. "HD27"
   std::string machine;         // machine data file name, e.g. "wa320"
-  double sample_rate_hz = 100.0;
+  double sample_rate_hz = kContractRateHz;
   double pile_toe_x_m = 0.0;   // where the pile's toe lies in the machine's frame
   Series2 pile_scan;           // (x, z) [m], x increasing
   Series2 drive, lift, tilt;   // operator target speeds (t [s], v [m/s]), t increasing

@@ -12,9 +12,6 @@ namespace talus::sim2real {
 
 namespace {
 
-// the sample rate of a synthetic run's channels [Hz]: the run contract's (SPEC §2.4)
-constexpr double kContractRateHz = 100.0;
-
 Series2 points(const vehicle::PiecewiseLinear& f) {
   Series2 out;
   for (const auto& p : f.points()) out.push_back(p);

@@ -25,16 +25,8 @@ double PiecewiseLinear::operator()(double t) const {
 
 namespace {
 
-// the longest scenario [s]: an hour of simulated time, far beyond a loading cycle (10-30 s) or the
-// reliability soak (600 s), and short enough that no step count can overflow
-constexpr double kMaxDuration = 3600.0;
 // the shortest [s]: two samples of the 100 Hz sensors
 constexpr double kMinDuration = 0.02;
-// the farthest a pile's toe may lie from the machine's start (x = 0) [m]: a loader approaches a
-// pile over a few metres, and at 100 m a run of an hour at its top speed (about 10 m/s) still
-// fits; far beyond, the device's float positions lose the millimetres a contact needs (their
-// spacing is 1e-3 m at 1e4 m from the origin)
-constexpr double kMaxPileToeX = 100.0;
 
 PiecewiseLinear series(const DataFile& f, const std::string& key) {
   const auto& j = f.member(f.root(), "", key);
@@ -83,8 +75,8 @@ Scenario load_scenario(const std::string& name_or_path) {
   s.duration = f.plain_number(root, "", "duration");
   s.payload = root.contains("payload") ? f.plain_number(root, "", "payload") : 0.0;
   if (!(s.duration > 0)) f.fail("duration", "is not > 0", "give the simulated time in s");
-  if (s.duration > kMaxDuration)
-    f.fail("duration", "is above " + std::to_string(static_cast<int>(kMaxDuration)) + " s",
+  if (s.duration > kMaxScenarioDuration)
+    f.fail("duration", "is above " + std::to_string(static_cast<int>(kMaxScenarioDuration)) + " s",
            "give at most an hour of simulated time (a loading cycle lasts 10-30 s)");
   // the sensors sample every 10 ms: a run shorter than two samples has nothing to compare
   if (s.duration < kMinDuration)
@@ -110,7 +102,10 @@ Scenario load_scenario(const std::string& name_or_path) {
     }
   } else {
     s.timestep = f.plain_number(root, "", "timestep");
-    if (!(s.timestep > 0) || s.timestep > 0.01) f.fail("timestep", "is not in (0, 0.01] s", "use e.g. 0.005 (sensors run at 100 Hz)");
+    // at least 1 ms (a 10 s scenario is then 10,000 steps; 1e-7 s ran for hours) and at most the
+    // sensors' 10 ms period
+    if (!(s.timestep >= 0.001 && s.timestep <= 0.01))
+      f.fail("timestep", "is not in [0.001, 0.01] s", "use e.g. 0.005 (sensors run at 100 Hz)");
     const double per_sample = 0.01 / s.timestep;
     if (std::abs(per_sample - std::round(per_sample)) > 1e-9) {
       f.fail("timestep", "does not divide the 10 ms sensor period", "use 0.01, 0.005, 0.0025, 0.002 or 0.001");

@@ -16,6 +16,16 @@
 
 namespace talus::vehicle {
 
+// the longest scenario [s]: an hour of simulated time, far beyond a loading cycle (10-30 s) or the
+// reliability soak (600 s), and short enough that no step count can overflow. Measured runs
+// (sim2real/measured) are held to it too: their time column is the replay's duration
+inline constexpr double kMaxScenarioDuration = 3600.0;
+// the farthest a pile's toe may lie from the machine's start (x = 0) [m]: a loader approaches a
+// pile over a few metres, and at 100 m a run of an hour at its top speed (about 10 m/s) still
+// fits; far beyond, the device's float positions lose the millimetres a contact needs (their
+// spacing is 1e-3 m at 1e4 m from the origin). Scenarios and measured runs alike
+inline constexpr double kMaxPileToeX = 100.0;
+
 // linear between points, constant before the first and after the last
 class PiecewiseLinear {
  public:

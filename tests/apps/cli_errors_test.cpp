@@ -2,11 +2,14 @@
 // how to fix it, exit code 1 for a runtime failure and 2 for bad input (apps/talus.cpp).
 #include <gtest/gtest.h>
 
+#include <array>
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "tests/apps/cli_test_util.hpp"
 
@@ -116,7 +119,8 @@ TEST(CliErrors, UnknownSubcommandAndRangeErrorsSayWhatIsWrong) {
   EXPECT_NE(o.err.find("run"), std::string::npos) << o.err;
   o = run("", "run --scenario hd27 --dt -1 --out /tmp/talus_unused_range");
   EXPECT_EQ(o.code, 2) << o.err;
-  EXPECT_NE(o.err.find("--dt: must be a finite number above 0, got '-1'"), std::string::npos)
+  EXPECT_NE(o.err.find("--dt: must be a finite number from 0.0001 to 0.05 s, got '-1'"),
+            std::string::npos)
       << o.err;
   EXPECT_LT(o.err.size(), 200u) << o.err;
   o = run("", "pile --settle-iterations 0 --out /tmp/talus_unused_range");
@@ -164,6 +168,32 @@ TEST(CliErrors, AnUnwritablePoclCacheIsNamed) {
         run("POCL_CACHE_DIR=" + dir, "pile --level D400 --quiet --out /tmp/talus_unused_pocl");
     EXPECT_EQ(o.code, 2) << o.err;
     EXPECT_NE(o.err.find("POCL_CACHE_DIR=" + dir), std::string::npos) << o.err;
+  }
+}
+
+// flags whose value sets a step count or a physical load have a stated range: beyond it a run
+// overflowed its step count (exit 0 with one sample), ran for days, or answered nonsense with exit
+// 0 (a bulk density of -174 kg/m^3, a repose angle of 0). Each is refused at once, exit 2, with the
+// flag, its range and unit, and the value
+TEST(CliErrors, StepCountsAndLoadsOutsideTheirRangeAreRefused) {
+  const std::vector<std::array<std::string, 2>> cases = {
+      {"--dt", "run --scenario hd27 --dt 1e-30 --out /tmp/talus_unused_range"},
+      {"--dt", "run --scenario hd27 --dt 1e30 --out /tmp/talus_unused_range"},
+      {"--dt", "repose --dt 1e-30 --out /tmp/talus_unused_range"},
+      {"--diameter", "repose --diameter 1e30 --out /tmp/talus_unused_range"},
+      {"--wall-speed", "repose --wall-speed 1e-3 --out /tmp/talus_unused_range"},
+      {"--speed", "cut --speed 1e-30 --out /tmp/talus_unused_range"},
+      {"--travel", "cut --travel 1e30 --out /tmp/talus_unused_range"},
+      {"--normal-stress", "soil --test shear --normal-stress 1e30 --out /tmp/talus_unused_range"},
+      {"--max-time", "pile --max-time 1e-30 --out /tmp/talus_unused_range"},
+      {"--max-time", "sweep --max-time 1e-30 --out /tmp/talus_unused_range"},
+      {"--settle-dt", "bench dem --settle-dt 1e30"}};
+  for (const auto& c : cases) {
+    const Outcome o = run("", c[1]);
+    EXPECT_EQ(o.code, 2) << c[1] << "\n" << o.err;
+    EXPECT_NE(o.err.find(c[0] + ": must be a finite number "), std::string::npos) << c[1] << "\n"
+                                                                                  << o.err;
+    EXPECT_NE(o.err.find(" to "), std::string::npos) << o.err;
   }
 }
 

@@ -94,11 +94,19 @@ TEST(MeasuredRun, MalformedMetadataNamesFileAndField) {
       {"'machine': missing", [](nlohmann::json& j) { j.erase("machine"); }},
       {"'sample_rate_hz'", [](nlohmann::json& j) { j["sample_rate_hz"] = -1; }},
       {"'pile_scan[2]': goes back", [](nlohmann::json& j) { j["pile_scan"][2][0] = 1.0; }},
-      {"'operator_inputs.lift[1]': must be a pair", [](nlohmann::json& j) { j["operator_inputs"]["lift"][1] = "x"; }},
-      {"'operator_inputs.tilt': missing", [](nlohmann::json& j) { j["operator_inputs"].erase("tilt"); }},
-      {"'loaded_mass_kg': differs from summary.json", [](nlohmann::json& j) { j["loaded_mass_kg"] = 2600; }},
+      {"'operator_inputs.lift[1]': must be a pair",
+       [](nlohmann::json& j) { j["operator_inputs"]["lift"][1] = "x"; }},
+      {"'operator_inputs.tilt': missing",
+       [](nlohmann::json& j) { j["operator_inputs"].erase("tilt"); }},
+      {"'loaded_mass_kg': differs from summary.json",
+       [](nlohmann::json& j) { j["loaded_mass_kg"] = 2600; }},
       {"'work_J': must be a finite number", [](nlohmann::json& j) { j["work_J"] = "lots"; }},
-      {"'scenario': is 'FB35' but summary.json says 'HD27'", [](nlohmann::json& j) { j["scenario"] = "FB35"; }},
+      {"'scenario': is 'FB35' but summary.json says 'HD27'",
+       [](nlohmann::json& j) { j["scenario"] = "FB35"; }},
+      // a toe far away ended in a misleading "needs more than 64 colours" (the scenarios' bound)
+      {"'pile_toe_x_m': lies outside 0-100 m", [](nlohmann::json& j) { j["pile_toe_x_m"] = 1e12; }},
+      {"'pile_toe_x_m': lies outside 0-100 m",
+       [](nlohmann::json& j) { j["pile_toe_x_m"] = -50.0; }},
   };
   int k = 0;
   for (const auto& [expected, change] : cases) {
@@ -108,9 +116,30 @@ TEST(MeasuredRun, MalformedMetadataNamesFileAndField) {
   }
 }
 
-TEST(MeasuredRun, SampleRateMustMatchTheTimeColumn) {
-  const std::string e = error_after("measured_rate", [](nlohmann::json& j) { j["sample_rate_hz"] = 50.0; });
-  EXPECT_NE(e.find("timeseries.csv: line 3: field 't'"), std::string::npos) << e;
+// the time column sets the replay's duration: beyond a scenario's hour it is refused naming the
+// file and field (a column to 1e7 s made diagnose simulate for hours)
+TEST(MeasuredRun, ATimeColumnBeyondAnHourIsRefused) {
+  const fs::path dir = write_run("measured_long");
+  save_timeseries(dir / kTimeseriesFile, test::reference_series(test::kRefRateHz, 3600.0));
+  try {
+    load_measured_run(dir);
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("timeseries.csv: field 't': runs from 3600"), std::string::npos) << m;
+    EXPECT_NE(m.find("within 0-3600 s"), std::string::npos) << m;
+  }
+}
+
+// the metrics compare samples one for one with the simulation's 100 Hz log: another rate is
+// refused with the fix (a 1 Hz run scored a position error of 3.66 on noiseless data)
+TEST(MeasuredRun, SampleRateIsTheContracts) {
+  for (const double rate : {50.0, 1.0}) {
+    const std::string e =
+        error_after("measured_rate", [rate](nlohmann::json& j) { j["sample_rate_hz"] = rate; });
+    EXPECT_NE(e.find("'sample_rate_hz'"), std::string::npos) << e;
+    EXPECT_NE(e.find("resample the data to 100 Hz"), std::string::npos) << e;
+  }
 }
 
 }  // namespace

@@ -45,6 +45,17 @@ TEST(ScenarioTest, MalformedScenarioNamesFileAndField) {
   std::ofstream(path) << R"({"name": "x", "machine": "wa320", "duration": 5, "timestep": 0.003,
                            "drive": [[0, 0]], "lift": [[0, 0]], "tilt": [[0, 0]]})";
   EXPECT_THROW(load_scenario(path), InputError);  // 3 ms does not divide the 10 ms sensor period
+  // 1e-7 s divides it, but a 5 s scenario would be 50 million steps (it ran for hours)
+  std::ofstream(path) << R"({"name": "x", "machine": "wa320", "duration": 5, "timestep": 1e-7,
+                           "drive": [[0, 0]], "lift": [[0, 0]], "tilt": [[0, 0]]})";
+  try {
+    load_scenario(path);
+    FAIL() << "1e-7 s: no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("field 'timestep' is not in [0.001, 0.01] s"),
+              std::string::npos)
+        << e.what();
+  }
   EXPECT_THROW(load_scenario("no-such-scenario"), InputError);
 }
 
