@@ -74,9 +74,22 @@ struct MachineDescription {
   GroundContactParameters bucket_ground;  // the bucket's bottom corners against the ground
 };
 
-// the machine file, every value checked for its type, sign and shape; InputError naming the
-// file, the field and the fix. What only the built model can check (names of bodies, a cylinder
-// range that holds the reference pose, a possible bucket) WheelLoader checks, naming the field.
+// the error a description's field raises: "SOURCE: field 'F' PROBLEM; FIX", SOURCE being the file
+// or, for a description made by code without one, "machine 'NAME'"
+[[noreturn]] void fail_field(const MachineDescription& m, const std::string& field,
+                             const std::string& problem, const std::string& fix);
+
+// every value of a description within its physical range (finite; masses, inertias, sizes,
+// pressures, speeds, powers, compliances within what wheel loaders have, each range with its unit
+// and source in machine.cpp); InputError naming the source (or the machine's name), the field,
+// the value and the range. parse_machine and WheelLoader both call it: one check for a file and
+// for a description made by code.
+void check_machine(const MachineDescription& m);
+
+// the machine file, every value checked for its type and shape, then by check_machine; InputError
+// naming the file, the field and the fix. What only the built model can check (names of bodies, a
+// cylinder range that holds the reference pose, a possible bucket) WheelLoader checks, naming the
+// field.
 MachineDescription parse_machine(const std::string& file);
 
 }  // namespace talus::vehicle

@@ -2,93 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
-#include <initializer_list>
 #include <limits>
 #include <sstream>
 
 #include "host/error.hpp"
 
 namespace talus::vehicle {
-
-namespace {
-
-// what does not fit in a description fails naming its source (or, made by code without one, its
-// name) and the field
-[[noreturn]] void fail(const MachineDescription& m, const std::string& field,
-                       const std::string& problem, const std::string& fix) {
-  const std::string source = m.source.empty() ? "machine '" + m.name + "'" : m.source;
-  throw InputError(source + ": field '" + field + "' " + problem + "; " + fix);
-}
-
-// the values parse_machine checks in a file, checked again for a description made by code
-void check_values(const MachineDescription& m) {
-  // every number finite (a file's are; code may hand in inf or NaN)
-  auto finite = [](std::initializer_list<double> v) {
-    return std::all_of(v.begin(), v.end(), [](double x) { return std::isfinite(x); });
-  };
-  auto all = [](const Vec3& v) { return v.allFinite(); };
-  for (size_t i = 0; i < m.bodies.size(); ++i) {
-    const BodyDescription& b = m.bodies[i];
-    if (!finite({b.mass}) || !all(b.com) || !all(b.inertia))
-      fail(m, "bodies[" + std::to_string(i) + "]", "has a value that is not finite",
-           "give finite numbers");
-  }
-  for (size_t i = 0; i < m.hinges.size(); ++i)
-    if (!all(m.hinges[i].point) || !all(m.hinges[i].axis))
-      fail(m, "hinges[" + std::to_string(i) + "]", "has a value that is not finite",
-           "give finite numbers");
-  for (size_t i = 0; i < m.cylinders.size(); ++i) {
-    const CylinderDescription& c = m.cylinders[i];
-    if (!all(c.pin_a) || !all(c.pin_b) ||
-        !finite({c.bore, c.rod, c.max_speed, c.length_min, c.length_max}))
-      fail(m, "cylinders[" + std::to_string(i) + "]", "has a value that is not finite",
-           "give finite numbers");
-  }
-  const DrivelineDescription& dl = m.driveline;
-  if (!all(m.bucket.tip) ||
-      !finite({m.bucket.rated_volume, m.relief_pressure, m.tyres.radius, m.tyres.width,
-               m.tyres.elastic_modulus, m.tyres.friction, dl.max_power, dl.rated_motor_speed,
-               dl.top_speed, dl.traction_limit, m.bucket_ground.stiffness,
-               m.bucket_ground.friction}))
-    fail(m, "bucket, hydraulics, tyres, driveline or bucket_ground",
-         "has a value that is not finite", "give finite numbers");
-  if (m.joint.compliance < 0 || m.joint.damping_time < 0 || m.motor_viscous_compliance < 0)
-    fail(m, "solver", "has a negative compliance or damping time", "use values >= 0");
-  if (m.bodies.empty()) fail(m, "bodies", "is empty", "list the rigid bodies");
-  for (size_t i = 0; i < m.bodies.size(); ++i)
-    if (!(m.bodies[i].mass > 0) || !(m.bodies[i].inertia.minCoeff() > 0))
-      fail(m, "bodies[" + std::to_string(i) + "]", "has a mass or inertia <= 0",
-           "give positive values");
-  for (size_t i = 0; i < m.hinges.size(); ++i) {
-    const HingeDescription& h = m.hinges[i];
-    if (h.axis.norm() < 1e-9)
-      fail(m, "hinges[" + std::to_string(i) + "].axis", "is zero", "give a direction");
-    if (h.range && h.range->first > h.range->second)
-      fail(m, "hinges[" + std::to_string(i) + "].range",
-           "is not [lower, upper] with lower <= upper", "give two angles in rad");
-  }
-  for (size_t i = 0; i < m.cylinders.size(); ++i) {
-    const CylinderDescription& c = m.cylinders[i];
-    if (!(c.bore > c.rod) || !(c.rod > 0))
-      fail(m, "cylinders[" + std::to_string(i) + "]", "has bore <= rod or rod <= 0",
-           "give bore > rod > 0 in metres");
-  }
-  const TyreParameters& t = m.tyres;
-  if (!(t.radius > 0) || !(t.width > 0) || !(t.elastic_modulus > 0) || !(t.friction >= 0))
-    fail(m, "tyres", "has a non-positive size, modulus or a negative friction",
-         "correct the values");
-  const DrivelineDescription& d = m.driveline;
-  if (!(d.max_power > 0) || !(d.rated_motor_speed > 0) || !(d.top_speed > 0) ||
-      !(d.traction_limit > 0))
-    fail(m, "driveline", "has a value <= 0", "give positive power, speeds and traction");
-  const GroundContactParameters& g = m.bucket_ground;
-  if (!(g.stiffness > 0) || !(g.friction >= 0) || !(g.damping_time >= 0) ||
-      !(g.viscous_compliance >= 0))
-    fail(m, "bucket_ground", "has a non-positive stiffness or a negative friction or damping",
-         "correct the values");
-}
-
-}  // namespace
 
 WheelLoader::WheelLoader(const std::string& machine_file, double payload_kg)
     : WheelLoader(parse_machine(machine_file), payload_kg) {}
@@ -97,7 +16,7 @@ WheelLoader::WheelLoader(const MachineDescription& m, double payload_kg) : paylo
   if (!(payload_kg >= 0.0))
     throw InputError("payload must be >= 0 kg (got " + std::to_string(payload_kg) + ")");
   name_ = m.name;
-  check_values(m);
+  check_machine(m);
   // the parts in an order that joints can take their anchors from: bodies and the loaded bucket,
   // hinges, cylinders, then the wheels' tyres, the bucket's ground contact and the driveline
   add_bodies(m);
@@ -111,7 +30,7 @@ int WheelLoader::body_of(const MachineDescription& m, const std::string& name,
   for (int i = 0; i < static_cast<int>(system_.bodies().size()); ++i) {
     if (system_.body(i).name == name) return i;
   }
-  fail(m, field, "names no body ('" + name + "')", "use one of the names in 'bodies'");
+  fail_field(m, field, "names no body ('" + name + "')", "use one of the names in 'bodies'");
 }
 
 void WheelLoader::add_bodies(const MachineDescription& m) {
@@ -133,8 +52,8 @@ void WheelLoader::add_bodies(const MachineDescription& m) {
   } catch (const InputError&) {
     throw;
   } catch (const Error& e) {
-    fail(m, "bucket", std::string("describes an impossible bucket (") + e.what() + ")",
-         "correct its dimensions");
+    fail_field(m, "bucket", std::string("describes an impossible bucket (") + e.what() + ")",
+               "correct its dimensions");
   }
   const Vec3& tip_world = m.bucket.tip;
   // the profile frame is world-aligned at the tip in the reference pose
@@ -192,9 +111,9 @@ void WheelLoader::add_cylinders(const MachineDescription& m) {
     s.length_max = d.length_max;
     const double now = cyl.coordinate(system_.bodies());
     if (!(s.length_min <= now && now <= s.length_max)) {
-      fail(m, where + ".length_range",
-           "does not contain the reference-pose length " + std::to_string(now) + " m",
-           "widen the range or move the pins");
+      fail_field(m, where + ".length_range",
+                 "does not contain the reference-pose length " + std::to_string(now) + " m",
+                 "widen the range or move the pins");
     }
     cyl.range.enabled = true;
     cyl.range.lower = s.length_min;
@@ -205,21 +124,23 @@ void WheelLoader::add_cylinders(const MachineDescription& m) {
     cyl.motor.viscous_compliance = m.motor_viscous_compliance;
     if (d.role == "lift") {
       if (lifts >= 2)
-        fail(m, where + ".role", "is a third lift cylinder", "the model has two lift cylinders");
+        fail_field(m, where + ".role", "is a third lift cylinder",
+                   "the model has two lift cylinders");
       lift_[lifts++] = &cyl;
       lift_spec_ = s;
     } else if (d.role == "tilt") {
       if (tilt_)
-        fail(m, where + ".role", "is a second tilt cylinder", "the model has one tilt cylinder");
+        fail_field(m, where + ".role", "is a second tilt cylinder",
+                   "the model has one tilt cylinder");
       tilt_ = &cyl;
       tilt_spec_ = s;
     } else {
-      fail(m, where + ".role", "is '" + d.role + "'", "use \"lift\" or \"tilt\"");
+      fail_field(m, where + ".role", "is '" + d.role + "'", "use \"lift\" or \"tilt\"");
     }
     joints_.push_back(&cyl);
   }
   if (lifts != 2 || !tilt_)
-    fail(m, "cylinders", "needs two lift and one tilt cylinder", "add the missing cylinders");
+    fail_field(m, "cylinders", "needs two lift and one tilt cylinder", "add the missing cylinders");
 }
 
 void WheelLoader::add_driveline(const MachineDescription& m,
@@ -243,7 +164,8 @@ void WheelLoader::add_driveline(const MachineDescription& m,
     for (const auto& [a, b] : hinge_bodies)
       if (b == w[i]) frames[i] = a;
     if (frames[i] == kWorld)
-      fail(m, "driveline.wheels", "names a wheel without an axle hinge", "add its hinge as b");
+      fail_field(m, "driveline.wheels", "names a wheel without an axle hinge",
+                 "add its hinge as b");
     tyres_[i] = &system_.add_constraint(std::make_unique<TyreContact>(w[i], Vec3::UnitY(), tp));
     tyres_[i]->name = "tyre_" + system_.body(w[i]).name;
   }
