@@ -48,8 +48,8 @@ void add_metric_flags(CLI::App* cmd, MetricFlags& f) {
   cmd->add_option("--force-constant", f.force_constant_N,
                   "force constant of the vehicle that forces are divided by [N] "
                   "(default: operating weight 15175 kg * 9.80665 m/s^2)")
-      ->check(finite_number())
-      ->check(positive_number());
+      // the weight of a wheel loader: a compact 2 t machine (20 kN) to the largest, 262 t (2.6 MN)
+      ->check(number_in(1e3, 3e6, "N"));
   cmd->add_option("--force-norm", f.force_norm,
                   "force error normaliser: 'max' = max |reference| (paper default), "
                   "'constant' = one force constant")
@@ -63,8 +63,9 @@ void add_metric_flags(CLI::App* cmd, MetricFlags& f) {
   f.l_norm = cmd->add_option("--l-norm", f.l_norm_m,
                              "trajectory normaliser L_norm [m] (default: extent of the "
                              "reference bucket-tip trajectory)")
-                 ->check(finite_number())
-                 ->check(positive_number());
+                 // a bucket's path: centimetres (a near-zero one made every error astronomical)
+                 // to a hundred metres (a whole loading cycle's travel is 10-30 m)
+                 ->check(number_in(0.01, 100.0, "m"));
   cmd->add_option("--decimals", f.decimals, "decimal places of the printed table")
       ->check(CLI::Range(0, 17));
 }

@@ -105,6 +105,22 @@ std::vector<CycleResult> read_results_csv(const std::string& path) {
     if (!(row >> r.s >> r.loaded_mass_kg >> r.cycle_time_s >> r.work_J >> productivity >> efficiency >> completed >>
           r.fill_start_s >> r.breakout_s))
       throw InputError(path + ": line " + std::to_string(n) + " is not nine numbers; rerun that shard");
+    // each value what a cycle can give: a point of the search line, a load, times and work
+    // (a hand-edited or damaged shard merged a negative mass into the results)
+    const auto check = [&](const char* field, double v, double lo, double hi) {
+      if (!(v >= lo && v <= hi))
+        throw InputError(path + ": line " + std::to_string(n) + ": field '" + field + "' is " +
+                         message_number(v) + ", outside " + message_number(lo) + "-" +
+                         message_number(hi) + "; rerun that shard");
+    };
+    constexpr double kMost = 1e12;  // finite: no cycle's mass [kg], time [s] or work [J] nears it
+    check("s", r.s, 0.0, 1.0);
+    check("loaded_mass_kg", r.loaded_mass_kg, 0.0, kMost);
+    check("cycle_time_s", r.cycle_time_s, 0.0, kMost);
+    check("work_J", r.work_J, -kMost, kMost);
+    check("completed", completed, 0.0, 1.0);
+    check("fill_start_s", r.fill_start_s, -kMost, kMost);
+    check("breakout_s", r.breakout_s, -kMost, kMost);
     r.completed = completed != 0;
     out.push_back(r);
   }

@@ -3,10 +3,10 @@
 #pragma once
 #include <CLI/CLI.hpp>
 #include <cmath>
-#include <cstdio>
 #include <stdexcept>
 #include <string>
 
+#include "host/error.hpp"
 #include "host/files.hpp"
 
 namespace talus::app {
@@ -69,13 +69,8 @@ inline constexpr double kMaxTimestep = 0.05;
 // nonsense with exit 0 (docs/reliability.md gives each flag's range and why)
 inline CLI::Validator number_in(double lo, double hi, const std::string& unit,
                                 bool zero_allowed = false) {
-  auto bound = [](double v) {
-    char s[32];
-    std::snprintf(s, sizeof s, "%g", v);
-    return std::string(s);
-  };
-  const std::string range = (zero_allowed ? "0 or " : "") + std::string("from ") + bound(lo) +
-                            " to " + bound(hi) + " " + unit;
+  const std::string range = (zero_allowed ? "0 or " : "") + std::string("from ") +
+                            message_number(lo) + " to " + message_number(hi) + " " + unit;
   return CLI::Validator(
       [lo, hi, zero_allowed, range](std::string& text) {
         try {

@@ -1,5 +1,7 @@
 #include "host/error.hpp"
 
+#include <cstdio>
+
 namespace talus {
 
 const char* cl_status_name(int code) {
@@ -63,6 +65,12 @@ const char* cl_status_name(int code) {
     case -1001: return "CL_PLATFORM_NOT_FOUND_KHR (no OpenCL platform installed)";
     default: return "unknown OpenCL status";
   }
+}
+
+std::string message_number(double v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", v);
+  return text;
 }
 
 }  // namespace talus

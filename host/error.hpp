@@ -23,4 +23,9 @@ class InputError : public Error {
   using Error::Error;
 };
 
+// a number as messages show it: six significant digits ("%g": 31400000 is "3.14e+07", 0.25 is
+// "0.25", NaN is "nan"), so a range or a bad value reads as the user wrote it, not as DBL_MAX's
+// 309 digits or std::to_string's fixed six decimals
+std::string message_number(double v);
+
 }  // namespace talus

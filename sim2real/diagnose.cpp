@@ -44,12 +44,6 @@ std::size_t channel_index(const std::string& name) {
   throw Error("diagnose: no channel '" + name + "'");
 }
 
-std::string format_number(double v) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.6g", v);
-  return text;
-}
-
 // an instance of the candidate with its channel set and parameter i at normalised x[i] in [0, 1]
 std::unique_ptr<vehicle::Effect> make_candidate(const Candidate& c, const std::vector<double>& x,
                                                 const vehicle::EffectPlugins& plugins) {
@@ -335,8 +329,9 @@ class Search {
       d_.scan_rms_m.push_back(replays_[i]->scan_rms_m());
     }
     d_.excess_before = mean_excess(d_.residuals_before, all_);
-    say("baseline: excess " + format_number(d_.excess_before) + " per run (noise alone leaves less than " +
-        format_number(kSignificantExcess) + "), mean error " + format_number(mean_row(d_.error_before, "").mean));
+    say("baseline: excess " + message_number(d_.excess_before) +
+        " per run (noise alone leaves less than " + message_number(kSignificantExcess) +
+        "), mean error " + message_number(mean_row(d_.error_before, "").mean));
     current_cal_ = mean_excess(d_.residuals_before, d_.calibration);
     current_val_ = mean_excess(d_.residuals_before, d_.validation);
     current_runs_ = d_.simulated_before;
@@ -394,7 +389,7 @@ class Search {
           " and " + dr.pairs[0].second.spec);
     } else {
       say("round " + std::to_string(number) + ": no candidate or pair explains " +
-          format_number(100.0 * kMinExplained) + " % of the excess left; nothing added");
+          message_number(100.0 * kMinExplained) + " % of the excess left; nothing added");
     }
     d_.rounds.push_back(dr);
     return dr.added;
@@ -433,7 +428,7 @@ class Search {
           target, regression_data(target, measured, simulated, command_limit(target, machine)));
       if (c.terms.empty()) {
         say("  " + target.label() + ": no sparse model cuts the held-out residual (mean square " +
-            format_number(c.cv_mse_none) + ")");
+            message_number(c.cv_mse_none) + ")");
         d_.discovery_tried.push_back(c);
         continue;
       }
@@ -448,7 +443,7 @@ class Search {
         d_.discovery_tried.push_back(c);
         continue;
       }
-      say("    explains " + format_number(100.0 * c.explained) + " % of the excess on the " +
+      say("    explains " + message_number(100.0 * c.explained) + " % of the excess on the " +
           c.explained_on + " runs");
       d_.discovery_tried.push_back(c);
     }
@@ -465,7 +460,7 @@ class Search {
         DiscoveredCorrection refined = refine(*best);
         if (refined.explained > best->explained) {
           say("  refined: " + refined.expression + ", explains " +
-              format_number(100.0 * refined.explained) + " %");
+              message_number(100.0 * refined.explained) + " %");
           d_.discovery_tried.push_back(refined);
         }
       } catch (const Interrupted&) {
@@ -478,7 +473,7 @@ class Search {
     // the best simulated correction, if it explains enough
     const DiscoveredCorrection* best = best_of();
     if (!best || best->explained < kMinExplained) {
-      say("discovery: no correction explains " + format_number(100.0 * kMinExplained) +
+      say("discovery: no correction explains " + message_number(100.0 * kMinExplained) +
           " % of the excess left");
       return;
     }
@@ -725,8 +720,8 @@ class Search {
       Scanned best{c, points[begin].x, Score{}, parameters[k]};
       for (std::size_t p = begin; p < end; ++p)
         if (scores[p] < best.score) best = {c, points[p].x, scores[p], parameters[k]};
-      say("  scan " + c->label() + ": best excess " + format_number(best.score.excess) + " (now " +
-          format_number(current_cal_) + ", " + std::to_string(end - begin) + " points)");
+      say("  scan " + c->label() + ": best excess " + message_number(best.score.excess) + " (now " +
+          message_number(current_cal_) + ", " + std::to_string(end - begin) + " points)");
       scanned.push_back(best);
     }
     std::sort(scanned.begin(), scanned.end(), [](const auto& a, const auto& b) { return a.score < b.score; });
@@ -775,9 +770,9 @@ class Search {
 
   // a fit's line in the notes (said by the caller, in rank order, once the fits beside it are done)
   void say_fit(const FittedEffect& f) const {
-    say("  fit " + f.spec + ": excess calibration " + format_number(f.excess_calibration) +
-        ", validation " + format_number(f.excess_validation) + " (explains " +
-        format_number(100.0 * f.explained) + " % on the " + f.explained_on + " runs)");
+    say("  fit " + f.spec + ": excess calibration " + message_number(f.excess_calibration) +
+        ", validation " + message_number(f.excess_validation) + " (explains " +
+        message_number(100.0 * f.explained) + " % on the " + f.explained_on + " runs)");
   }
 
   // run i simulated with the effects found so far plus the candidates at their normalised values
@@ -843,7 +838,7 @@ class Search {
         current_cal_ = mean_excess(current_residuals_, d_.calibration);
         current_val_ = mean_excess(current_residuals_, d_.validation);
         say("pairs: " + a->candidate.label() + " taken provisionally (excess " +
-            format_number(current_cal_) + ")");
+            message_number(current_cal_) + ")");
         DiagnosisRound inner;
         std::vector<const Candidate*> screened;
         for (const Candidate* c : screen(candidates, inner))
@@ -879,7 +874,7 @@ class Search {
       }
       const FittedPair& p = pairs[k];
       say("  pair " + p.first.spec + " + " + p.second.spec + ": explains " +
-          format_number(100.0 * p.explained) + " % on the " + p.explained_on + " runs");
+          message_number(100.0 * p.explained) + " % on the " + p.explained_on + " runs");
       dr.pairs.push_back(p);
     }
     std::sort(dr.pairs.begin(), dr.pairs.end(),

@@ -12,6 +12,10 @@ namespace talus::sim2real {
 
 namespace {
 
+// the largest noise a channel may be given, over its default (a real sensor's): beyond it the
+// noise is larger than what the channel measures (f_lift: 500 kN against the lift's 300 kN)
+constexpr double kMaxNoiseOverDefault = 100.0;
+
 Series2 points(const vehicle::PiecewiseLinear& f) {
   Series2 out;
   for (const auto& p : f.points()) out.push_back(p);
@@ -48,14 +52,25 @@ std::map<std::string, double> parse_sensor_noise(const std::string& spec, const 
     if (eq == std::string::npos || !known)
       throw InputError(what + ": '" + part + "' is not none, default or CHANNEL=SIGMA with a channel of the "
                        "contract (f_lift, f_tilt, f_traction, v_drive, d_lift, ...)");
+    // the whole text a number in SI units: "5kN" was read as 5 N
+    const std::string text = part.substr(eq + 1);
     double value = 0.0;
+    std::size_t used = 0;
     try {
-      value = std::stod(part.substr(eq + 1));
+      value = std::stod(text, &used);
     } catch (const std::exception&) {
-      throw InputError(what + ": '" + part + "': the standard deviation is not a number");
+      used = 0;
     }
-    if (!(value >= 0.0) || !std::isfinite(value))
-      throw InputError(what + ": '" + part + "': the standard deviation must be a finite number >= 0");
+    if (used == 0 || used != text.size())
+      throw InputError(what + ": '" + part + "': the standard deviation '" + text +
+                       "' is not a plain number in SI units (N, m, m/s, deg, W: 5 kN is 5000)");
+    // at most kMaxNoiseOverDefault times a real sensor's noise: beyond it the noise is the channel
+    const double most = kMaxNoiseOverDefault * default_sensor_noise().at(channel);
+    if (!(value >= 0.0 && value <= most))
+      throw InputError(what + ": '" + part + "': the standard deviation must lie in 0-" +
+                       message_number(most) + " (at most " + message_number(kMaxNoiseOverDefault) +
+                       " times the default's " +
+                       message_number(default_sensor_noise().at(channel)) + ")");
     sigma[channel] = value;
   }
   return sigma;

@@ -1,7 +1,6 @@
 #include "vehicle/machine.hpp"
 
 #include <cmath>
-#include <cstdio>
 
 #include "host/error.hpp"
 #include "vehicle/data_file.hpp"
@@ -51,18 +50,12 @@ constexpr Range kTopSpeed{0.5, 15.0, "m/s"};        // loaders' top gear: up to 
 constexpr Range kTraction{1e3, 2e6, "N"};
 constexpr Range kRatedVolume{0.1, 50.0, "m^3"};
 
-std::string number_text(double v) {
-  char s[32];
-  std::snprintf(s, sizeof s, "%g", v);
-  return s;
-}
-
 // a value within its range (NaN is not), or one message naming the field, the value and the range
 void check_range(const MachineDescription& m, const std::string& field, double v, const Range& r) {
   if (v >= r.lo && v <= r.hi) return;
   const std::string unit = *r.unit ? std::string(" ") + r.unit : std::string();
-  fail_field(m, field, "is " + number_text(v) + unit,
-             "give a value from " + number_text(r.lo) + " to " + number_text(r.hi) + unit);
+  fail_field(m, field, "is " + message_number(v) + unit,
+             "give a value from " + message_number(r.lo) + " to " + message_number(r.hi) + unit);
 }
 
 void check_point(const MachineDescription& m, const std::string& field, const Vec3& p) {
@@ -96,7 +89,8 @@ void check_machine(const MachineDescription& m) {
     if (j[0] > (j[1] + j[2]) * (1 + kRoundOff) || j[1] > (j[0] + j[2]) * (1 + kRoundOff) ||
         j[2] > (j[0] + j[1]) * (1 + kRoundOff))
       fail_field(m, where + ".inertia",
-                 "is (" + number_text(j[0]) + ", " + number_text(j[1]) + ", " + number_text(j[2]) +
+                 "is (" + message_number(j[0]) + ", " + message_number(j[1]) + ", " +
+                     message_number(j[2]) +
                      ") kg m^2: one moment above the sum of the other two, which no body has",
                  "give the principal moments of a real body");
   }

@@ -187,7 +187,10 @@ TEST(CliErrors, StepCountsAndLoadsOutsideTheirRangeAreRefused) {
       {"--normal-stress", "soil --test shear --normal-stress 1e30 --out /tmp/talus_unused_range"},
       {"--max-time", "pile --max-time 1e-30 --out /tmp/talus_unused_range"},
       {"--max-time", "sweep --max-time 1e-30 --out /tmp/talus_unused_range"},
-      {"--settle-dt", "bench dem --settle-dt 1e30"}};
+      {"--settle-dt", "bench dem --settle-dt 1e30"},
+      // a near-zero normaliser made every error of the table astronomical
+      {"--force-constant", "compare --sim a --ref b --force-constant 1e-300"},
+      {"--l-norm", "compare --sim a --ref b --l-norm 1e-300"}};
   for (const auto& c : cases) {
     const Outcome o = run("", c[1]);
     EXPECT_EQ(o.code, 2) << c[1] << "\n" << o.err;
@@ -195,6 +198,33 @@ TEST(CliErrors, StepCountsAndLoadsOutsideTheirRangeAreRefused) {
                                                                                   << o.err;
     EXPECT_NE(o.err.find(" to "), std::string::npos) << o.err;
   }
+}
+
+// a shard that a crash or a hand cut up holds a value no cycle gives: --collect names the file,
+// the line and the field instead of merging a negative mass or a point off the search line into
+// the sweep's results
+TEST(CliErrors, ADamagedShardIsNamedByFileLineAndField) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "talus_bad_shard";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir / "D400");
+  const std::string header =
+      "s,loaded_mass_kg,cycle_time_s,work_J,productivity_kg_s,efficiency_kg_per_kJ,completed,"
+      "fill_start_s,breakout_s\n";
+  std::ofstream(dir / "D400" / "shard-0.csv") << header << "0,3500,12,200000,291,17.5,1,2,9\n";
+  std::ofstream(dir / "D400" / "shard-1.csv") << header << "1,-3500,12,200000,291,17.5,1,2,9\n";
+  const std::string args =
+      "sweep --scenario fb35 --fidelity D400 --samples 2 --collect --out " + dir.string();
+  Outcome o = run("", args);
+  EXPECT_EQ(o.code, 2) << o.err;
+  EXPECT_NE(o.err.find("shard-1.csv: line 2: field 'loaded_mass_kg' is -3500, outside 0-1e+12"),
+            std::string::npos)
+      << o.err;
+  std::ofstream(dir / "D400" / "shard-1.csv") << header << "1.5,3500,12,200000,291,17.5,1,2,9\n";
+  o = run("", args);
+  EXPECT_EQ(o.code, 2) << o.err;
+  EXPECT_NE(o.err.find("shard-1.csv: line 2: field 's' is 1.5, outside 0-1"), std::string::npos)
+      << o.err;
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

@@ -24,7 +24,9 @@ TEST(Synthetic, NoiseSpecsParseAndBadPartsAreNamed) {
   const auto changed = parse_sensor_noise("default,f_lift=1e4", "--noise");
   EXPECT_DOUBLE_EQ(changed.at("f_lift"), 1e4);
   EXPECT_DOUBLE_EQ(changed.at("f_tilt"), default_sensor_noise().at("f_tilt"));
-  for (const char* bad : {"t=1", "f_lift", "f_lift=abc", "f_lift=-1", "quiet"}) {
+  // "5kN" was read as 5 N; a sigma of 1e12 N is no sensor's (at most 100 times the default)
+  for (const char* bad : {"t=1", "f_lift", "f_lift=abc", "f_lift=-1", "quiet", "f_lift=5kN",
+                          "f_lift=1e12", "v_drive=nan"}) {
     try {
       parse_sensor_noise(bad, "metadata.json: field 'noise'");
       ADD_FAILURE() << bad << " parsed";
