@@ -6,7 +6,10 @@
 
 #include "host/error.hpp"
 #include "host/files.hpp"
+#include "vehicle/data_file.hpp"
 #include "vehicle/scenario.hpp"
+#include "vehicle/sensors.hpp"
+#include "vehicle/wheel_loader.hpp"
 
 namespace talus::sim2real {
 
@@ -70,6 +73,51 @@ struct Fields {
 };
 
 bool same(double a, double b) { return std::abs(a - b) <= kSameValue * std::max(std::abs(a), std::abs(b)); }
+
+// a record's readings and scalars within what its machine can read, carry and do: a column in kN
+// or mm, or a mass in tonnes, would otherwise pass as a strange machine and the diagnosis would
+// fit effects to a unit error
+void check_within_machine(const MeasuredRun& r, const fs::path& dir, const Fields& f) {
+  const std::string machine = vehicle::find_data_file(r.meta.machine, "machines");
+  if (machine.empty())
+    f.fail("machine", "names '" + r.meta.machine + "', which is neither a file nor data/machines/" +
+                          r.meta.machine + ".json");
+  const vehicle::WheelLoader loader(machine);
+  const auto limit = vehicle::reading_limits(loader);
+  const std::string csv = (dir / kTimeseriesFile).string();
+  for (std::size_t c = 1; c < kChannelCount; ++c) {
+    if (limit[c] == 0.0) continue;
+    const vehicle::SensorChannel& ch = vehicle::kSensorChannels[c];
+    const std::vector<double>& column = r.run.series.columns[c];
+    for (std::size_t k = 0; k < column.size(); ++k) {
+      const double v = column[k];
+      if (std::abs(v) <= limit[c]) continue;
+      // a thousand times too large is a prefix's worth: say which
+      const std::string hint = std::abs(v) <= 1e3 * limit[c]
+                                   ? "; a thousand times too large: is the column in another unit?"
+                                   : "";
+      throw InputError(csv + ": line " + std::to_string(k + 2) + ": field '" + ch.name + "' is " +
+                       message_number(v) + " " + ch.unit + ", beyond the " +
+                       message_number(limit[c]) + " " + ch.unit + " that " + loader.name() +
+                       " can read (twice its machine data's largest); give it in " + ch.unit +
+                       hint);
+    }
+  }
+  // the load: at most what tips the empty machine with its boom low (the most it can carry)
+  const double tipping = loader.static_tipping_load();
+  if (!(r.meta.loaded_mass_kg >= 0.0 && r.meta.loaded_mass_kg <= tipping))
+    f.fail("loaded_mass_kg", "is " + message_number(r.meta.loaded_mass_kg) +
+                                 " kg, outside 0 to the " + message_number(tipping) +
+                                 " kg that tips " + loader.name() + " (give kg, not t)");
+  // the work: at most the largest power over the whole record
+  const auto& t = r.run.series[Channel::t];
+  const double duration = t.empty() ? 0.0 : t.back() - t.front();
+  const double most = limit[static_cast<std::size_t>(Channel::power)] * duration;
+  if (!(std::abs(r.meta.work_J) <= most))
+    f.fail("work_J", "is " + message_number(r.meta.work_J) + " J, beyond the " +
+                         message_number(most) + " J that " + loader.name() + " can do in the " +
+                         message_number(duration) + " s of the record (give J, not kJ)");
+}
 
 }  // namespace
 
@@ -158,6 +206,7 @@ MeasuredRun load_measured_run(const fs::path& dir) {
     f.fail("work_J", "differs from summary.json's; the two files must describe the same run");
   if (r.run.summary.scenario && *r.run.summary.scenario != r.meta.scenario)
     f.fail("scenario", "is '" + r.meta.scenario + "' but summary.json says '" + *r.run.summary.scenario + "'");
+  check_within_machine(r, dir, f);
   return r;
 }
 

@@ -25,6 +25,36 @@ double plane_angle(const RigidBody& frame, const Vec3& world_direction) {
 
 }  // namespace
 
+std::array<double, kChannelCount> reading_limits(const WheelLoader& loader) {
+  // twice the machine's data: a reading beyond it is a unit error or a broken sensor
+  constexpr double kMargin = 2.0;
+  std::array<double, kChannelCount> limit{};
+  auto set = [&](Channel c, double v) { limit[static_cast<std::size_t>(c)] = kMargin * v; };
+  // cylinders: the relief pressure's force on the piston or the annulus; two lift cylinders summed
+  const CylinderSpec& lift = loader.lift_spec();
+  const CylinderSpec& tilt = loader.tilt_spec();
+  const double f_lift = 2.0 * std::max(lift.force_push, lift.force_pull);
+  const double f_tilt = std::max(tilt.force_push, tilt.force_pull);
+  set(Channel::f_lift, f_lift);
+  set(Channel::f_tilt, f_tilt);
+  // the tyres' grip under the machine carrying its tipping load (braking on the tyres can exceed
+  // the driveline's traction limit), or the driveline's limit where that is larger
+  double grip = 0.0;
+  for (const auto* ty : loader.tyres()) grip = std::max(grip, ty->parameters().friction);
+  const double weight =
+      (loader.operating_mass() + loader.static_tipping_load()) * loader.system().gravity().norm();
+  const double f_traction = std::max(loader.traction_limit(), grip * weight);
+  set(Channel::f_traction, f_traction);
+  set(Channel::v_drive, loader.top_speed());
+  set(Channel::d_lift, lift.length_max - lift.length_min);
+  set(Channel::d_tilt, tilt.length_max - tilt.length_min);
+  for (Channel c : {Channel::boom_deg, Channel::bucket_deg, Channel::pitch_deg}) set(c, 90.0);
+  // P = f_tr v + f_l ḋ_l + f_t ḋ_t at the largest forces and speeds
+  set(Channel::power,
+      f_traction * loader.top_speed() + f_lift * lift.max_speed + f_tilt * tilt.max_speed);
+  return limit;
+}
+
 SensorSample read_sensors(const WheelLoader& loader, double t) {
   const auto& bodies = loader.bodies();
   SensorSample s;

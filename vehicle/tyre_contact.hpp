@@ -32,6 +32,7 @@ class TyreContact : public Constraint {
   // the longitudinal direction of the last step (wheel heading on the ground)
   const Vec3& longitudinal() const { return longitudinal_; }
   int wheel() const { return wheel_; }
+  const TyreParameters& parameters() const { return p_; }
   // the base's forces, the deflection and the heading of the last step
   void save_state(ByteWriter& w) const override;
   void restore_state(ByteReader& r) override;

@@ -142,5 +142,65 @@ TEST(MeasuredRun, SampleRateIsTheContracts) {
   }
 }
 
+// each reading within what the record's machine can read (twice its data's largest,
+// vehicle::reading_limits): a stroke in mm or a force a thousand times too large is named with its
+// line, field, value and unit instead of being diagnosed as a strange machine
+TEST(MeasuredRun, AReadingBeyondWhatTheMachineCanReadIsNamed) {
+  for (const auto& [channel, value] : {std::pair<Channel, double>{Channel::d_lift, 850.0},
+                                       std::pair<Channel, double>{Channel::f_lift, -2e9},
+                                       std::pair<Channel, double>{Channel::v_drive, 40.0}}) {
+    const fs::path dir = write_run("measured_beyond");
+    TimeSeries series = test::reference_series();
+    series[channel][7] = value;
+    save_timeseries(dir / kTimeseriesFile, series);
+    const std::string name = vehicle::kChannelNames[static_cast<std::size_t>(channel)];
+    try {
+      load_measured_run(dir);
+      ADD_FAILURE() << name << ": no error";
+    } catch (const InputError& e) {
+      const std::string m = e.what();
+      EXPECT_NE(m.find("timeseries.csv: line 9: field '" + name + "' is "), std::string::npos) << m;
+      EXPECT_NE(m.find("that wa320 can read"), std::string::npos) << m;
+    }
+  }
+  // the same record within the machine loads
+  EXPECT_NO_THROW(load_measured_run(write_run("measured_within")));
+}
+
+// the load and the work within what the machine carries and does: a mass in grams or a work in
+// mJ is named with the field and the unit to give
+TEST(MeasuredRun, ALoadOrWorkBeyondTheMachineIsNamed) {
+  const auto beyond = [](const std::string& tag, double mass, double work) {
+    const fs::path dir = write_run(tag);
+    RunSummary s;
+    s.loaded_mass_kg = mass;
+    s.work_J = work;
+    s.scenario = "HD27";
+    s.fidelity = "field";
+    save_summary(dir / kSummaryFile, s);
+    MeasuredMetadata m = sample_metadata();
+    m.loaded_mass_kg = mass;
+    m.work_J = work;
+    save_metadata(dir / kMetadataFile, m);
+    try {
+      load_measured_run(dir);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  const std::string mass = beyond("measured_grams", 2.7e6, 127e3);
+  EXPECT_NE(mass.find("metadata.json: field 'loaded_mass_kg': is 2.7e+06 kg, outside 0 to the"),
+            std::string::npos)
+      << mass;
+  const std::string work = beyond("measured_millijoules", 2700.0, 1.27e11);
+  EXPECT_NE(work.find("metadata.json: field 'work_J': is 1.27e+11 J, beyond the"),
+            std::string::npos)
+      << work;
+  const std::string machine =
+      error_after("measured_no_machine", [](nlohmann::json& j) { j["machine"] = "wa999"; });
+  EXPECT_NE(machine.find("field 'machine': names 'wa999'"), std::string::npos) << machine;
+}
+
 }  // namespace
 }  // namespace talus::sim2real
