@@ -426,7 +426,12 @@ void run_scenario(const RunOptions& o) {
     run_digging(o, sc, effects->set);
   } else {
     // a payload the machine cannot hold on its wheels even with its boom low is refused
-    vehicle::check_payload_holds(sc, vehicle::WheelLoader(vehicle::machine_file(sc), sc.payload));
+    const vehicle::MachineDescription machine = vehicle::parse_machine(vehicle::machine_file(sc));
+    vehicle::check_payload_holds(sc, vehicle::WheelLoader(machine, sc.payload));
+    // above the rated load it runs, with a word on stderr (not silenced by --quiet: it is about
+    // the result, not progress)
+    if (const std::string w = vehicle::payload_warning(sc, machine); !w.empty())
+      std::cerr << "talus run: warning: " << w << "\n";
     run_vehicle_only(o, sc, effects->set);
   }
 }

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "host/error.hpp"
+#include "vehicle/sensors.hpp"
 
 namespace talus::vehicle {
 
@@ -254,6 +255,42 @@ void check_payload_holds(const Scenario& scenario, const WheelLoader& loaded) {
         << " kg): it would tip forward onto its bucket; give a payload below that";
     throw InputError(msg.str());
   }
+}
+
+double full_reach_tipping_load(const MachineDescription& m) {
+  WheelLoader w(m);
+  // the scenarios' timestep [s] and the speeds of the pose [m/s], slow enough to arrive at rest
+  constexpr double kStep = 0.005, kCurlSpeed = 0.15, kLiftSpeed = 0.1;
+  const auto hold = [&](double seconds, double lift, double tilt) {
+    w.set_lift_speed(lift);
+    w.set_tilt_speed(tilt);
+    for (int k = 0; k < static_cast<int>(std::lround(seconds / kStep)); ++k) w.step(kStep);
+  };
+  // settle on the tyres, curl the bucket as it carries, lift until the boom is level (its reach is
+  // longest there) or the stroke ends, then come to rest
+  hold(0.2, 0.0, 0.0);
+  hold(0.9, 0.0, kCurlSpeed);
+  constexpr double kLongestLift = 30.0;  // s: any stroke at kLiftSpeed
+  w.set_lift_speed(kLiftSpeed);
+  w.set_tilt_speed(0.0);
+  const int longest = static_cast<int>(std::lround(kLongestLift / kStep));
+  for (int k = 0; k < longest && read_sensors(w, 0.0).boom_deg < 0.0; ++k) w.step(kStep);
+  hold(3.0, 0.0, 0.0);
+  return w.static_tipping_load();
+}
+
+std::string payload_warning(const Scenario& scenario, const MachineDescription& m) {
+  if (scenario.payload <= 0.0) return "";
+  const double tipping = full_reach_tipping_load(m);
+  const double rated = 0.5 * tipping;
+  if (scenario.payload <= rated) return "";
+  std::ostringstream msg;
+  msg << scenario.path << ": payload " << std::lround(scenario.payload)
+      << " kg is above the rated operating load of " << m.name << " (" << std::lround(rated)
+      << " kg: half its static tipping load at full reach, " << std::lround(tipping)
+      << " kg, ISO 14397-1); it runs, but the machine may tip forward when it brakes or lowers "
+         "with the boom up";
+  return msg.str();
 }
 
 }  // namespace talus::vehicle

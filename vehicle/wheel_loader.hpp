@@ -139,4 +139,16 @@ class WheelLoader {
 // itself builds such a machine for test rigs that hold its frame, so runs check, not the machine
 void check_payload_holds(const Scenario& scenario, const WheelLoader& loaded);
 
+// the straight static tipping load of the empty machine at its farthest reach [kg], the pose ISO
+// 14397-1 rates a loader in: posed by its own joints (bucket curled as it carries, boom lifted
+// until the line from the boom pivot to the bucket hinge is level, then at rest), the payload the
+// moment balance about the front wheels says tips it. Costs about 2,700 steps of the machine alone
+double full_reach_tipping_load(const MachineDescription& m);
+
+// a warning for a payload above the machine's rated operating load (ISO 14397-1: half the tipping
+// load; here half the straight one at full reach, so an upper estimate), or "" below it. Such a
+// payload runs, but the machine may tip forward when it brakes or lowers with the boom up
+// (docs/vehicle.md: load-carry pitches to -12 deg with 7 t and to -41 deg with 9 t)
+std::string payload_warning(const Scenario& scenario, const MachineDescription& m);
+
 }  // namespace talus::vehicle

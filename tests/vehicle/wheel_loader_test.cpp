@@ -9,6 +9,7 @@
 
 #include "host/error.hpp"
 #include "vehicle/data_file.hpp"
+#include "vehicle/scenario.hpp"
 #include "vehicle/sensors.hpp"
 
 namespace talus::vehicle {
@@ -293,6 +294,29 @@ TEST(WheelLoaderTest, BucketMobilityMatchesFiniteDifference) {
   EXPECT_LT(err, 1e-6);
   // the articulated bucket is far less mobile than a free one (1/m) along x
   EXPECT_LT(W(0, 0), 1.0 / sys.body(w.bucket_body()).mass);
+}
+
+// the tipping load at full reach from the machine's own pose (boom level) lies in the class's
+// band as the test above's hand pose does, and a payload above half of it (ISO 14397-1's rated
+// load) runs with a warning naming the file, the rated load and the tipping load (load-carry with
+// 7 t pitches to -12 deg, with 9 t to -41 deg: docs/vehicle.md)
+TEST(WheelLoaderTest, APayloadAboveTheRatedLoadGetsAWarning) {
+  const MachineDescription m = parse_machine(machine());
+  const double tipping = full_reach_tipping_load(m);
+  std::cout << "[ measured ] static tipping load with the boom level: " << tipping << " kg\n";
+  constexpr double kFullTurnPerMass = 11020.0 / 14560.0;  // WA320-5 (Marini, Test macchine n. 63)
+  const double class_floor = kFullTurnPerMass * WheelLoader(m).operating_mass();
+  EXPECT_GT(tipping, class_floor);
+  EXPECT_LT(tipping, 1.2 * class_floor);
+  Scenario sc = load_scenario("load-carry");
+  EXPECT_EQ(payload_warning(sc, m), "") << "3.5 t is within the rating";
+  sc.payload = 7000.0;
+  const std::string w = payload_warning(sc, m);
+  EXPECT_NE(w.find("load-carry.json: payload 7000 kg is above the rated operating load of wa320"),
+            std::string::npos)
+      << w;
+  EXPECT_NE(w.find(std::to_string(std::lround(tipping)) + " kg, ISO 14397-1"), std::string::npos)
+      << w;
 }
 
 }  // namespace
