@@ -1,4 +1,5 @@
 // talus pile: build and settle the default pile (or a scanned profile) at a fidelity level.
+#include <algorithm>
 #include <chrono>
 #include <iostream>
 
@@ -85,6 +86,10 @@ void add_pile_command(CLI::App& app, const std::string& command_line) {
         {"profile", profile.name},
         {"profile_volume_m3", profile.volume()},
         {"wall_s", wall},
+        // the DEM's device memory after settling, in all and per particle (a dig adds the bucket's)
+        {"device_bytes", pile.device_bytes},
+        {"device_bytes_per_particle", double(pile.device_bytes) / std::max(n, 1)},
+        {"largest_buffer_bytes", pile.largest_buffer_bytes},
         {"device", dev.description()}};
     add_provenance(j, command_line);
     write_json(opt->out + "/summary.json", j);

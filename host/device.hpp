@@ -48,6 +48,10 @@ class Device {
   bool is_gpu() const { return is_gpu_; }
   // "platform / device (compute units, global memory)"
   std::string description() const { return description_; }
+  // the device's global memory [bytes] (CL_DEVICE_GLOBAL_MEM_SIZE), what its buffers share
+  std::size_t global_memory() const { return device_.getInfo<CL_DEVICE_GLOBAL_MEM_SIZE>(); }
+  // the largest single buffer it allocates [bytes] (CL_DEVICE_MAX_MEM_ALLOC_SIZE)
+  std::size_t max_allocation() const { return device_.getInfo<CL_DEVICE_MAX_MEM_ALLOC_SIZE>(); }
 
   // a program made of the shared headers followed by `files` (names in kernels/);
   // built once per Device and option string, and kept
@@ -82,6 +86,8 @@ class Buffer {
   Buffer(Device& dev, size_t count) : dev_(&dev) { resize(count); }
 
   size_t size() const { return count_; }
+  // the device memory it holds [bytes]: its capacity, which grows ahead of its size
+  size_t bytes() const { return capacity_ * sizeof(T); }
   const cl::Buffer& raw() const { return buffer_; }
 
   // reallocates when the capacity is too small (grows by 1.5x to amortise)

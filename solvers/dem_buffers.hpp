@@ -11,6 +11,10 @@ namespace talus {
 
 struct DemBuffers {
   explicit DemBuffers(Device& dev);
+  // the device memory of every array below [bytes] (their capacities)
+  std::size_t device_bytes() const;
+  // the largest of them [bytes] (the rows of a dense packing): what one allocation must hold
+  std::size_t largest_buffer_bytes() const;
 
   // particle state (layouts in kernels/dem_types.h)
   Buffer<cl_float4> position, velocity, omega, rotation;

@@ -402,6 +402,27 @@ int settle_sweeps(const FidelityPreset& preset, const PileBuildOptions& options)
                                        : std::min(preset.iterations, kSettleIterationCap);
 }
 
+void check_device_memory(double particles, std::size_t global_bytes,
+                         std::size_t max_allocation_bytes, const std::string& where,
+                         const std::string& level) {
+  const double mib = 1024.0 * 1024.0;
+  const double all = particles * kDemDeviceBytesPerParticle;
+  const double largest = particles * kDemLargestBufferBytesPerParticle;
+  const auto text = [&](double bytes) { return message_number(std::round(bytes / mib)) + " MiB"; };
+  const std::string pile = where + ": the pile needs about " +
+                           message_number(std::round(particles)) + " particles at " + level;
+  const std::string fix = "; use a coarser level, a smaller pile or a device with more memory "
+                          "(TALUS_DEVICE)";
+  if (all > static_cast<double>(global_bytes))
+    throw InputError(pile + ", about " + text(all) + " of device memory (" +
+                     message_number(kDemDeviceBytesPerParticle) + " bytes a particle), more than "
+                     "the device's " + text(static_cast<double>(global_bytes)) + fix);
+  if (largest > static_cast<double>(max_allocation_bytes))
+    throw InputError(pile + ", whose contact rows need one buffer of about " + text(largest) +
+                     ", more than the device allocates at once (" +
+                     text(static_cast<double>(max_allocation_bytes)) + ")" + fix);
+}
+
 PileBuild build_pile(Device& dev, const PileProfile& profile, const FidelityPreset& preset,
                      const Material& material, const PileBuildOptions& options, Progress* progress) {
   // a pile sized by mistake is refused before it is filled (kMaxPileParticles)
@@ -416,6 +437,10 @@ PileBuild build_pile(Device& dev, const PileProfile& profile, const FidelityPres
                      ", more than talus builds (4,500,000, ten times D50's); check that "
                      "'profile_xz_m' and 'width_m' are in metres, or use a coarser level");
   }
+  // and one that the device cannot hold, before the first buffer is made
+  check_device_memory(needed, dev.global_memory(), dev.max_allocation(),
+                      profile.path.empty() ? "pile profile '" + profile.name + "'" : profile.path,
+                      preset.name);
   PileBuild out;
   out.geoms = pile_container(profile);
   out.bounds = pile_bounds(profile, preset.diameter);
@@ -463,6 +488,8 @@ PileBuild build_pile(Device& dev, const PileProfile& profile, const FidelityPres
   so.max_time = options.max_time;
   SettleResult r = settle(world, so, progress);
   out.particles = world.particles();
+  out.device_bytes = world.buffers().device_bytes();
+  out.largest_buffer_bytes = world.buffers().largest_buffer_bytes();
   out.settle_time = r.sim_time;
   out.at_rest = r.at_rest;
   out.rms_speed = r.rms_speed;

@@ -41,6 +41,18 @@ inline constexpr double kMaxPileParticles = 4.5e6;
 // the particles a pile needs at a level: its volume filled to the emission's solid fraction with
 // spheres of the level's diameter
 double estimated_pile_particles(const PileProfile& profile, double diameter);
+// the DEM's device memory per particle of a settled pile [bytes], all arrays and the largest one
+// (the contact rows): measured 1611 and 439 at D400, 1802 and 486 at D200 (`talus pile`'s
+// device_bytes_per_particle and largest_buffer_bytes, 2026-11-27, PoCL); bounds with 40 % over the
+// measured, for the capacities' growth ahead of the sizes (host/device.hpp Buffer)
+inline constexpr double kDemDeviceBytesPerParticle = 2500.0;
+inline constexpr double kDemLargestBufferBytesPerParticle = 700.0;
+// a pile of `particles` on a device with `global_bytes` of memory and `max_allocation_bytes` per
+// buffer: InputError from `where` naming the estimate, the device's figure and the fix when it
+// would not fit (before, the allocation failed mid-fill in OpenCL, or the host swapped)
+void check_device_memory(double particles, std::size_t global_bytes,
+                         std::size_t max_allocation_bytes, const std::string& where,
+                         const std::string& level);
 // data/piles/default.json (looked up next to the sources or the working directory)
 PileProfile default_pile_profile();
 
@@ -123,6 +135,10 @@ struct PileBuild {
   double bulk_density = 0.0;  // in the flat top's core [kg/m^3]
   double toe_shift = 0.0;     // how far the settled pile was moved to put its toe in place [m]
   ProfileFit soil_fit;        // the placed pile's soil against its profile
+  // the DEM's device memory when settling ended [bytes] (DemBuffers::device_bytes): what a dig of
+  // this pile needs on the device, before the bucket's own arrays
+  std::size_t device_bytes = 0;
+  std::size_t largest_buffer_bytes = 0;  // the largest single array of them [bytes]
   // how this pile was had, not part of it (terrain/pile_cache.hpp neither writes nor compares
   // these): read back from the cache, and the cache file it was read from or saved to
   bool from_cache = false;
