@@ -35,8 +35,8 @@ void add_pile_command(CLI::App& app, const std::string& command_line) {
   cmd->add_option(
          "--form-speed", opt->build.form_speed,
          "speed the formwork withdraws at before the pile settles, 0 = removed at once [m/s]")
-      ->check(finite_number())
-      ->check(non_negative_number())
+      // slower than 10 mm/s it takes hours to clear the face (build_pile refuses it too)
+      ->check(number_in(0.01, 10.0, "m/s", true))
       ->capture_default_str();
   cmd->add_option("--settle-iterations", opt->build.settle_iterations,
                   "study: sweeps per step while filling and settling, above the level's N_it too "

@@ -3,6 +3,7 @@
 #pragma once
 #include <CLI/CLI.hpp>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -20,12 +21,7 @@ inline constexpr int kExitUsage = 2;
 inline CLI::Validator finite_number() {
   return CLI::Validator(
       [](std::string& text) {
-        try {
-          size_t used = 0;
-          const double x = std::stod(text, &used);
-          if (used == text.size() && std::isfinite(x)) return std::string();
-        } catch (const std::exception&) {
-        }
+        if (finite_number_in(text)) return std::string();
         return "must be a finite number, got '" + text + "'";
       },
       "FINITE");
@@ -42,13 +38,8 @@ inline void check_output_file(const std::string& path, const std::string& flag) 
 inline CLI::Validator signed_number(bool allow_zero) {
   return CLI::Validator(
       [allow_zero](std::string& text) {
-        try {
-          size_t used = 0;
-          const double x = std::stod(text, &used);
-          if (used == text.size() && std::isfinite(x) && (x > 0.0 || (allow_zero && x == 0.0)))
-            return std::string();
-        } catch (const std::exception&) {
-        }
+        const std::optional<double> x = finite_number_in(text);
+        if (x && (*x > 0.0 || (allow_zero && *x == 0.0))) return std::string();
         return std::string(allow_zero ? "must be a finite number at least 0"
                                       : "must be a finite number above 0") +
                ", got '" + text + "'";
@@ -73,14 +64,8 @@ inline CLI::Validator number_in(double lo, double hi, const std::string& unit,
                             message_number(lo) + " to " + message_number(hi) + " " + unit;
   return CLI::Validator(
       [lo, hi, zero_allowed, range](std::string& text) {
-        try {
-          size_t used = 0;
-          const double x = std::stod(text, &used);
-          if (used == text.size() && std::isfinite(x) &&
-              ((x >= lo && x <= hi) || (zero_allowed && x == 0.0)))
-            return std::string();
-        } catch (const std::exception&) {
-        }
+        const std::optional<double> x = finite_number_in(text);
+        if (x && ((*x >= lo && *x <= hi) || (zero_allowed && *x == 0.0))) return std::string();
         return "must be a finite number " + range + ", got '" + text + "'";
       },
       "[" + range + "]");

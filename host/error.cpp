@@ -1,6 +1,8 @@
 #include "host/error.hpp"
 
+#include <cmath>
 #include <cstdio>
+#include <exception>
 
 namespace talus {
 
@@ -71,6 +73,16 @@ std::string message_number(double v) {
   char text[32];
   std::snprintf(text, sizeof text, "%g", v);
   return text;
+}
+
+std::optional<double> finite_number_in(const std::string& text) {
+  try {
+    std::size_t used = 0;
+    const double x = std::stod(text, &used);
+    if (used == text.size() && std::isfinite(x)) return x;
+  } catch (const std::exception&) {
+  }
+  return std::nullopt;
 }
 
 }  // namespace talus

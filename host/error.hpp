@@ -1,5 +1,6 @@
 // One error type for the whole library: a message that names what failed and how to fix it.
 #pragma once
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -27,5 +28,9 @@ class InputError : public Error {
 // "0.25", NaN is "nan"), so a range or a bad value reads as the user wrote it, not as DBL_MAX's
 // 309 digits or std::to_string's fixed six decimals
 std::string message_number(double v);
+
+// a user's text read as one finite number, the whole of it ("5kN", "1e3 N", "nan", "inf" and ""
+// are not): the number, or nullopt. The one reading of numbers the flags and specs use
+std::optional<double> finite_number_in(const std::string& text);
 
 }  // namespace talus

@@ -74,9 +74,10 @@ struct Fields {
 
 bool same(double a, double b) { return std::abs(a - b) <= kSameValue * std::max(std::abs(a), std::abs(b)); }
 
-// a record's readings and scalars within what its machine can read, carry and do: a column in kN
-// or mm, or a mass in tonnes, would otherwise pass as a strange machine and the diagnosis would
-// fit effects to a unit error
+// a record's readings and scalars within what its machine can read, carry and do: a stroke in mm,
+// a force in mN or a mass in grams would otherwise pass as a strange machine and the diagnosis
+// would fit effects to a unit error (a unit too large a thousandfold reads too small, which no
+// bound can tell from a light dig)
 void check_within_machine(const MeasuredRun& r, const fs::path& dir, const Fields& f) {
   const std::string machine = vehicle::find_data_file(r.meta.machine, "machines");
   if (machine.empty())
@@ -96,11 +97,12 @@ void check_within_machine(const MeasuredRun& r, const fs::path& dir, const Field
       const std::string hint = std::abs(v) <= 1e3 * limit[c]
                                    ? "; a thousand times too large: is the column in another unit?"
                                    : "";
-      throw InputError(csv + ": line " + std::to_string(k + 2) + ": field '" + ch.name + "' is " +
-                       message_number(v) + " " + ch.unit + ", beyond the " +
-                       message_number(limit[c]) + " " + ch.unit + " that " + loader.name() +
-                       " can read (twice its machine data's largest); give it in " + ch.unit +
-                       hint);
+      // named by the sample's time: the reader skips blank lines, so a line number could be off
+      throw InputError(
+          csv + ": field '" + ch.name + "' at t = " + message_number(r.run.series[Channel::t][k]) +
+          " s is " + message_number(v) + " " + ch.unit + ", beyond the " +
+          message_number(limit[c]) + " " + ch.unit + " that " + loader.name() +
+          " can read (five times its machine data's largest); give it in " + ch.unit + hint);
     }
   }
   // the load: at most what tips the empty machine with its boom low (the most it can carry)
@@ -108,7 +110,7 @@ void check_within_machine(const MeasuredRun& r, const fs::path& dir, const Field
   if (!(r.meta.loaded_mass_kg >= 0.0 && r.meta.loaded_mass_kg <= tipping))
     f.fail("loaded_mass_kg", "is " + message_number(r.meta.loaded_mass_kg) +
                                  " kg, outside 0 to the " + message_number(tipping) +
-                                 " kg that tips " + loader.name() + " (give kg, not t)");
+                                 " kg that tips " + loader.name() + " (give kg, not g)");
   // the work: at most the largest power over the whole record
   const auto& t = r.run.series[Channel::t];
   const double duration = t.empty() ? 0.0 : t.back() - t.front();
@@ -116,7 +118,7 @@ void check_within_machine(const MeasuredRun& r, const fs::path& dir, const Field
   if (!(std::abs(r.meta.work_J) <= most))
     f.fail("work_J", "is " + message_number(r.meta.work_J) + " J, beyond the " +
                          message_number(most) + " J that " + loader.name() + " can do in the " +
-                         message_number(duration) + " s of the record (give J, not kJ)");
+                         message_number(duration) + " s of the record (give J, not mJ)");
 }
 
 }  // namespace
@@ -137,11 +139,12 @@ MeasuredMetadata load_metadata(const fs::path& file) {
   // the channel contract's rate: the metrics compare the simulation's 100 Hz samples with these
   // one for one (a 1 Hz run gave a position error of 3.66 on noiseless data)
   if (m.sample_rate_hz != kContractRateHz)
-    f.fail("sample_rate_hz", "is " + std::to_string(m.sample_rate_hz) +
+    f.fail("sample_rate_hz", "is " + message_number(m.sample_rate_hz) +
                                  "; the channel contract is 100 Hz: resample the data to 100 Hz");
   m.pile_toe_x_m = f.number(j, "pile_toe_x_m", "pile_toe_x_m");
   if (!(m.pile_toe_x_m >= 0.0 && m.pile_toe_x_m <= vehicle::kMaxPileToeX))
-    f.fail("pile_toe_x_m", "lies outside 0-100 m from the machine's start (front axle at x = 0)");
+    f.fail("pile_toe_x_m", "lies outside 0-" + message_number(vehicle::kMaxPileToeX) +
+                               " m from the machine's start (front axle at x = 0)");
   m.pile_scan = f.pairs(j, "pile_scan", "pile_scan", false);
   const auto& inputs = f.member(j, "operator_inputs", "operator_inputs");
   if (!inputs.is_object()) f.fail("operator_inputs", "must be an object with drive, lift and tilt series");
@@ -190,8 +193,10 @@ MeasuredRun load_measured_run(const fs::path& dir) {
   const auto& t = r.run.series[Channel::t];
   if (!t.empty() && !(t.front() >= 0.0 && t.back() <= vehicle::kMaxScenarioDuration))
     throw InputError((dir / kTimeseriesFile).string() + ": field 't': runs from " +
-                     std::to_string(t.front()) + " to " + std::to_string(t.back()) +
-                     " s; a measured run lies within 0-3600 s (split longer records into runs)");
+                     message_number(t.front()) + " to " + message_number(t.back()) +
+                     " s; a measured run lies within 0-" +
+                     message_number(vehicle::kMaxScenarioDuration) +
+                     " s from its start (split longer records into runs, each timed from 0)");
   const double period = 1.0 / r.meta.sample_rate_hz;
   for (size_t k = 1; k < t.size(); ++k) {
     if (std::abs(t[k] - t[k - 1] - period) > kPeriodTolerance * period)

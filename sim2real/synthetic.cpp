@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <optional>
 #include <random>
 #include <sstream>
 
@@ -11,10 +12,6 @@
 namespace talus::sim2real {
 
 namespace {
-
-// the largest noise a channel may be given, over its default (a real sensor's): beyond it the
-// noise is larger than what the channel measures (f_lift: 500 kN against the lift's 300 kN)
-constexpr double kMaxNoiseOverDefault = 100.0;
 
 Series2 points(const vehicle::PiecewiseLinear& f) {
   Series2 out;
@@ -54,16 +51,11 @@ std::map<std::string, double> parse_sensor_noise(const std::string& spec, const 
                        "contract (f_lift, f_tilt, f_traction, v_drive, d_lift, ...)");
     // the whole text a number in SI units: "5kN" was read as 5 N
     const std::string text = part.substr(eq + 1);
-    double value = 0.0;
-    std::size_t used = 0;
-    try {
-      value = std::stod(text, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used == 0 || used != text.size())
+    const std::optional<double> number = finite_number_in(text);
+    if (!number)
       throw InputError(what + ": '" + part + "': the standard deviation '" + text +
-                       "' is not a plain number in SI units (N, m, m/s, deg, W: 5 kN is 5000)");
+                       "' is not a finite number in SI units (N, m, m/s, deg, W: 5 kN is 5000)");
+    const double value = *number;
     // at most kMaxNoiseOverDefault times a real sensor's noise: beyond it the noise is the channel
     const double most = kMaxNoiseOverDefault * default_sensor_noise().at(channel);
     if (!(value >= 0.0 && value <= most))

@@ -18,6 +18,11 @@ namespace talus::sim2real {
 // engine's (orders of magnitude of the paper's instrumentation, Table 1; no per-sensor data is
 // published)
 const std::map<std::string, double>& default_sensor_noise();
+// the largest noise a channel may be given, over its default (a real sensor's): beyond it the
+// noise outgrows what the channel measures (f_lift: 250 kN against a dig's 300 kN), and at five
+// of its σ it stays within half of what the machine can read (vehicle::reading_limits), so a
+// synthetic run always loads as a measured one (Synthetic.TheLargestNoiseStaysWithinTheReadings)
+inline constexpr double kMaxNoiseOverDefault = 50.0;
 
 // "none", "default", or CHANNEL=SIGMA pairs separated by commas ("default,f_lift=1e4" changes one
 // of the defaults); InputError starting with `what` (the option or field it came from) and naming

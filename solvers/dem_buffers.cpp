@@ -37,30 +37,15 @@ DemBuffers::DemBuffers(Device& dev)
       first_non_finite(dev, 1) {}
 
 std::size_t DemBuffers::device_bytes() const {
-  std::size_t sum = position.bytes() + velocity.bytes() + omega.bytes() + rotation.bytes() +
-                    geoms.bytes() + particle_cell.bytes() + cell_counts.bytes() +
-                    cell_start.bytes() + cell_fill.bytes() + cell_particles.bytes() +
-                    contact_counts.bytes() + degree.bytes() + adjacency_offsets.bytes() +
-                    adjacency_fill.bytes() + adjacency.bytes() + colour.bytes() +
-                    colour_next.bytes() + colour_status.bytes() + colour_histogram.bytes() +
-                    colour_offsets.bytes() + colour_start_dev.bytes() + order.bytes() +
-                    row_of_contact.bytes() + rows.bytes() + delta_lin.bytes() +
-                    delta_ang.bytes() + residual.bytes() + first_non_finite.bytes();
-  for (int k = 0; k < 2; ++k) sum += owner_offsets[k].bytes() + contacts[k].bytes();
+  std::size_t sum = 0;
+  for_each_buffer_bytes([&](std::size_t b) { sum += b; });
   return sum;
 }
 
 std::size_t DemBuffers::largest_buffer_bytes() const {
-  return std::max({position.bytes(), velocity.bytes(), omega.bytes(), rotation.bytes(),
-                   geoms.bytes(), particle_cell.bytes(), cell_counts.bytes(), cell_start.bytes(),
-                   cell_fill.bytes(), cell_particles.bytes(), contact_counts.bytes(),
-                   degree.bytes(), adjacency_offsets.bytes(), adjacency_fill.bytes(),
-                   adjacency.bytes(), colour.bytes(), colour_next.bytes(), colour_status.bytes(),
-                   colour_histogram.bytes(), colour_offsets.bytes(), colour_start_dev.bytes(),
-                   order.bytes(), row_of_contact.bytes(), rows.bytes(), delta_lin.bytes(),
-                   delta_ang.bytes(), residual.bytes(), first_non_finite.bytes(),
-                   owner_offsets[0].bytes(), owner_offsets[1].bytes(), contacts[0].bytes(),
-                   contacts[1].bytes()});
+  std::size_t largest = 0;
+  for_each_buffer_bytes([&](std::size_t b) { largest = std::max(largest, b); });
+  return largest;
 }
 
 }  // namespace talus

@@ -1,6 +1,8 @@
 // Device arrays of one DEM system, owned by DemWorld and shared with its stages and sweeps.
 #pragma once
 #include <array>
+#include <cstddef>
+#include <initializer_list>
 #include <vector>
 
 #include "host/device.hpp"
@@ -15,6 +17,43 @@ struct DemBuffers {
   std::size_t device_bytes() const;
   // the largest of them [bytes] (the rows of a dense packing): what one allocation must hold
   std::size_t largest_buffer_bytes() const;
+  // f(bytes) for every device array below: the one list of them
+  template <class F>
+  void for_each_buffer_bytes(F&& f) const {
+    for (std::size_t b : {position.bytes(),
+                          velocity.bytes(),
+                          omega.bytes(),
+                          rotation.bytes(),
+                          geoms.bytes(),
+                          particle_cell.bytes(),
+                          cell_counts.bytes(),
+                          cell_start.bytes(),
+                          cell_fill.bytes(),
+                          cell_particles.bytes(),
+                          contact_counts.bytes(),
+                          owner_offsets[0].bytes(),
+                          owner_offsets[1].bytes(),
+                          contacts[0].bytes(),
+                          contacts[1].bytes(),
+                          degree.bytes(),
+                          adjacency_offsets.bytes(),
+                          adjacency_fill.bytes(),
+                          adjacency.bytes(),
+                          colour.bytes(),
+                          colour_next.bytes(),
+                          colour_status.bytes(),
+                          colour_histogram.bytes(),
+                          colour_offsets.bytes(),
+                          colour_start_dev.bytes(),
+                          order.bytes(),
+                          row_of_contact.bytes(),
+                          rows.bytes(),
+                          delta_lin.bytes(),
+                          delta_ang.bytes(),
+                          residual.bytes(),
+                          first_non_finite.bytes()})
+      f(b);
+  }
 
   // particle state (layouts in kernels/dem_types.h)
   Buffer<cl_float4> position, velocity, omega, rotation;

@@ -413,11 +413,11 @@ void check_device_memory(double particles, std::size_t global_bytes,
                            message_number(std::round(particles)) + " particles at " + level;
   const std::string fix = "; use a coarser level, a smaller pile or a device with more memory "
                           "(TALUS_DEVICE)";
-  if (all > static_cast<double>(global_bytes))
+  if (!(all <= static_cast<double>(global_bytes)))
     throw InputError(pile + ", about " + text(all) + " of device memory (" +
                      message_number(kDemDeviceBytesPerParticle) + " bytes a particle), more than "
                      "the device's " + text(static_cast<double>(global_bytes)) + fix);
-  if (largest > static_cast<double>(max_allocation_bytes))
+  if (!(largest <= static_cast<double>(max_allocation_bytes)))
     throw InputError(pile + ", whose contact rows need one buffer of about " + text(largest) +
                      ", more than the device allocates at once (" +
                      text(static_cast<double>(max_allocation_bytes)) + ")" + fix);

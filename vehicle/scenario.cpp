@@ -89,7 +89,8 @@ Scenario load_scenario(const std::string& name_or_path) {
     s.pile_profile = root.contains("pile_profile") ? f.text(root, "", "pile_profile") : "default";
     s.pile_toe_x = f.plain_number(root, "", "pile_toe_x");
     if (!(s.pile_toe_x >= 0.0 && s.pile_toe_x <= kMaxPileToeX))
-      f.fail("pile_toe_x", "lies outside 0-100 m from the machine's start",
+      f.fail("pile_toe_x",
+             "lies outside 0-" + message_number(kMaxPileToeX) + " m from the machine's start",
              "give the pile's toe in m ahead of the machine (the shipped scenarios: 3.95-4.25 m)");
     s.dig_start = f.plain_number(root, "", "dig_start");
     s.dig_end = f.plain_number(root, "", "dig_end");

@@ -26,8 +26,10 @@ double plane_angle(const RigidBody& frame, const Vec3& world_direction) {
 }  // namespace
 
 std::array<double, kChannelCount> reading_limits(const WheelLoader& loader) {
-  // twice the machine's data: a reading beyond it is a unit error or a broken sensor
-  constexpr double kMargin = 2.0;
+  // five times the machine's data: far beyond what a working sensor reads (the cylinders' end
+  // stops, which relief pressure does not cap, and road speeds above the digging gear's top
+  // included), far below the thousandfold of a unit prefix
+  constexpr double kMargin = 5.0;
   std::array<double, kChannelCount> limit{};
   auto set = [&](Channel c, double v) { limit[static_cast<std::size_t>(c)] = kMargin * v; };
   // cylinders: the relief pressure's force on the piston or the annulus; two lift cylinders summed
@@ -48,7 +50,9 @@ std::array<double, kChannelCount> reading_limits(const WheelLoader& loader) {
   set(Channel::v_drive, loader.top_speed());
   set(Channel::d_lift, lift.length_max - lift.length_min);
   set(Channel::d_tilt, tilt.length_max - tilt.length_min);
-  for (Channel c : {Channel::boom_deg, Channel::bucket_deg, Channel::pitch_deg}) set(c, 90.0);
+  // angles: half a turn either way, whatever the margin
+  for (Channel c : {Channel::boom_deg, Channel::bucket_deg, Channel::pitch_deg})
+    limit[static_cast<std::size_t>(c)] = 180.0;
   // P = f_tr v + f_l ḋ_l + f_t ḋ_t at the largest forces and speeds
   set(Channel::power,
       f_traction * loader.top_speed() + f_lift * lift.max_speed + f_tilt * tilt.max_speed);

@@ -15,11 +15,11 @@ namespace talus::vehicle {
 SensorSample read_sensors(const WheelLoader& loader, double t);
 
 // the largest magnitude each channel can read on this loader, in its unit (index as
-// kSensorChannels; 0: no bound, for t and the positions): twice what the machine's data allows, so
-// that a record beyond it holds a unit error (kN for N, mm for m) or a broken sensor, never a real
-// reading. Forces from the cylinders' relief-pressure forces and the tyres' grip under the machine
-// with its tipping load, the drive speed from its top speed, strokes from the cylinders' ranges,
-// angles half a turn, power from those forces at those speeds
+// kSensorChannels; 0: no bound, for t and the positions): five times what the machine's data
+// allows, so that a record beyond it holds a unit error (mm for m, mN for N) or a broken sensor,
+// never a real reading. Forces from the cylinders' relief-pressure forces and the tyres' grip under
+// the machine with its tipping load, the drive speed from its top speed, strokes from the
+// cylinders' ranges, angles half a turn, power from those forces at those speeds
 std::array<double, kChannelCount> reading_limits(const WheelLoader& loader);
 
 // samples at a fixed rate and integrates the work

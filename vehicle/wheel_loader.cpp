@@ -270,10 +270,12 @@ double full_reach_tipping_load(const MachineDescription& m) {
   // longest there) or the stroke ends, then come to rest
   hold(0.2, 0.0, 0.0);
   hold(0.9, 0.0, kCurlSpeed);
-  constexpr double kLongestLift = 30.0;  // s: any stroke at kLiftSpeed
+  // the whole stroke at the speed the cylinders reach (set_lift_speed clamps to their top), twice
+  const double speed = std::min(kLiftSpeed, w.lift_spec().max_speed);
+  const double longest_lift = 2.0 * (w.lift_spec().length_max - w.lift_spec().length_min) / speed;
   w.set_lift_speed(kLiftSpeed);
   w.set_tilt_speed(0.0);
-  const int longest = static_cast<int>(std::lround(kLongestLift / kStep));
+  const int longest = static_cast<int>(std::lround(longest_lift / kStep));
   for (int k = 0; k < longest && read_sensors(w, 0.0).boom_deg < 0.0; ++k) w.step(kStep);
   hold(3.0, 0.0, 0.0);
   return w.static_tipping_load();

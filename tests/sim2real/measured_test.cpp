@@ -159,7 +159,8 @@ TEST(MeasuredRun, AReadingBeyondWhatTheMachineCanReadIsNamed) {
       ADD_FAILURE() << name << ": no error";
     } catch (const InputError& e) {
       const std::string m = e.what();
-      EXPECT_NE(m.find("timeseries.csv: line 9: field '" + name + "' is "), std::string::npos) << m;
+      EXPECT_NE(m.find("timeseries.csv: field '" + name + "' at t = 0.07 s is "), std::string::npos)
+          << m;
       EXPECT_NE(m.find("that wa320 can read"), std::string::npos) << m;
     }
   }
@@ -193,10 +194,12 @@ TEST(MeasuredRun, ALoadOrWorkBeyondTheMachineIsNamed) {
   EXPECT_NE(mass.find("metadata.json: field 'loaded_mass_kg': is 2.7e+06 kg, outside 0 to the"),
             std::string::npos)
       << mass;
+  EXPECT_NE(mass.find("(give kg, not g)"), std::string::npos) << mass;
   const std::string work = beyond("measured_millijoules", 2700.0, 1.27e11);
   EXPECT_NE(work.find("metadata.json: field 'work_J': is 1.27e+11 J, beyond the"),
             std::string::npos)
       << work;
+  EXPECT_NE(work.find("(give J, not mJ)"), std::string::npos) << work;
   const std::string machine =
       error_after("measured_no_machine", [](nlohmann::json& j) { j["machine"] = "wa999"; });
   EXPECT_NE(machine.find("field 'machine': names 'wa999'"), std::string::npos) << machine;

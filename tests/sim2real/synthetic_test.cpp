@@ -9,7 +9,10 @@
 
 #include "host/error.hpp"
 #include "tests/sim2real/synthetic_runs.hpp"
+#include "vehicle/data_file.hpp"
 #include "vehicle/scenario.hpp"
+#include "vehicle/sensors.hpp"
+#include "vehicle/wheel_loader.hpp"
 
 namespace talus::sim2real {
 namespace {
@@ -35,6 +38,20 @@ TEST(Synthetic, NoiseSpecsParseAndBadPartsAreNamed) {
       EXPECT_EQ(msg.rfind("metadata.json: field 'noise'", 0), 0u) << msg;
       EXPECT_NE(msg.find(bad), std::string::npos) << msg;
     }
+  }
+}
+
+// the largest noise synth accepts stays, at five of its standard deviations, within half of what
+// the machine can read, so a synthetic run always loads as a measured one (load_measured_run holds
+// records to vehicle::reading_limits)
+TEST(Synthetic, TheLargestNoiseStaysWithinTheReadings) {
+  const vehicle::WheelLoader loader(vehicle::find_data_file("wa320", "machines"));
+  const auto limit = vehicle::reading_limits(loader);
+  for (const auto& [channel, sigma] : default_sensor_noise()) {
+    std::size_t c = 0;
+    while (kChannelNames[c] != channel) ++c;
+    if (limit[c] == 0.0) continue;  // positions: no machine bound
+    EXPECT_LE(5.0 * kMaxNoiseOverDefault * sigma, 0.5 * limit[c]) << channel;
   }
 }
 
