@@ -155,9 +155,9 @@ void add_bench_dig(CLI::App& bench) {
       ->capture_default_str();
   dig->add_option("--level", opt->level, "fidelity level (D400, D200, D100, D50)")
       ->capture_default_str();
+  // a dig from its start: the scenarios dig for 5-15 s, the soak for ten minutes
   dig->add_option("--seconds", opt->seconds, "simulated seconds measured from dig_start [s]")
-      ->check(finite_number())
-      ->check(positive_number())
+      ->check(number_in(0.01, 600.0, "s"))
       ->capture_default_str();
   dig->add_option("--seed", opt->seed, "seed of the pile's particles")->capture_default_str();
   dig->add_option("--json", opt->json, "also write the result as JSON to this file");

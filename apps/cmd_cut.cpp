@@ -56,8 +56,7 @@ void add_cut_command(CLI::App& app, const std::string& command_line) {
       ->check(CLI::Range(1.0, 80.0))
       ->capture_default_str();
   cmd->add_option("--rolling", opt->material.rolling, "rolling resistance mu_r of the gravel")
-      ->check(finite_number())
-      ->check(non_negative_number())
+      ->check(number_in(0.0, kMaxContactCoefficient, ""))
       ->capture_default_str();
   cmd->add_option("--seed", opt->cut.seed, "random seed of the bed")->capture_default_str();
   cmd->add_flag("--quiet", opt->quiet, "no progress on stderr");

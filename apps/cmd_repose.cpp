@@ -33,13 +33,11 @@ void add_repose_command(CLI::App& app, const std::string& command_line) {
   cmd->add_option("--seed", opt->heap.seed, "random seed of the particle sizes and jitter");
   cmd->add_option("--friction", opt->material.friction,
                   "Coulomb friction (default: the gravel's 0.3)")
-      ->check(finite_number())
-      ->check(non_negative_number());
+      ->check(number_in(0.0, kMaxContactCoefficient, ""));
   cmd->add_option("--rolling", opt->material.rolling,
                   "rolling resistance mu_r, torque <= mu_r R* lambda_n (default: the paper's 0.02; "
                   "docs/soil.md)")
-      ->check(finite_number())
-      ->check(non_negative_number());
+      ->check(number_in(0.0, kMaxContactCoefficient, ""));
   cmd->add_option("--wall-speed", opt->heap.wall_speed,
                   "speed the walls retreat at before removal, 0 = at once [m/s]")
       // slower than 10 mm/s the walls take hours to clear the heap (the pile's formwork has the

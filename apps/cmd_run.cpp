@@ -466,8 +466,7 @@ void add_run_command(CLI::App& app, const std::string& command_line) {
   cmd->add_option("--rolling", opts->rolling,
                   "study: the gravel's rolling resistance mu_r instead of the paper's 0.02 "
                   "(docs/soil.md)")
-      ->check(finite_number())
-      ->check(non_negative_number());
+      ->check(number_in(0.0, kMaxContactCoefficient, ""));
   cmd->add_option("--dt", opts->dt, "study: timestep [s] instead of the level's")
       ->check(number_in(kMinTimestep, kMaxTimestep, "s"));
   cmd->add_option("--iterations", opts->iterations, "study: sweeps per step instead of the level's")
@@ -475,8 +474,8 @@ void add_run_command(CLI::App& app, const std::string& command_line) {
   cmd->add_option("--form-speed", opts->form_speed,
                   "study: speed the pile's formwork withdraws at before it "
                   "settles, 0 = removed at once [m/s]")
-      ->check(finite_number())
-      ->check(non_negative_number());
+      // slower than 10 mm/s it takes hours to clear the face (build_pile refuses it too)
+      ->check(number_in(0.01, 10.0, "m/s", true));
   cmd->add_flag("--residuals", opts->residuals, "record the particle rows' residual at the end of every step "
                 "(summary: step_residual_m_s median and p95)");
   cmd->add_option("--effect", opts->effects,

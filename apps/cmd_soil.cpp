@@ -81,12 +81,10 @@ void add_soil_command(CLI::App& app, const std::string& command_line) {
   cmd->add_option("--rolling", opt->material.rolling,
                   "rolling resistance mu_r, torque <= mu_r R* lambda_n (default: the paper's 0.02; "
                   "docs/soil.md)")
-      ->check(finite_number())
-      ->check(non_negative_number())
+      ->check(number_in(0.0, kMaxContactCoefficient, ""))
       ->capture_default_str();
   cmd->add_option("--friction", opt->material.friction, "Coulomb friction between grains")
-      ->check(finite_number())
-      ->check(non_negative_number())
+      ->check(number_in(0.0, kMaxContactCoefficient, ""))
       ->capture_default_str();
   cmd->add_option("--seed", opt->seed, "random seed of the particle sizes and jitter")->capture_default_str();
   cmd->add_option("--aspect", opt->aspect, "collapse: column height over length asked for")->check(finite_number())

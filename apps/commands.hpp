@@ -49,6 +49,11 @@ inline CLI::Validator signed_number(bool allow_zero) {
 inline CLI::Validator positive_number() { return signed_number(false); }
 inline CLI::Validator non_negative_number() { return signed_number(true); }
 
+// the contact coefficients a study may ask for (Coulomb friction, rolling resistance μ_r): 0 to 2,
+// beyond which a grain neither slides nor rolls any less (the gravel: 0.3 and 0.02; talus's former
+// blocked rolling: 1.0)
+inline constexpr double kMaxContactCoefficient = 2.0;
+
 // timesteps a study may ask for [s]: from 0.1 ms (a 15 s dig is then 150,000 steps, hours at D200;
 // below it the step count runs to days or overflows) to 50 ms, G400's and the coarsest preset's
 // (SPEC §2.6)
@@ -61,7 +66,8 @@ inline constexpr double kMaxTimestep = 0.05;
 inline CLI::Validator number_in(double lo, double hi, const std::string& unit,
                                 bool zero_allowed = false) {
   const std::string range = (zero_allowed ? "0 or " : "") + std::string("from ") +
-                            message_number(lo) + " to " + message_number(hi) + " " + unit;
+                            message_number(lo) + " to " + message_number(hi) +
+                            (unit.empty() ? "" : " " + unit);
   return CLI::Validator(
       [lo, hi, zero_allowed, range](std::string& text) {
         const std::optional<double> x = finite_number_in(text);

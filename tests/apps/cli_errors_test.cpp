@@ -190,7 +190,11 @@ TEST(CliErrors, StepCountsAndLoadsOutsideTheirRangeAreRefused) {
       {"--settle-dt", "bench dem --settle-dt 1e30"},
       // a near-zero normaliser made every error of the table astronomical
       {"--force-constant", "compare --sim a --ref b --force-constant 1e-300"},
-      {"--l-norm", "compare --sim a --ref b --l-norm 1e-300"}};
+      {"--l-norm", "compare --sim a --ref b --l-norm 1e-300"},
+      {"--seconds", "bench dig --seconds 1e30"},
+      {"--rolling", "run --scenario hd27 --rolling 1e30 --out /tmp/talus_unused_range"},
+      {"--friction", "soil --test shear --friction 50 --out /tmp/talus_unused_range"},
+      {"--form-speed", "run --scenario hd27 --form-speed 1e-4 --out /tmp/talus_unused_range"}};
   for (const auto& c : cases) {
     const Outcome o = run("", c[1]);
     EXPECT_EQ(o.code, 2) << c[1] << "\n" << o.err;
