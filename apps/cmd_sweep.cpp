@@ -27,6 +27,7 @@
 #include "host/progress.hpp"
 #include "io/plot.hpp"
 #include "vehicle/data_file.hpp"
+#include "vehicle/scenario.hpp"
 
 namespace talus::app {
 
@@ -338,8 +339,8 @@ void add_sweep_command(CLI::App& app, const std::string& command_line) {
   cmd->add_option("--approach", o->approach,
                   "distance from the bucket tip to the pile at the start [m]")
       ->capture_default_str()
-      ->check(finite_number())
-      ->check(positive_number());
+      // the paper's approach at 8 km/h runs a few metres; as far as a scenario's pile toe may lie
+      ->check(number_in(0.1, vehicle::kMaxPileToeX, "m"));
   // a cycle fills in 5-15 s (paper §7); two minutes is far beyond any that completes
   cmd->add_option("--max-time", o->max_time, "time limit of one cycle [s]")
       ->capture_default_str()

@@ -194,7 +194,8 @@ TEST(CliErrors, StepCountsAndLoadsOutsideTheirRangeAreRefused) {
       {"--seconds", "bench dig --seconds 1e30"},
       {"--rolling", "run --scenario hd27 --rolling 1e30 --out /tmp/talus_unused_range"},
       {"--friction", "soil --test shear --friction 50 --out /tmp/talus_unused_range"},
-      {"--form-speed", "run --scenario hd27 --form-speed 1e-4 --out /tmp/talus_unused_range"}};
+      {"--form-speed", "run --scenario hd27 --form-speed 1e-4 --out /tmp/talus_unused_range"},
+      {"--approach", "sweep --approach 1e30 --out /tmp/talus_unused_range"}};
   for (const auto& c : cases) {
     const Outcome o = run("", c[1]);
     EXPECT_EQ(o.code, 2) << c[1] << "\n" << o.err;
