@@ -7,6 +7,7 @@
 #include "host/error.hpp"
 #include "host/files.hpp"
 #include "vehicle/data_file.hpp"
+#include "vehicle/machine.hpp"
 #include "vehicle/scenario.hpp"
 #include "vehicle/sensors.hpp"
 #include "vehicle/wheel_loader.hpp"
@@ -151,6 +152,17 @@ MeasuredMetadata load_metadata(const fs::path& file) {
   m.drive = f.pairs(inputs, "operator_inputs.drive", "drive", false);
   m.lift = f.pairs(inputs, "operator_inputs.lift", "lift", false);
   m.tilt = f.pairs(inputs, "operator_inputs.tilt", "tilt", false);
+  // the target speeds within what any loader reaches, as a scenario's (vehicle/machine.hpp)
+  const auto within = [&](const Series2& v, const std::string& field, double fastest) {
+    for (std::size_t i = 0; i < v.size(); ++i)
+      if (!(std::abs(v[i].second) <= fastest))
+        f.fail(field + "[" + std::to_string(i) + "]", "asks " + message_number(v[i].second) +
+                                                          " m/s; give a target speed within +-" +
+                                                          message_number(fastest) + " m/s");
+  };
+  within(m.drive, "operator_inputs.drive", vehicle::kMaxDriveSpeed);
+  within(m.lift, "operator_inputs.lift", vehicle::kMaxCylinderSpeed);
+  within(m.tilt, "operator_inputs.tilt", vehicle::kMaxCylinderSpeed);
   m.loaded_mass_kg = f.number(j, "loaded_mass_kg", "loaded_mass_kg");
   m.work_J = f.number(j, "work_J", "work_J");
   if (!(m.loaded_mass_kg >= 0.0)) f.fail("loaded_mass_kg", "must not be negative");

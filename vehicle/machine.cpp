@@ -38,7 +38,7 @@ constexpr Range kHingeAngle{-M_PI, M_PI, "rad"};
 constexpr Range kReliefPressure{5e6, 5e7, "Pa"};  // mobile hydraulics: 10-45 MPa
 constexpr Range kBore{0.02, 1.0, "m"};
 constexpr Range kCylinderLength{0.05, 20.0, "m"};
-constexpr Range kCylinderSpeed{1e-3, 1.0, "m/s"};  // loaders: 0.1-0.5 m/s (wa320: 0.218, 0.25)
+constexpr Range kCylinderSpeed{1e-3, kMaxCylinderSpeed, "m/s"};  // wa320: 0.218, 0.25
 constexpr Range kTyreRadius{0.2, 2.5, "m"};
 constexpr Range kTyreWidth{0.05, 2.0, "m"};
 constexpr Range kTyreModulus{1e5, 1e8, "Pa"};  // paper: 1 MPa
@@ -46,7 +46,7 @@ constexpr Range kFriction{0.0, 3.0, ""};       // paper: tyres 2.0, bucket-terra
 constexpr Range kGroundStiffness{1e5, 1e10, "N/m"};
 constexpr Range kPower{1e3, 2e6, "W"};              // paper: 127 kW
 constexpr Range kMotorSpeed{50.0, 1500.0, "rad/s"};  // diesels 1800-2200 rpm, e-motors to 14000
-constexpr Range kTopSpeed{0.5, 15.0, "m/s"};        // loaders' top gear: up to 40 km/h
+constexpr Range kTopSpeed{0.5, kMaxDriveSpeed, "m/s"};  // wa320: 3.61 (digging gear)
 constexpr Range kTraction{1e3, 2e6, "N"};
 constexpr Range kRatedVolume{0.1, 50.0, "m^3"};
 

@@ -74,6 +74,12 @@ struct MachineDescription {
   GroundContactParameters bucket_ground;  // the bucket's bottom corners against the ground
 };
 
+// the fastest a loader drives and moves a cylinder [m/s]: the largest top speed and cylinder speed
+// a machine may declare (check_machine) and the largest target speed an operator's input may ask
+// (scenarios and measured runs): loaders' top gear reaches 40 km/h, their cylinders 0.1-0.5 m/s
+inline constexpr double kMaxDriveSpeed = 15.0;
+inline constexpr double kMaxCylinderSpeed = 1.0;
+
 // the error a description's field raises: "SOURCE: field 'F' PROBLEM; FIX", SOURCE being the file
 // or, for a description made by code without one, "machine 'NAME'"
 [[noreturn]] void fail_field(const MachineDescription& m, const std::string& field,

@@ -7,6 +7,7 @@
 #include "host/data_files.hpp"
 #include "host/error.hpp"
 #include "vehicle/data_file.hpp"
+#include "vehicle/machine.hpp"
 
 namespace talus::vehicle {
 
@@ -28,7 +29,9 @@ namespace {
 // the shortest [s]: two samples of the 100 Hz sensors
 constexpr double kMinDuration = 0.02;
 
-PiecewiseLinear series(const DataFile& f, const std::string& key) {
+// an operator's target speeds [[t, v], ...]: finite, in time order, |v| at most `fastest` [m/s]
+// (a lever at its stop asks the machine's top speed; 1e30 m/s ran as a valid scenario)
+PiecewiseLinear series(const DataFile& f, const std::string& key, double fastest) {
   const auto& j = f.member(f.root(), "", key);
   if (!j.is_array() || j.empty()) f.fail(key, "is not a non-empty array", "give [[t, v], ...] with t in s and v in m/s");
   std::vector<std::pair<double, double>> pts;
@@ -39,6 +42,10 @@ PiecewiseLinear series(const DataFile& f, const std::string& key) {
         !std::isfinite(p[0].get<double>()) || !std::isfinite(p[1].get<double>())) {
       f.fail(where, "is not a pair of finite numbers", "write [t, v]");
     }
+    if (!(std::abs(p[1].get<double>()) <= fastest))
+      f.fail(where, "asks " + message_number(p[1].get<double>()) + " m/s",
+             "give a target speed within +-" + message_number(fastest) +
+                 " m/s (no loader drives or moves a cylinder faster)");
     if (!pts.empty() && p[0].get<double>() < pts.back().first) {
       f.fail(where, "goes back in time", "sort the points by time");
     }
@@ -112,9 +119,9 @@ Scenario load_scenario(const std::string& name_or_path) {
       f.fail("timestep", "does not divide the 10 ms sensor period", "use 0.01, 0.005, 0.0025, 0.002 or 0.001");
     }
   }
-  s.drive = series(f, "drive");
-  s.lift = series(f, "lift");
-  s.tilt = series(f, "tilt");
+  s.drive = series(f, "drive", kMaxDriveSpeed);
+  s.lift = series(f, "lift", kMaxCylinderSpeed);
+  s.tilt = series(f, "tilt", kMaxCylinderSpeed);
   return s;
 }
 

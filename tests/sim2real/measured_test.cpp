@@ -105,6 +105,9 @@ TEST(MeasuredRun, MalformedMetadataNamesFileAndField) {
        [](nlohmann::json& j) { j["scenario"] = "FB35"; }},
       // a toe far away ended in a misleading "needs more than 64 colours" (the scenarios' bound)
       {"'pile_toe_x_m': lies outside 0-100 m", [](nlohmann::json& j) { j["pile_toe_x_m"] = 1e12; }},
+      // a target speed beyond any loader's: a unit error (mm/s), not an operator
+      {"'operator_inputs.lift[1]': asks 200 m/s",
+       [](nlohmann::json& j) { j["operator_inputs"]["lift"][1][1] = 200.0; }},
       {"'pile_toe_x_m': lies outside 0-100 m",
        [](nlohmann::json& j) { j["pile_toe_x_m"] = -50.0; }},
   };

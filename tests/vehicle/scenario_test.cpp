@@ -56,6 +56,16 @@ TEST(ScenarioTest, MalformedScenarioNamesFileAndField) {
               std::string::npos)
         << e.what();
   }
+  // an operator's target speed beyond any loader's (1e30 m/s ran as a valid scenario, clamped)
+  std::ofstream(path) << R"({"name": "x", "machine": "wa320", "duration": 5, "timestep": 0.005,
+                           "drive": [[0, 0]], "lift": [[0, 0], [1, 1e30]], "tilt": [[0, 0]]})";
+  try {
+    load_scenario(path);
+    FAIL() << "1e30 m/s: no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("field 'lift[1]' asks 1e+30 m/s"), std::string::npos)
+        << e.what();
+  }
   EXPECT_THROW(load_scenario("no-such-scenario"), InputError);
 }
 
