@@ -411,12 +411,13 @@ void check_device_memory(double particles, std::size_t global_bytes,
   const auto text = [&](double bytes) { return message_number(std::round(bytes / mib)) + " MiB"; };
   const std::string pile = where + ": the pile needs about " +
                            message_number(std::round(particles)) + " particles at " + level;
-  const std::string fix = "; use a coarser level, a smaller pile or a device with more memory "
-                          "(TALUS_DEVICE)";
+  const std::string fix =
+      "; use a coarser level, a smaller pile or a device with more memory (TALUS_DEVICE)";
   if (!(all <= static_cast<double>(global_bytes)))
     throw InputError(pile + ", about " + text(all) + " of device memory (" +
-                     message_number(kDemDeviceBytesPerParticle) + " bytes a particle), more than "
-                     "the device's " + text(static_cast<double>(global_bytes)) + fix);
+                     message_number(kDemDeviceBytesPerParticle) +
+                     " bytes a particle), more than the device's " +
+                     text(static_cast<double>(global_bytes)) + fix);
   if (!(largest <= static_cast<double>(max_allocation_bytes)))
     throw InputError(pile + ", whose contact rows need one buffer of about " + text(largest) +
                      ", more than the device allocates at once (" +

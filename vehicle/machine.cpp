@@ -44,8 +44,8 @@ constexpr Range kTyreWidth{0.05, 2.0, "m"};
 constexpr Range kTyreModulus{1e5, 1e8, "Pa"};  // paper: 1 MPa
 constexpr Range kFriction{0.0, 3.0, ""};       // paper: tyres 2.0, bucket-terrain 0.2
 constexpr Range kGroundStiffness{1e5, 1e10, "N/m"};
-constexpr Range kPower{1e3, 2e6, "W"};              // paper: 127 kW
-constexpr Range kMotorSpeed{50.0, 1500.0, "rad/s"};  // diesels 1800-2200 rpm, e-motors to 14000
+constexpr Range kPower{1e3, 2e6, "W"};                  // paper: 127 kW
+constexpr Range kMotorSpeed{50.0, 1500.0, "rad/s"};     // diesels 1800-2200 rpm, e-motors to 14000
 constexpr Range kTopSpeed{0.5, kMaxDriveSpeed, "m/s"};  // wa320: 3.61 (digging gear)
 constexpr Range kTraction{1e3, 2e6, "N"};
 constexpr Range kRatedVolume{0.1, 50.0, "m^3"};
