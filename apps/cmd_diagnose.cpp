@@ -37,6 +37,7 @@ struct DiagnoseArgs {
   int max_effects = 2;
   int validation = -1;
   unsigned pile_seed = 1;
+  int pile_ensemble = 1;
   int threads = 0;
   bool quiet = false;
   bool discover = false;
@@ -49,6 +50,7 @@ void diagnose_command(const DiagnoseArgs& a) {
   DiagnoseOptions options;
   options.replay.fidelity = a.fidelity;
   options.replay.pile_seed = a.pile_seed;
+  options.replay.pile_ensemble = a.pile_ensemble;
   options.replay.progress = !a.quiet;
   options.max_effects = a.max_effects;
   options.validation_runs = a.validation;
@@ -124,6 +126,12 @@ void add_diagnose_command(CLI::App& app) {
   cmd->add_option("--effect-plugin", a->plugins, "a shared library whose effects join the candidates (repeatable)")
       ->expected(1)->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   cmd->add_option("--pile-seed", a->pile_seed, "random seed of the simulated pile's particles")->capture_default_str();
+  cmd->add_option("--pile-ensemble", a->pile_ensemble,
+                  "dig N piles per simulation (seeds pile-seed, pile-seed + 1, ...) and compare their "
+                  "mean: a smoother objective where the grains' arrangement scatters the dig "
+                  "(docs/sim2real.md); N times the cost")
+      ->capture_default_str()
+      ->check(CLI::Range(1, sim2real::kMaxPileEnsemble));
   cmd->add_flag(
       "--discover", a->discover,
       "fit a learned correction (a sparse model of the residual, docs/discovery.md) even when the "

@@ -327,6 +327,7 @@ class Search {
       const Comparison c = compare_runs(r, runs_[i].run, CompareOptions{});
       d_.error_before.push_back({runs_[i].run.label(), c.e, c.mean});
       d_.scan_rms_m.push_back(replays_[i]->scan_rms_m());
+      d_.piles.push_back(replays_[i]->scenario().pile ? options_.replay.pile_ensemble : 1);
     }
     d_.excess_before = mean_excess(d_.residuals_before, all_);
     say("baseline: excess " + message_number(d_.excess_before) +
@@ -1056,6 +1057,7 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
     const bool val = std::find(d.validation.begin(), d.validation.end(), i) != d.validation.end();
     json r = {{"dir", d.runs[i]}, {"role", cal && val ? "calibration and validation" : cal ? "calibration" : "validation"}};
     if (d.scan_rms_m[i]) r["scan_rms_m"] = *d.scan_rms_m[i];
+    if (i < d.piles.size()) r["piles"] = d.piles[i];
     runs.push_back(r);
   }
   // the correction discovered, with the error over the held-out runs before and after the model

@@ -155,6 +155,9 @@ struct Diagnosis {
   double excess_before = 0.0, excess_after = 0.0;  // mean per run, all runs
   bool unexplained = false;               // some run keeps an excess beyond noise
   std::vector<std::optional<double>> scan_rms_m;   // per run (pile scenarios)
+  // piles each pile run's simulations dug and averaged (ReplayOptions::pile_ensemble; 1 without
+  // a pile), per run
+  std::vector<int> piles;
   // discovery: whether it ran, every target's correction (simulated ones with their shares), and
   // the one added (also the last of `found`), if any
   bool discovery_ran = false;

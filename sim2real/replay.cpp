@@ -58,6 +58,40 @@ Run dig_run(const vehicle::Scenario& scenario, const std::string& fidelity, cons
   return run;
 }
 
+Run ensemble_mean(const std::vector<Run>& runs) {
+  if (runs.empty()) throw Error("ensemble_mean: no runs");
+  const Run& first = runs.front();
+  if (runs.size() == 1) return first;
+  // every member on the first's time base, labels and marks
+  for (std::size_t m = 1; m < runs.size(); ++m) {
+    const Run& r = runs[m];
+    const std::string which = "ensemble_mean: run " + std::to_string(m) + " (" + r.label() + ")";
+    if (r.series.size() != first.series.size() || r.series[Channel::t] != first.series[Channel::t])
+      throw Error(which + " has other sample times than run 0; an ensemble shares its scenario and level");
+    if (r.summary.scenario != first.summary.scenario || r.summary.fidelity != first.summary.fidelity ||
+        r.summary.dig_start_s != first.summary.dig_start_s || r.summary.dig_end_s != first.summary.dig_end_s)
+      throw Error(which + " has another scenario, level or phase marks than run 0");
+  }
+  // sums in member order, then one division: the same runs give the same mean, bit for bit
+  Run mean = first;
+  const double n = static_cast<double>(runs.size());
+  for (std::size_t c = 0; c < kChannelCount; ++c) {
+    if (static_cast<Channel>(c) == Channel::t) continue;
+    auto& column = mean.series.columns[c];
+    for (std::size_t m = 1; m < runs.size(); ++m)
+      for (std::size_t i = 0; i < column.size(); ++i) column[i] += runs[m].series.columns[c][i];
+    for (double& v : column) v /= n;
+  }
+  for (std::size_t m = 1; m < runs.size(); ++m) {
+    mean.summary.loaded_mass_kg += runs[m].summary.loaded_mass_kg;
+    mean.summary.work_J += runs[m].summary.work_J;
+  }
+  mean.summary.loaded_mass_kg /= n;
+  mean.summary.work_J /= n;
+  mean.summary.details["pile_ensemble"] = runs.size();
+  return mean;
+}
+
 vehicle::Scenario measured_scenario(const MeasuredRun& measured) {
   vehicle::Scenario sc;
   try {
@@ -108,6 +142,9 @@ std::optional<double> scan_difference(const Series2& a, const std::vector<Eigen:
 
 Replay::Replay(const MeasuredRun& measured, const ReplayOptions& options, Device* device)
     : measured_(measured), scenario_(measured_scenario(measured)), options_(options), device_(device) {
+  if (options_.pile_ensemble < 1 || options_.pile_ensemble > kMaxPileEnsemble)
+    throw InputError("replay: a pile ensemble of " + std::to_string(options_.pile_ensemble) +
+                     " piles; give 1 to " + std::to_string(kMaxPileEnsemble));
   if (scenario_.pile) {
     level_preset(options_.fidelity);  // an unknown level fails now, listing the known ones
     if (!device_) throw Error("replay of " + measured.run.dir.string() + ": a pile scenario needs an OpenCL device");
@@ -122,25 +159,34 @@ Run Replay::simulate(vehicle::EffectSet& effects) {
   if (!scenario_.pile) {
     run = vehicle_run(scenario_, simulate_on_flat_ground(scenario_, effects));
   } else {
-    // the pile at the level, once; every simulation digs a copy of it
+    // the ensemble's piles at the level, once; every simulation digs a copy of each
     const FidelityPreset& preset = level_preset(options_.fidelity);
-    DiggingOptions digging;
-    digging.pile.seed = options_.pile_seed;
-    if (!pile_) {
-      const PileProfile placed = scenario_pile_profile(scenario_);
-      Progress progress("pile " + preset.name, 1.5 * digging.pile.max_time, options_.progress);
-      pile_ = std::make_unique<PileBuild>(build_scenario_pile(*device_, scenario_, placed, preset, digging, &progress));
-      progress.finish(std::to_string(pile_->particles.size()) + " particles");
-      scan_rms_ = scan_difference(measured_.meta.pile_scan,
-                                  scan_scenario_pile(*pile_, placed, preset).points);
+    const int piles = options_.pile_ensemble;
+    std::vector<Run> members;
+    for (int k = 0; k < piles; ++k) {
+      DiggingOptions digging;
+      digging.pile.seed = options_.pile_seed + static_cast<unsigned>(k);
+      if (piles_.size() <= static_cast<std::size_t>(k)) {
+        const PileProfile placed = scenario_pile_profile(scenario_);
+        const std::string label = "pile " + preset.name + (piles > 1 ? " seed " + std::to_string(digging.pile.seed) : "");
+        Progress progress(label, 1.5 * digging.pile.max_time, options_.progress);
+        piles_.push_back(std::make_unique<PileBuild>(build_scenario_pile(*device_, scenario_, placed, preset, digging, &progress)));
+        progress.finish(std::to_string(piles_.back()->particles.size()) + " particles");
+        // the scan difference of the ensemble: its piles' mean
+        const auto rms = scan_difference(measured_.meta.pile_scan,
+                                         scan_scenario_pile(*piles_.back(), placed, preset).points);
+        if (rms) scan_rms_ = (scan_rms_.value_or(0.0) * k + *rms) / (k + 1);
+      }
+      DiggingSimulation sim(*device_, scenario_, preset, *piles_[k], digging, &effects);
+      sim.run([&](int) {
+        if (interrupt_requested())
+          throw_if_interrupted("the replay of " + scenario_.name +
+                               " at t = " + std::to_string(sim.time()) + " s");
+      });
+      members.push_back(dig_run(scenario_, preset.name, sim));
     }
-    DiggingSimulation sim(*device_, scenario_, preset, *pile_, digging, &effects);
-    sim.run([&](int) {
-      if (interrupt_requested())
-        throw_if_interrupted("the replay of " + scenario_.name +
-                             " at t = " + std::to_string(sim.time()) + " s");
-    });
-    run = dig_run(scenario_, preset.name, sim);
+    run = ensemble_mean(members);
+    members_ = std::move(members);
   }
   run.dir = measured_.run.dir;
   const std::lock_guard<std::mutex> lock(count_mutex_);

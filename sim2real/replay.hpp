@@ -43,10 +43,22 @@ Run dig_run(const vehicle::Scenario& scenario, const std::string& fidelity, cons
 // the run's operator inputs and pile toe; InputError naming the metadata's field 'scenario'
 vehicle::Scenario measured_scenario(const MeasuredRun& measured);
 
+// the ensemble's mean run: every channel averaged sample by sample, loaded mass and work
+// averaged; the runs must share their time base (the same scenario at the same level) and their
+// labels and phase marks, which the mean keeps. Error naming the first run that differs
+Run ensemble_mean(const std::vector<Run>& runs);
+
+// piles in one simulation's ensemble at most: a bound far above what smooths a D400 dig (3 to 5)
+// that still catches a typo before hours of digging start
+inline constexpr int kMaxPileEnsemble = 16;
+
 struct ReplayOptions {
   std::string fidelity = "D400";  // particle level for pile scenarios
-  unsigned pile_seed = 1;         // the pile's particle sizes and jitter
-  bool progress = false;          // progress of the pile build on stderr
+  unsigned pile_seed = 1;         // the pile's particle sizes and jitter (the first pile's)
+  // piles per simulation of a pile scenario, seeds pile_seed, pile_seed + 1, ...: the simulation
+  // is their ensemble_mean (1: one pile, the run as it is). Ignored without a pile
+  int pile_ensemble = 1;
+  bool progress = false;  // progress of the pile build on stderr
 };
 
 class Replay {
@@ -66,8 +78,12 @@ class Replay {
   const vehicle::Scenario& scenario() const { return scenario_; }
   const MeasuredRun& measured() const { return measured_; }
   // the root-mean-square height difference [m] between the measured scan and the simulated pile's
-  // scan over their common x range; nullopt before the first pile simulation or without a pile
+  // scan over their common x range (the mean over an ensemble's piles); nullopt before the first
+  // pile simulation or without a pile
   std::optional<double> scan_rms_m() const { return scan_rms_; }
+  // a pile scenario's last simulation, pile by pile in seed order: the ensemble's members, whose
+  // mean simulate() returned (empty without a pile: those simulations may run on several threads)
+  const std::vector<Run>& members() const { return members_; }
   int simulations() const;
   double wall_s() const;  // time spent in simulate(), pile build included (summed over threads)
 
@@ -76,8 +92,9 @@ class Replay {
   vehicle::Scenario scenario_;
   ReplayOptions options_;
   Device* device_ = nullptr;
-  std::unique_ptr<PileBuild> pile_;
+  std::vector<std::unique_ptr<PileBuild>> piles_;  // one per ensemble member, built at first use
   std::optional<double> scan_rms_;
+  std::vector<Run> members_;
   mutable std::mutex count_mutex_;  // guards the two counts below
   int simulations_ = 0;
   double wall_s_ = 0.0;
