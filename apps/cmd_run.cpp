@@ -167,6 +167,7 @@ DiggingOptions digging_options(const RunOptions& o) {
     options.coupling.material.rolling = o.rolling;
   }
   options.coupling.record_residual = o.residuals;
+  options.sweep_tolerance = o.sweep_tolerance;
   if (o.form_speed >= 0.0) options.pile.form_speed = o.form_speed;
   options.sweep = parse_sweep(o.sweep, "--sweep");
   options.pile_cache.enabled = o.pile_cache;
@@ -256,6 +257,8 @@ nlohmann::json dig_details(const RunOptions& o, const vehicle::Scenario& sc,
       {"coupling",
        {{"steps_with_bucket_contacts", sim.contact_steps()},
         {"mean_passes", sim.mean_passes()},
+        {"mean_sweeps", sim.mean_sweeps()},
+        {"sweep_tolerance_m_s", options.sweep_tolerance},
         {"max_passes", sim.max_passes()},
         {"max_residual_m_s", sim.max_residual()},
         {"steps_at_pass_limit", sim.steps_at_pass_limit()},
@@ -471,6 +474,11 @@ void add_run_command(CLI::App& app, const std::string& command_line) {
       ->check(number_in(kMinTimestep, kMaxTimestep, "s"));
   cmd->add_option("--iterations", opts->iterations, "study: sweeps per step instead of the level's")
       ->check(CLI::Range(1, 100000));
+  cmd->add_option("--sweep-tolerance", opts->sweep_tolerance,
+                  "study: end a step's sweeps once the particle rows' RMS residual is below this, "
+                  "the level's sweeps the cap; 0 = always the level's (docs/dem.md) [m/s]")
+      // a residual above 1 m/s is no convergence at all (the bucket moves at about 1 m/s)
+      ->check(number_in(0.0, 1.0, "m/s", true));
   cmd->add_option("--form-speed", opts->form_speed,
                   "study: speed the pile's formwork withdraws at before it "
                   "settles, 0 = removed at once [m/s]")

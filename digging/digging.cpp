@@ -116,6 +116,7 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
   DemSettings settings;
   settings.dt = h;
   settings.iterations = preset.iterations;
+  settings.tolerance = options.sweep_tolerance;
   settings.sweep = options.sweep;
   settings.max_speed = options.max_particle_speed;
   // the soil: the options' gravel, and what the effects make of it (soil_cohesion)
@@ -165,6 +166,7 @@ void DiggingSimulation::step(double drive, double lift, double tilt) {
   time_ = t_end;
   // coupling bookkeeping
   const CouplingStats& s = split_->stats();
+  sweep_sum_ += s.sweeps;
   if (s.bucket_contacts > 0) {
     ++contact_steps_;
     pass_sum_ += s.passes;
@@ -297,6 +299,7 @@ void DiggingSimulation::save_state(ByteWriter& w) const {
   w.i64(max_passes_);
   w.i64(capped_steps_);
   w.i64(pass_sum_);
+  w.i64(sweep_sum_);
   w.f64(max_residual_);
   w.f64(max_overlap_rel_);
   w.u64(residuals_.size());
@@ -341,6 +344,7 @@ void DiggingSimulation::restore_state(ByteReader& r) {
   max_passes_ = static_cast<int>(r.i64("coupling counters"));
   capped_steps_ = static_cast<int>(r.i64("coupling counters"));
   pass_sum_ = static_cast<long>(r.i64("coupling counters"));
+  sweep_sum_ = static_cast<long>(r.i64("coupling counters"));
   max_residual_ = r.f64("coupling counters");
   max_overlap_rel_ = r.f64("coupling counters");
   const std::uint64_t residuals = r.u64("coupling residuals");

@@ -34,6 +34,10 @@ struct DiggingOptions {
   PileBuildOptions pile;         // settling of the pile before the machine starts
   CouplingSettings coupling;     // bucket contacts and outer passes
   SweepKind sweep = SweepKind::Pgs;
+  // a type-D dig's sweeps end early once the particle rows' RMS residual is below this [m/s]
+  // (DemSettings::tolerance; the level's N_it is the cap). 0: always N_it, the paper's presets.
+  // A study knob of issue 13 (docs/dem.md, "Sweeps stopped by a tolerance")
+  double sweep_tolerance = 0.0;
   // the fastest particle to expect [m/s] (speculative contacts, DemSettings::max_speed): gravel
   // thrown by the bucket moves at about the bucket's speed, 1-2 m/s in these scenarios
   double max_particle_speed = 2.0;
@@ -150,6 +154,9 @@ class DiggingSimulation {
   double max_bucket_overlap_rel() const { return max_overlap_rel_; }
   // steps whose outer passes stopped at the limit with the residual still above the tolerance
   int steps_at_pass_limit() const { return capped_steps_; }
+  // particle sweeps per type-D step, mean over the steps run (all passes; the level's N_it or
+  // more without a tolerance, fewer when DiggingOptions::sweep_tolerance stopped them)
+  double mean_sweeps() const { return steps_done_ > 0 ? double(sweep_sum_) / steps_done_ : 0.0; }
   // the particle rows' RMS residual at the end of each step with particle contacts [m/s], when
   // options.coupling.record_residual is set (empty otherwise)
   const std::vector<double>& step_residuals() const { return residuals_; }
@@ -173,7 +180,7 @@ class DiggingSimulation {
   double time_ = 0.0;
   int steps_done_ = 0, steps_total_ = 0;
   int contact_steps_ = 0, max_passes_ = 0, capped_steps_ = 0;
-  long pass_sum_ = 0;
+  long pass_sum_ = 0, sweep_sum_ = 0;
   double max_residual_ = 0.0, max_overlap_rel_ = 0.0;
   std::vector<double> residuals_;
 };

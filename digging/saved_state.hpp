@@ -20,7 +20,7 @@ namespace talus {
 
 // the file's format: raise it whenever what any save_state writes changes (a file of another
 // version is refused, never half-read)
-inline constexpr std::uint32_t kStateFormatVersion = 2;  // 2: walls, type G (2026-11-25)
+inline constexpr std::uint32_t kStateFormatVersion = 3;  // 2: walls, type G (2026-11-25); 3: sweep count (2026-11-27)
 
 struct SavedStateHeader {
   std::string key;     // "name=value" lines: what the simulation was made from

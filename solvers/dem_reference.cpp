@@ -621,8 +621,6 @@ void integrate(Particles& bodies, const StepParams& p) {
 // ---- one time step ----
 
 namespace {
-// the residual check interval when a tolerance is set (DemWorld::sweep)
-constexpr int kToleranceCheckEvery = 10;
 
 void sweeps(ReferenceWorld& world, int count) {
   for (int it = 0; it < count; ++it) {
@@ -664,7 +662,7 @@ void step(ReferenceWorld& world) {
       world.iterations = s.iterations;
     } else {
       while (world.iterations < s.iterations) {
-        int chunk = std::min(kToleranceCheckEvery, s.iterations - world.iterations);
+        int chunk = std::min(kToleranceCheckInterval, s.iterations - world.iterations);
         sweeps(world, chunk);
         world.iterations += chunk;
         if (residual(world.rows, world.particles) < s.tolerance) break;

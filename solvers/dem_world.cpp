@@ -19,8 +19,6 @@ constexpr double kMaxGridCells = 64.0e6;
 // host round trip (a wait for the queue), which cost D400 steps as much as their sweeps; rounds
 // after the last contact is coloured change nothing, so at most this many minus one are spare
 constexpr int kColourRoundsPerCheck = 4;
-// the residual check interval when a tolerance is set (sweeps)
-constexpr int kToleranceCheckEvery = 10;
 }  // namespace
 
 TlGeom to_device(const StaticGeom& g) {
@@ -431,7 +429,7 @@ int DemWorld::sweep(int iterations) {
   // with a tolerance: sweep in chunks and stop once the residual is small enough
   int done = 0;
   while (done < iterations) {
-    int chunk = std::min(kToleranceCheckEvery, iterations - done);
+    int chunk = std::min(kToleranceCheckInterval, iterations - done);
     sweep_->iterate(buffers_, chunk);
     done += chunk;
     if (residual() < settings_.tolerance) break;

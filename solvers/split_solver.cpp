@@ -173,15 +173,25 @@ Vec6 SplitSolver::solve_coupled(std::vector<ContactRow>& rows, const Vec6& warm_
   const int pass_sweeps = std::max(1, static_cast<int>(std::lround(settings_.pass_sweep_fraction * iterations)));
   Vec6 impulse = warm_impulse;
   for (int pass = 0; pass < settings_.max_passes; ++pass) {
-    // the pass's sweeps, particle rows and bucket rows in turn
+    // the pass's sweeps, particle rows and bucket rows in turn; with a tolerance
+    // (DemSettings::tolerance) the particle rows' residual, looked at every
+    // kToleranceCheckInterval sweeps, ends them early
     const int sweeps = pass == 0 ? iterations : pass_sweeps;
+    const double tolerance = dem_.settings().tolerance;
     for (int it = 0; it < sweeps; ++it) {
       {
         StageScope stage(dev_, "particle_sweeps");
         dem_.sweep_fixed(1);
       }
-      StageScope stage(dev_, "bucket_rows");
-      block_.sweep(dem_.buffers().velocity, dem_.buffers().omega);
+      {
+        StageScope stage(dev_, "bucket_rows");
+        block_.sweep(dem_.buffers().velocity, dem_.buffers().omega);
+      }
+      ++stats_.sweeps;
+      if (tolerance > 0.0 && (it + 1) % kToleranceCheckInterval == 0 && it + 1 < sweeps) {
+        StageScope stage(dev_, "tolerance_check");
+        if (dem_.residual() < tolerance) break;
+      }
     }
     ++stats_.passes;
     if (rows.empty()) break;  // nothing touches the bucket (and the vehicle solved without load)

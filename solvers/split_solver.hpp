@@ -48,6 +48,8 @@ struct CouplingStats {
   int candidates = 0;          // particles in the bucket's box
   int bucket_contacts = 0;     // rows between particles and the bucket
   int passes = 0;              // outer passes run
+  int sweeps = 0;              // particle sweeps over all passes (fewer than N_it per pass when
+                               // DemSettings::tolerance stopped them)
   double residual = 0.0;       // final bucket point-velocity disagreement [m/s]
   double max_overlap_rel = 0.0;  // deepest particle-bucket overlap at the step's start / radius
   Vec6 wrench = Vec6::Zero();  // mean wrench of the particles on the bucket over the step [N, N m]
