@@ -132,6 +132,8 @@ nlohmann::ordered_json dig_cost_json(const DigCost& c, const std::string& device
           {"contacts", c.contacts},
           {"bucket_contacts", c.bucket_contacts},
           {"passes", c.passes},
+          {"sweeps", c.sweeps},
+          {"sweep_tolerance_m_s", c.sweep_tolerance},
           {"loaded_mass_kg", c.loaded_mass_kg}};
 }
 
@@ -145,6 +147,7 @@ void add_bench_dig(CLI::App& bench) {
     unsigned seed = 1;
     bool quiet = false;
     bool pile_cache = true;  // the pile through the pile cache (--no-pile-cache)
+    double sweep_tolerance = 0.0;  // [m/s] DiggingOptions::sweep_tolerance
   };
   auto opt = std::make_shared<Options>();
   auto* dig = bench.add_subcommand("dig",
@@ -161,6 +164,11 @@ void add_bench_dig(CLI::App& bench) {
       ->capture_default_str();
   dig->add_option("--seed", opt->seed, "seed of the pile's particles")->capture_default_str();
   dig->add_option("--json", opt->json, "also write the result as JSON to this file");
+  dig->add_option("--sweep-tolerance", opt->sweep_tolerance,
+                  "end a step's sweeps once the particle rows' RMS residual is below this, the "
+                  "level's sweeps the cap; 0 = always the level's (docs/dem.md) [m/s]")
+      ->check(number_in(0.0, 1.0, "m/s", true))
+      ->capture_default_str();
   dig->add_flag("--quiet", opt->quiet, "no progress on stderr");
   dig->add_flag(
       "!--no-pile-cache", opt->pile_cache,
@@ -177,6 +185,7 @@ void add_bench_dig(CLI::App& bench) {
     Device dev;
     DiggingOptions options;
     options.pile.seed = opt->seed;
+    options.sweep_tolerance = opt->sweep_tolerance;
     options.pile_cache.enabled = opt->pile_cache;
     options.pile_cache.note = [](const std::string& line) {
       std::cerr << "talus bench dig: " << line << "\n";

@@ -61,6 +61,7 @@ DigCost measure_dig_cost(Device& dev, const vehicle::Scenario& scenario,
   cost.particles = sim.dem().size();
   cost.dt = preset.dt;
   cost.iterations = preset.iterations;
+  cost.sweep_tolerance = options.sweep_tolerance;
   StageTimes times;
   double plain_wall = 0.0, profiled_wall = 0.0;
   int plain = 0, profiled = 0;
@@ -81,6 +82,7 @@ DigCost measure_dig_cost(Device& dev, const vehicle::Scenario& scenario,
     cost.contacts += sim.dem().stats().contacts;
     cost.bucket_contacts += sim.split().stats().bucket_contacts;
     cost.passes += sim.split().stats().passes;
+    cost.sweeps += sim.split().stats().sweeps;
     if (progress) progress->update(sim.time(), "measuring");
   }
 
@@ -95,6 +97,7 @@ DigCost measure_dig_cost(Device& dev, const vehicle::Scenario& scenario,
   cost.contacts /= measured_steps;
   cost.bucket_contacts /= measured_steps;
   cost.passes /= measured_steps;
+  cost.sweeps /= measured_steps;
   cost.loaded_mass_kg = sim.loaded_mass();
   return cost;
 }

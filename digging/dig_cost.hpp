@@ -17,7 +17,8 @@ struct DigCost {
   std::string scenario, level;
   size_t particles = 0;
   double dt = 0.0;                    // [s]
-  int iterations = 0;                 // sweeps per step
+  int iterations = 0;                 // sweeps per step (the cap, with a sweep tolerance)
+  double sweep_tolerance = 0.0;       // [m/s] DiggingOptions::sweep_tolerance (0: none)
   double seconds = 0.0;               // simulated time measured [s]
   int steps = 0;                      // steps measured (both halves)
   double ms_per_step = 0.0;           // mean wall time of an unprofiled step [ms]
@@ -30,6 +31,7 @@ struct DigCost {
   double contacts = 0.0;         // particle-particle and particle-geometry contacts
   double bucket_contacts = 0.0;  // particle-bucket rows
   double passes = 0.0;           // outer coupling passes
+  double sweeps = 0.0;           // particle sweeps, all passes (fewer with a sweep tolerance)
   double loaded_mass_kg = 0.0;   // in the bucket at the end (to tell an empty dig from a full one)
 };
 
