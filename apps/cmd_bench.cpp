@@ -147,7 +147,7 @@ void add_bench_dig(CLI::App& bench) {
     unsigned seed = 1;
     bool quiet = false;
     bool pile_cache = true;  // the pile through the pile cache (--no-pile-cache)
-    double sweep_tolerance = 0.0;  // [m/s] DiggingOptions::sweep_tolerance
+    double sweep_tolerance = kDigSweepTolerance;  // [m/s] DiggingOptions::sweep_tolerance
   };
   auto opt = std::make_shared<Options>();
   auto* dig = bench.add_subcommand("dig",
@@ -166,7 +166,8 @@ void add_bench_dig(CLI::App& bench) {
   dig->add_option("--json", opt->json, "also write the result as JSON to this file");
   dig->add_option("--sweep-tolerance", opt->sweep_tolerance,
                   "end a step's sweeps once the particle rows' RMS residual is below this, the "
-                  "level's sweeps the cap; 0 = always the level's (docs/dem.md) [m/s]")
+                  "level's sweeps the cap; 0 = always the level's, as the paper's presets "
+                  "(docs/dem.md) [m/s]")
       ->check(number_in(0.0, 1.0, "m/s", true))
       ->capture_default_str();
   dig->add_flag("--quiet", opt->quiet, "no progress on stderr");

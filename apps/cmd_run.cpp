@@ -475,8 +475,10 @@ void add_run_command(CLI::App& app, const std::string& command_line) {
   cmd->add_option("--iterations", opts->iterations, "study: sweeps per step instead of the level's")
       ->check(CLI::Range(1, 100000));
   cmd->add_option("--sweep-tolerance", opts->sweep_tolerance,
-                  "study: end a step's sweeps once the particle rows' RMS residual is below this, "
-                  "the level's sweeps the cap; 0 = always the level's (docs/dem.md) [m/s]")
+                  "end a step's sweeps once the particle rows' RMS residual is below this, the "
+                  "level's sweeps the cap; 0 = always the level's, as the paper's presets "
+                  "(docs/dem.md) [m/s]")
+      ->capture_default_str()
       // a residual above 1 m/s is no convergence at all (the bucket moves at about 1 m/s)
       ->check(number_in(0.0, 1.0, "m/s", true));
   cmd->add_option("--form-speed", opts->form_speed,

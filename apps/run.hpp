@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "digging/digging.hpp"
 #include "vehicle/scenario.hpp"
 
 namespace talus::app {
@@ -25,8 +26,8 @@ struct RunOptions {
   double rolling = -1.0;
   double dt = 0.0;
   int iterations = 0;
-  // issue 13: end a step's sweeps once the particle rows' RMS residual is below this [m/s]; 0: N_it
-  double sweep_tolerance = 0.0;
+  // end a step's sweeps once the particle rows' RMS residual is below this [m/s]; 0: N_it always
+  double sweep_tolerance = kDigSweepTolerance;
   bool residuals = false;
   // settled piles read from and saved to the pile cache (terrain/pile_cache.hpp; --no-pile-cache)
   bool pile_cache = true;

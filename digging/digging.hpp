@@ -30,14 +30,20 @@
 
 namespace talus {
 
+// the residual a type-D dig's sweeps stop at [m/s]: 0.1 % of the velocity gravity adds in a D200
+// step (g h = 0.098 m/s), ten times what D200's 500 sweeps reach (1.1e-5, median). Measured
+// (docs/dem.md, "Sweeps stopped by a tolerance", issue 13): at D200 FB35's fill and work move by
+// +0.9 % and +1.3 %, HD27's five-pile means by -0.5 % and -0.6 %, with 64-79 sweeps a step
+// instead of 500 (3.8-4.6 times the speed); D400's 15 sweeps rarely reach it
+inline constexpr double kDigSweepTolerance = 1.0e-4;
+
 struct DiggingOptions {
   PileBuildOptions pile;         // settling of the pile before the machine starts
   CouplingSettings coupling;     // bucket contacts and outer passes
   SweepKind sweep = SweepKind::Pgs;
   // a type-D dig's sweeps end early once the particle rows' RMS residual is below this [m/s]
-  // (DemSettings::tolerance; the level's N_it is the cap). 0: always N_it, the paper's presets.
-  // A study knob of issue 13 (docs/dem.md, "Sweeps stopped by a tolerance")
-  double sweep_tolerance = 0.0;
+  // (DemSettings::tolerance; the level's N_it is the cap). 0: always N_it, as the paper's presets
+  double sweep_tolerance = kDigSweepTolerance;
   // the fastest particle to expect [m/s] (speculative contacts, DemSettings::max_speed): gravel
   // thrown by the bucket moves at about the bucket's speed, 1-2 m/s in these scenarios
   double max_particle_speed = 2.0;
