@@ -38,6 +38,9 @@ void add_pile_command(CLI::App& app, const std::string& command_line) {
       // slower than 10 mm/s it takes hours to clear the face (build_pile refuses it too)
       ->check(number_in(0.01, 10.0, "m/s", true))
       ->capture_default_str();
+  cmd->add_flag("--hold-face", opt->build.hold_face,
+                "study: the formwork holds the face while the pile settles and is left out of the "
+                "pile's container (the face stands at its profile when a dig starts)");
   cmd->add_option("--settle-iterations", opt->build.settle_iterations,
                   "study: sweeps per step while filling and settling, above the level's N_it too "
                   "(default: the level's N_it, at most 100)")

@@ -169,6 +169,7 @@ DiggingOptions digging_options(const RunOptions& o) {
   options.coupling.record_residual = o.residuals;
   options.sweep_tolerance = o.sweep_tolerance;
   if (o.form_speed >= 0.0) options.pile.form_speed = o.form_speed;
+  options.pile.hold_face = o.hold_face;
   options.sweep = parse_sweep(o.sweep, "--sweep");
   options.pile_cache.enabled = o.pile_cache;
   options.pile_cache.note = [quiet = o.quiet](const std::string& line) {
@@ -238,6 +239,7 @@ nlohmann::json dig_details(const RunOptions& o, const vehicle::Scenario& sc,
       {"rolling_resistance", options.soil.rolling},
       {"seed", o.seed},
       {"form_speed_m_s", options.pile.form_speed},
+      {"pile_face_held", options.pile.hold_face},
       {"work_total_J", sim.log().work()},
       {"sim_time_s", sim_time},
       {"wall_time_s", dig_wall},
@@ -486,6 +488,9 @@ void add_run_command(CLI::App& app, const std::string& command_line) {
                   "settles, 0 = removed at once [m/s]")
       // slower than 10 mm/s it takes hours to clear the face (build_pile refuses it too)
       ->check(number_in(0.01, 10.0, "m/s", true));
+  cmd->add_flag("--hold-face", opts->hold_face,
+                "study: the formwork holds the pile's face while it settles and goes when the dig "
+                "starts, so the face stands at its profile at t = 0 (docs/validation.md)");
   cmd->add_flag("--residuals", opts->residuals, "record the particle rows' residual at the end of every step "
                 "(summary: step_residual_m_s median and p95)");
   cmd->add_option("--effect", opts->effects,

@@ -32,6 +32,7 @@ struct RunOptions {
   // settled piles read from and saved to the pile cache (terrain/pile_cache.hpp; --no-pile-cache)
   bool pile_cache = true;
   double form_speed = -1.0;  // the pile's formwork withdrawal speed [m/s]; negative: PileBuildOptions' default
+  bool hold_face = false;    // PileBuildOptions::hold_face (issue 11 study)
   std::vector<std::string> effects;         // NAME:key=value,...
   std::vector<std::string> effect_plugins;  // shared libraries
   // when set, this scenario instead of loading `scenario` (talus synth's varied operator inputs)

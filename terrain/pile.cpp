@@ -466,12 +466,13 @@ PileBuild build_pile(Device& dev, const PileProfile& profile, const FidelityPres
   out.fill_rms_speed = filled.rms_speed;
   out.settle_iterations = settings.iterations;
   // the gravel's friction on; the formwork withdraws (along -x, away from the faces), then goes,
-  // and the pile settles into its own shape
+  // and the pile settles into its own shape; or it stays and the pile settles against it
+  // (hold_face: the face goes when the pile is used, out.geoms never held it)
   world.set_material(material);
   if (options.form_speed > 0.0 && options.form_speed < 0.01)
     throw InputError("--form-speed " + std::to_string(options.form_speed) +
                      " m/s: give 0 (formwork removed at once) or at least 0.01 m/s");
-  if (options.form_speed > 0.0) {
+  if (options.form_speed > 0.0 && !options.hold_face) {
     const int steps = static_cast<int>(std::lround(options.form_travel / (options.form_speed * settings.dt)));
     for (int k = 1; k <= steps; ++k) {
       std::vector<StaticGeom> moved = out.geoms;
@@ -484,7 +485,7 @@ PileBuild build_pile(Device& dev, const PileProfile& profile, const FidelityPres
       if (progress) progress->update(world.time(), "formwork withdrawing");
     }
   }
-  world.set_geoms(out.geoms);
+  if (!options.hold_face) world.set_geoms(out.geoms);
   so.min_time = options.min_time;
   so.max_time = options.max_time;
   SettleResult r = settle(world, so, progress);

@@ -79,6 +79,7 @@ std::string pile_key_bytes(const PileProfile& profile, const FidelityPreset& pre
   for (double v : {options.min_time, options.max_time, options.form_speed, options.form_travel})
     w.f64(v);
   w.u8(options.place_toe ? 1 : 0);
+  w.u8(options.hold_face ? 1 : 0);
   w.str("device");
   w.str(device);
   w.str("commit");

@@ -233,6 +233,9 @@ TEST(PileCache, KeyFollowsEveryInput) {
   PileBuildOptions unplaced = options;
   unplaced.place_toe = false;
   EXPECT_NE(base, key(profile, d400, soil, unplaced));
+  PileBuildOptions held = options;
+  held.hold_face = true;
+  EXPECT_NE(base, key(profile, d400, soil, held));
   // the sweeps it settles with count as they are resolved: 15 at D400 by the rule or asked for
   PileBuildOptions swept = options;
   swept.settle_iterations = 15;
