@@ -33,7 +33,7 @@ namespace talus {
 // the residual a type-D dig's sweeps stop at [m/s]: 0.1 % of the velocity gravity adds in a D200
 // step (g h = 0.098 m/s), ten times what D200's 500 sweeps reach (1.1e-5, median). Measured
 // (docs/dem.md, "Sweeps stopped by a tolerance", issue 13): at D200 FB35's fill and work move by
-// +0.9 % and +1.3 %, HD27's five-pile means by -0.6 % and -0.6 %, with 64-79 sweeps a step
+// +0.9 % and +1.3 %, HD27's five-pile means by -0.6 % and -0.6 %, with 62-79 sweeps a step
 // instead of 500 (3.8-4.6 times the speed); D400's 15 sweeps rarely reach it
 inline constexpr double kDigSweepTolerance = 1.0e-4;
 
