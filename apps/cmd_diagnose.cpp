@@ -126,10 +126,11 @@ void add_diagnose_command(CLI::App& app) {
   cmd->add_option("--effect-plugin", a->plugins, "a shared library whose effects join the candidates (repeatable)")
       ->expected(1)->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   cmd->add_option("--pile-seed", a->pile_seed, "random seed of the simulated pile's particles")->capture_default_str();
-  cmd->add_option("--pile-ensemble", a->pile_ensemble,
-                  "dig N piles per simulation (seeds pile-seed, pile-seed + 1, ...) and compare their "
-                  "mean: a smoother objective where the grains' arrangement scatters the dig "
-                  "(docs/sim2real.md); N times the cost")
+  cmd->add_option(
+         "--pile-ensemble", a->pile_ensemble,
+         "dig N piles per simulation (seeds pile-seed, pile-seed + 1, ...) and compare their "
+         "mean: a smoother objective where the grains' arrangement scatters the dig "
+         "(docs/sim2real.md); N times the cost")
       ->capture_default_str()
       ->check(CLI::Range(1, sim2real::kMaxPileEnsemble));
   cmd->add_flag(

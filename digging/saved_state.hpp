@@ -20,7 +20,8 @@ namespace talus {
 
 // the file's format: raise it whenever what any save_state writes changes (a file of another
 // version is refused, never half-read)
-inline constexpr std::uint32_t kStateFormatVersion = 3;  // 2: walls, type G (2026-11-25); 3: sweep count (2026-11-27)
+// 2: walls, type G (2026-11-25); 3: the dig's sweep count (2026-11-27)
+inline constexpr std::uint32_t kStateFormatVersion = 3;
 
 struct SavedStateHeader {
   std::string key;     // "name=value" lines: what the simulation was made from

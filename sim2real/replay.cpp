@@ -67,9 +67,12 @@ Run ensemble_mean(const std::vector<Run>& runs) {
     const Run& r = runs[m];
     const std::string which = "ensemble_mean: run " + std::to_string(m) + " (" + r.label() + ")";
     if (r.series.size() != first.series.size() || r.series[Channel::t] != first.series[Channel::t])
-      throw Error(which + " has other sample times than run 0; an ensemble shares its scenario and level");
-    if (r.summary.scenario != first.summary.scenario || r.summary.fidelity != first.summary.fidelity ||
-        r.summary.dig_start_s != first.summary.dig_start_s || r.summary.dig_end_s != first.summary.dig_end_s)
+      throw Error(which +
+                  " has other sample times than run 0; an ensemble shares its scenario and level");
+    if (r.summary.scenario != first.summary.scenario ||
+        r.summary.fidelity != first.summary.fidelity ||
+        r.summary.dig_start_s != first.summary.dig_start_s ||
+        r.summary.dig_end_s != first.summary.dig_end_s)
       throw Error(which + " has another scenario, level or phase marks than run 0");
   }
   // sums in member order, then one division: the same runs give the same mean, bit for bit
@@ -168,9 +171,11 @@ Run Replay::simulate(vehicle::EffectSet& effects) {
       digging.pile.seed = options_.pile_seed + static_cast<unsigned>(k);
       if (piles_.size() <= static_cast<std::size_t>(k)) {
         const PileProfile placed = scenario_pile_profile(scenario_);
-        const std::string label = "pile " + preset.name + (piles > 1 ? " seed " + std::to_string(digging.pile.seed) : "");
+        const std::string label =
+            "pile " + preset.name + (piles > 1 ? " seed " + std::to_string(digging.pile.seed) : "");
         Progress progress(label, 1.5 * digging.pile.max_time, options_.progress);
-        piles_.push_back(std::make_unique<PileBuild>(build_scenario_pile(*device_, scenario_, placed, preset, digging, &progress)));
+        piles_.push_back(std::make_unique<PileBuild>(
+            build_scenario_pile(*device_, scenario_, placed, preset, digging, &progress)));
         progress.finish(std::to_string(piles_.back()->particles.size()) + " particles");
         // the scan difference of the ensemble: its piles' mean
         const auto rms = scan_difference(measured_.meta.pile_scan,

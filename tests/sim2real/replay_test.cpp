@@ -102,7 +102,6 @@ TEST(Replay, AnUnknownScenarioNamesTheMetadataField) {
   }
 }
 
-
 // two runs on one time base: the mean of every channel but t, of the loaded mass and of the work
 TEST(Replay, AnEnsemblesMeanAveragesEveryChannelAndTheScalars) {
   sim2real::Run a, b;
@@ -119,7 +118,8 @@ TEST(Replay, AnEnsemblesMeanAveragesEveryChannelAndTheScalars) {
   EXPECT_EQ(mean.series[Channel::t], a.series[Channel::t]);
   for (std::size_t c = 1; c < kChannelCount; ++c)
     for (std::size_t i = 0; i < a.series.size(); i += 37)
-      EXPECT_DOUBLE_EQ(mean.series.columns[c][i], 0.5 * (a.series.columns[c][i] + b.series.columns[c][i]))
+      EXPECT_DOUBLE_EQ(mean.series.columns[c][i],
+                       0.5 * (a.series.columns[c][i] + b.series.columns[c][i]))
           << kChannelNames[c] << " " << i;
   EXPECT_DOUBLE_EQ(mean.summary.loaded_mass_kg, a.summary.loaded_mass_kg + 500.0);
   EXPECT_DOUBLE_EQ(mean.summary.work_J, 1.5 * a.summary.work_J);
@@ -170,10 +170,12 @@ TEST(Replay, APileEnsembleIsTheMeanOfItsPilesDigs) {
   ASSERT_EQ(ensemble.members().size(), 2u);
   const sim2real::Run& m0 = ensemble.members()[0];
   const sim2real::Run& m1 = ensemble.members()[1];
-  std::printf("[ measured ] HD27-D400 piles 4 and 5: loaded %.0f and %.0f kg, work %.1f and %.1f kJ\n",
-              m0.summary.loaded_mass_kg, m1.summary.loaded_mass_kg, m0.summary.work_J / 1e3,
-              m1.summary.work_J / 1e3);
-  EXPECT_EQ(mean.summary.loaded_mass_kg, (m0.summary.loaded_mass_kg + m1.summary.loaded_mass_kg) / 2.0);
+  std::printf(
+      "[ measured ] HD27-D400 piles 4 and 5: loaded %.0f and %.0f kg, work %.1f and %.1f kJ\n",
+      m0.summary.loaded_mass_kg, m1.summary.loaded_mass_kg, m0.summary.work_J / 1e3,
+      m1.summary.work_J / 1e3);
+  EXPECT_EQ(mean.summary.loaded_mass_kg,
+            (m0.summary.loaded_mass_kg + m1.summary.loaded_mass_kg) / 2.0);
   EXPECT_EQ(mean.series[Channel::f_lift][400],
             (m0.series[Channel::f_lift][400] + m1.series[Channel::f_lift][400]) / 2.0);
   EXPECT_NE(m0.series[Channel::f_lift], m1.series[Channel::f_lift]);

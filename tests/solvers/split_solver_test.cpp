@@ -47,7 +47,8 @@ struct LoadedBucket {
   std::unique_ptr<DemWorld> dem;
   std::unique_ptr<SplitSolver> split;
 
-  LoadedBucket(double z_lo, double z_hi, int iterations, double density_factor = 1.0, double tolerance = 0.0) {
+  LoadedBucket(double z_lo, double z_hi, int iterations, double density_factor = 1.0,
+               double tolerance = 0.0) {
     const BucketPose pose = bucket_pose(loader);
     particles = particles_in_bucket_frame(pose, Vec3(-0.95, -1.15, z_lo), Vec3(-0.45, 1.15, z_hi), 0.12, 3);
     for (size_t i = 0; i < particles.size(); ++i) {
@@ -188,11 +189,14 @@ TEST(SplitSolver, AToleranceEndsTheSweepsEarlyAndTheBucketStillWeighsItsLoad) {
       most = std::max(most, s.sweeps);
     }
   }
-  const double in_bucket = loaded_mass(b.dem->particles(), loader.bucket_mesh(), bucket_pose(loader));
-  std::printf("[ measured ] tolerance %.0e m/s: %.1f sweeps per step at rest (%d to %d of %d); vertical force "
-              "on the bucket %.1f N against the load's weight %.1f N (%+.2f%%)\n", kTolerance,
-              double(sweeps) / window, fewest, most, kIterations, -mean.z(), in_bucket * 9.81,
-              100.0 * (-mean.z() - in_bucket * 9.81) / (in_bucket * 9.81));
+  const double in_bucket =
+      loaded_mass(b.dem->particles(), loader.bucket_mesh(), bucket_pose(loader));
+  std::printf(
+      "[ measured ] tolerance %.0e m/s: %.1f sweeps per step at rest (%d to %d of %d); vertical "
+      "force "
+      "on the bucket %.1f N against the load's weight %.1f N (%+.2f%%)\n",
+      kTolerance, double(sweeps) / window, fewest, most, kIterations, -mean.z(), in_bucket * 9.81,
+      100.0 * (-mean.z() - in_bucket * 9.81) / (in_bucket * 9.81));
   EXPECT_LT(double(sweeps) / window, 0.8 * kIterations);
   EXPECT_NEAR(-mean.z(), in_bucket * 9.81, 0.02 * in_bucket * 9.81);
 }

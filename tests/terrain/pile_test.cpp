@@ -302,8 +302,10 @@ TEST(Pile, APileSettledAgainstItsFormworkStandsAtItsProfileAndLeavesTheFormworkO
   options.hold_face = true;
   const PileBuild held = build_pile(dev, profile, preset, gravel(), options, nullptr);
   const PileScan scan = scan_pile(held.particles, profile, preset.diameter);
-  std::printf("[ measured ] D400 pile settled against its formwork: face %.1f deg, scan mean to "
-              "profile %+.3f m\n", scan.face_angle_deg, scan.mean_to_profile_m);
+  std::printf(
+      "[ measured ] D400 pile settled against its formwork: face %.1f deg, scan mean to "
+      "profile %+.3f m\n",
+      scan.face_angle_deg, scan.mean_to_profile_m);
   EXPECT_NEAR(scan.face_angle_deg, 32.0, 3.0);
   EXPECT_LT(std::abs(scan.mean_to_profile_m), 0.5 * preset.diameter);
   EXPECT_TRUE(held.at_rest);
