@@ -195,7 +195,9 @@ TEST(CliErrors, StepCountsAndLoadsOutsideTheirRangeAreRefused) {
       {"--rolling", "run --scenario hd27 --rolling 1e30 --out /tmp/talus_unused_range"},
       {"--friction", "soil --test shear --friction 50 --out /tmp/talus_unused_range"},
       {"--form-speed", "run --scenario hd27 --form-speed 1e-4 --out /tmp/talus_unused_range"},
-      {"--approach", "sweep --approach 1e30 --out /tmp/talus_unused_range"}};
+      {"--approach", "sweep --approach 1e30 --out /tmp/talus_unused_range"},
+      {"--sweep-tolerance", "run --scenario hd27 --sweep-tolerance -1 --out /tmp/talus_unused_range"},
+      {"--sweep-tolerance", "bench dig --sweep-tolerance 1e30"}};
   for (const auto& c : cases) {
     const Outcome o = run("", c[1]);
     EXPECT_EQ(o.code, 2) << c[1] << "\n" << o.err;
@@ -203,6 +205,11 @@ TEST(CliErrors, StepCountsAndLoadsOutsideTheirRangeAreRefused) {
                                                                                   << o.err;
     EXPECT_NE(o.err.find(" to "), std::string::npos) << o.err;
   }
+  // a count: CLI11's range, named by the flag
+  const Outcome ensemble = run("", "diagnose --data /tmp --pile-ensemble 17");
+  EXPECT_EQ(ensemble.code, 2) << ensemble.err;
+  EXPECT_NE(ensemble.err.find("--pile-ensemble: Value 17 not in range 1 to 16"), std::string::npos)
+      << ensemble.err;
 }
 
 // a shard that a crash or a hand cut up holds a value no cycle gives: --collect names the file,
