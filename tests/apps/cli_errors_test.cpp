@@ -196,7 +196,8 @@ TEST(CliErrors, StepCountsAndLoadsOutsideTheirRangeAreRefused) {
       {"--friction", "soil --test shear --friction 50 --out /tmp/talus_unused_range"},
       {"--form-speed", "run --scenario hd27 --form-speed 1e-4 --out /tmp/talus_unused_range"},
       {"--approach", "sweep --approach 1e30 --out /tmp/talus_unused_range"},
-      {"--sweep-tolerance", "run --scenario hd27 --sweep-tolerance -1 --out /tmp/talus_unused_range"},
+      {"--sweep-tolerance",
+       "run --scenario hd27 --sweep-tolerance -1 --out /tmp/talus_unused_range"},
       {"--sweep-tolerance", "bench dig --sweep-tolerance 1e30"}};
   for (const auto& c : cases) {
     const Outcome o = run("", c[1]);
