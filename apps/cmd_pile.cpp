@@ -34,13 +34,15 @@ void add_pile_command(CLI::App& app, const std::string& command_line) {
       ->check(number_in(1.0, 600.0, "s"));
   cmd->add_option(
          "--form-speed", opt->build.form_speed,
-         "speed the formwork withdraws at before the pile settles, 0 = removed at once [m/s]")
+         "with --free-face: speed the formwork withdraws at before the pile settles, 0 = removed "
+         "at once [m/s]")
       // slower than 10 mm/s it takes hours to clear the face (build_pile refuses it too)
       ->check(number_in(0.01, 10.0, "m/s", true))
       ->capture_default_str();
-  cmd->add_flag("--hold-face", opt->build.hold_face,
-                "study: the formwork holds the face while the pile settles and is left out of the "
-                "pile's container (the face stands at its profile when a dig starts)");
+  cmd->add_flag("--hold-face,!--free-face", opt->build.hold_face,
+                "the formwork holds the face while the pile settles and is left out of the pile's "
+                "container, so the face stands at its profile when a dig starts (the default); "
+                "--free-face: it goes before the pile settles");
   cmd->add_option("--settle-iterations", opt->build.settle_iterations,
                   "study: sweeps per step while filling and settling, above the level's N_it too "
                   "(default: the level's N_it, at most 100)")

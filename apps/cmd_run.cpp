@@ -484,13 +484,14 @@ void add_run_command(CLI::App& app, const std::string& command_line) {
       // a residual above 1 m/s is no convergence at all (the bucket moves at about 1 m/s)
       ->check(number_in(0.0, 1.0, "m/s", true));
   cmd->add_option("--form-speed", opts->form_speed,
-                  "study: speed the pile's formwork withdraws at before it "
+                  "study, with --free-face: speed the pile's formwork withdraws at before it "
                   "settles, 0 = removed at once [m/s]")
       // slower than 10 mm/s it takes hours to clear the face (build_pile refuses it too)
       ->check(number_in(0.01, 10.0, "m/s", true));
-  cmd->add_flag("--hold-face", opts->hold_face,
-                "study: the formwork holds the pile's face while it settles and goes when the dig "
-                "starts, so the face stands at its profile at t = 0 (docs/validation.md)");
+  cmd->add_flag("--hold-face,!--free-face", opts->hold_face,
+                "the formwork holds the pile's face while it settles and goes when the dig starts, "
+                "so the face stands at its profile at t = 0 (the default); --free-face: it goes "
+                "before the pile settles (issue 11's earlier piles; docs/validation.md)");
   cmd->add_flag("--residuals", opts->residuals, "record the particle rows' residual at the end of every step "
                 "(summary: step_residual_m_s median and p95)");
   cmd->add_option("--effect", opts->effects,

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "digging/digging.hpp"
+#include "terrain/pile.hpp"
 #include "vehicle/scenario.hpp"
 
 namespace talus::app {
@@ -32,7 +33,8 @@ struct RunOptions {
   // settled piles read from and saved to the pile cache (terrain/pile_cache.hpp; --no-pile-cache)
   bool pile_cache = true;
   double form_speed = -1.0;  // the pile's formwork withdrawal speed [m/s]; negative: PileBuildOptions' default
-  bool hold_face = false;    // PileBuildOptions::hold_face (issue 11 study)
+  bool hold_face =
+      PileBuildOptions{}.hold_face;  // the face held while the pile settles (--free-face: not)
   std::vector<std::string> effects;         // NAME:key=value,...
   std::vector<std::string> effect_plugins;  // shared libraries
   // when set, this scenario instead of loading `scenario` (talus synth's varied operator inputs)

@@ -426,6 +426,14 @@ void check_device_memory(double particles, std::size_t global_bytes,
 
 PileBuild build_pile(Device& dev, const PileProfile& profile, const FidelityPreset& preset,
                      const Material& material, const PileBuildOptions& options, Progress* progress) {
+  // a formwork speed that cannot be used, before anything is built
+  if (options.form_speed > 0.0 && options.form_speed < 0.01)
+    throw InputError("--form-speed " + std::to_string(options.form_speed) +
+                     " m/s: give 0 (formwork removed at once) or at least 0.01 m/s");
+  if (options.form_speed > 0.0 && options.hold_face)
+    throw InputError("--form-speed " + std::to_string(options.form_speed) +
+                     " m/s withdraws the formwork before the pile settles, which a held face keeps "
+                     "until the dig: add --free-face to settle the pile free");
   // a pile sized by mistake is refused before it is filled (kMaxPileParticles)
   const double needed = estimated_pile_particles(profile, preset.diameter);
   if (needed > kMaxPileParticles) {
@@ -469,10 +477,7 @@ PileBuild build_pile(Device& dev, const PileProfile& profile, const FidelityPres
   // and the pile settles into its own shape; or it stays and the pile settles against it
   // (hold_face: the face goes when the pile is used, out.geoms never held it)
   world.set_material(material);
-  if (options.form_speed > 0.0 && options.form_speed < 0.01)
-    throw InputError("--form-speed " + std::to_string(options.form_speed) +
-                     " m/s: give 0 (formwork removed at once) or at least 0.01 m/s");
-  if (options.form_speed > 0.0 && !options.hold_face) {
+  if (options.form_speed > 0.0) {
     const int steps = static_cast<int>(std::lround(options.form_travel / (options.form_speed * settings.dt)));
     for (int k = 1; k <= steps; ++k) {
       std::vector<StaticGeom> moved = out.geoms;

@@ -156,10 +156,11 @@ struct PileBuildOptions {
   int settle_iterations = 0;
   double min_time = 1.0;  // [s]
   double max_time = 4.0;  // [s]
-  // the formwork withdraws from the face at this speed before the pile settles [m/s] (0: removed
-  // at once). A study knob of issue 11: on the gravel-covered ground (Material::ground_rolling)
-  // the default pile's face stands at 29 deg at D400 either way (HD27-D400 loads 2212 kg after an
-  // instant removal, 2223 kg after one at 0.5 m/s), so the cheaper instant removal is the default
+  // with a free face (hold_face false), the formwork withdraws from the face at this speed before
+  // the pile settles [m/s] (0: removed at once). A study knob of issue 11: on the gravel-covered
+  // ground (Material::ground_rolling) the pile's face stood at 29 deg at D400 either way (HD27-D400
+  // loaded 2212 kg after an instant removal, 2223 kg after one at 0.5 m/s). A held face keeps its
+  // formwork until the dig, so a withdrawal speed with it is refused (build_pile)
   double form_speed = 0.0;
   double form_travel = 2.0;  // how far the formwork withdraws before it is removed [m]
   // move the settled pile along x so that its toe lies where the profile's does (pile_toe): a
@@ -169,9 +170,12 @@ struct PileBuildOptions {
   // the formwork stays while the pile settles with the gravel's friction and goes only when the
   // pile is used (its geoms leave it out): the face stands at the profile when a dig starts, as
   // the paper's piles were "emitted into a container with a front surface shaped as in the field
-  // tests" (paper §4.2). A study knob of issue 11 (docs/validation.md): these spheres slump to
-  // 25-28 deg at D100 once the formwork goes before settling, where the field's face stood at 32
-  bool hold_face = false;
+  // tests" (paper §4.2). The default since issue 11's seventh part (docs/validation.md): these
+  // spheres (mu 0.3, mu_r 0.02) heap at about 20 deg, so a face freed before settling slumps the
+  // more the finer the level (25-28 deg at D100 where the field's stood at 32) and HD27 loaded
+  // 2.39 / 1.35 / 0.83 t at D400 / D200 / D100; held, 2.72 / 2.35 / 2.69 t (field 2.70 t).
+  // false (talus --free-face) settles the pile free after the formwork withdraws (form_speed)
+  bool hold_face = true;
 };
 
 // the toe of a pile: the first x, from the front, where its surface rises kToeHeight above the

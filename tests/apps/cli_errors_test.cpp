@@ -137,6 +137,18 @@ TEST(CliErrors, UnknownSubcommandAndRangeErrorsSayWhatIsWrong) {
   }
 }
 
+// a formwork withdrawal speed asks for a free face: with the default held face it is refused
+// before the pile is filled, naming the flag that settles the pile free
+TEST(CliErrors, AFormworkSpeedWithAHeldFaceNamesFreeFace) {
+  for (const char* command : {"run --scenario hd27 --form-speed 0.5 --out /tmp/talus_unused_form",
+                              "pile --form-speed 0.5 --out /tmp/talus_unused_form"}) {
+    const Outcome o = run("", command);
+    EXPECT_EQ(o.code, 2) << command << ": " << o.err;
+    EXPECT_NE(o.err.find("--form-speed"), std::string::npos) << o.err;
+    EXPECT_NE(o.err.find("--free-face"), std::string::npos) << o.err;
+  }
+}
+
 // a vehicle-only scenario: its flags are checked though it uses no particles (--fidelity D37 and
 // --sweep bogus were ignored), and a payload the machine cannot hold is refused naming the file
 // and field (1e12 kg ran to exit 0 with the machine at 90 degrees of pitch)

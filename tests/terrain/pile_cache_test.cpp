@@ -233,18 +233,18 @@ TEST(PileCache, KeyFollowsEveryInput) {
   PileBuildOptions unplaced = options;
   unplaced.place_toe = false;
   EXPECT_NE(base, key(profile, d400, soil, unplaced));
-  PileBuildOptions held = options;
-  held.hold_face = true;
-  EXPECT_NE(base, key(profile, d400, soil, held));
+  PileBuildOptions free_face = options;
+  free_face.hold_face = false;
+  EXPECT_NE(base, key(profile, d400, soil, free_face));
   // the sweeps it settles with count as they are resolved: 15 at D400 by the rule or asked for
   PileBuildOptions swept = options;
   swept.settle_iterations = 15;
   EXPECT_EQ(base, key(profile, d400, soil, swept));
   swept.settle_iterations = 200;
   EXPECT_NE(base, key(profile, d400, soil, swept));
-  PileBuildOptions formed = options;
+  PileBuildOptions formed = free_face;
   formed.form_speed = 0.5;
-  EXPECT_NE(base, key(profile, d400, soil, formed));
+  EXPECT_NE(key(profile, d400, soil, free_face), key(profile, d400, soil, formed));
   EXPECT_NE(base, key(profile, d400, soil, options, "gpu"));
   EXPECT_NE(base, key(profile, d400, soil, options, "cpu", "abd"));
 }

@@ -264,14 +264,15 @@ TEST(Pile, LaserScanOfALowerBedReadsHowMuchLowerItStands) {
 namespace talus {
 namespace {
 
-// the default pile at D400 on gravel-covered ground: its face stands (the scan reads more than
-// 25 deg; on a polished floor the paper's gravel ran out to 6-15 deg, issue 11) and its settled
-// toe is moved to where the profile's lies
+// the default pile at D400 settled free (--free-face) on gravel-covered ground: its face stands
+// (the scan reads more than 25 deg; on a polished floor the paper's gravel ran out to 6-15 deg,
+// issue 11) and its settled toe is moved to where the profile's lies
 TEST(Pile, SettledD400PileStandsWithItsToeWhereTheProfilePutsIt) {
   Device dev;
   const PileProfile profile = default_pile_profile();
   const FidelityPreset& preset = fidelity_preset("D400");
   PileBuildOptions options;
+  options.hold_face = false;
   const PileBuild pile = build_pile(dev, profile, preset, gravel(), options, nullptr);
   const PileScan scan = scan_pile(pile.particles, profile, preset.diameter);
   std::printf("[ measured ] D400 pile: face %.1f deg, toe moved %+.2f m, toe at %.2f m (profile %.2f m)\n",
@@ -289,17 +290,17 @@ TEST(Pile, SettledD400PileStandsWithItsToeWhereTheProfilePutsIt) {
   EXPECT_NEAR(profile_toe(profile), profile.points.front().x() + kToeHeight / std::tan(32.0 * M_PI / 180.0), 0.05);
 }
 
-// a pile settled against its formwork (hold_face) stands at its profile's face when it is used:
-// the scan reads the face within 3 deg of the profile's 32 (measured 30.3 deg; the grain tops of a
-// D400 face scatter by about that, and the pile settled free reads 33.2 deg at this level, where
-// the face barely slumps), it is at rest, and the formwork is not among its geoms (the dig starts
-// with the face free). At D100 the difference is the study's (docs/validation.md)
+// the default pile, settled against its formwork (hold_face), stands at its profile's face when it
+// is used: the scan reads the face within 3 deg of the profile's 32 (measured 30.3 deg; the grain
+// tops of a D400 face scatter by about that, and the pile settled free reads 33.2 deg at this
+// level, where the face barely slumps), it is at rest, and the formwork is not among its geoms (the
+// dig starts with the face free). At D100 the difference is the study's (docs/validation.md)
 TEST(Pile, APileSettledAgainstItsFormworkStandsAtItsProfileAndLeavesTheFormworkOut) {
   Device dev;
   const PileProfile profile = default_pile_profile();
   const FidelityPreset& preset = fidelity_preset("D400");
-  PileBuildOptions options;
-  options.hold_face = true;
+  const PileBuildOptions options;
+  ASSERT_TRUE(options.hold_face);
   const PileBuild held = build_pile(dev, profile, preset, gravel(), options, nullptr);
   const PileScan scan = scan_pile(held.particles, profile, preset.diameter);
   std::printf(
