@@ -2,6 +2,10 @@
 // (the lower index of a pair), written at offsets from a prefix sum of per-particle counts.
 // Enumeration order (27 cells in z,y,x order, particles in index order, then static
 // geometry in index order) is fixed, so the contact list is deterministic.
+// Static geometry comes from the list of the particle's (x, y) column of the grid (DemWorld's
+// geometry bins): every geometry within a cell of the column, in index order, so the contacts
+// are those of a loop over all of them, without testing the hundreds of voxel columns of the
+// multiscale terrain (issue 14) against every particle.
 
 // the margin below which a pair becomes a (possibly speculative) contact
 float contact_margin(float ra, float rb, const TlStepParams p) {
@@ -45,9 +49,11 @@ void emit_contact(__global TlContact* out, int a, int b, float3 n, float gap, fl
 // write mode stops at `limit` contacts (the count pass's number), so a pair that rounds
 // differently between the passes can never write into the next particle's slots
 int visit_contacts(int i, int write, int limit, __global const float4* position,
-                   __global const float4* velocity, __global const int* cell_start, __global const int* cell_particles,
-                   __global const TlGeom* geoms, const TlStepParams p, __global TlContact* out,
-                   __global const int* prev_offsets, __global const TlContact* prev, int has_prev) {
+                   __global const float4* velocity, __global const int* cell_start,
+                   __global const int* cell_particles, __global const TlGeom* geoms,
+                   __global const int* geom_column_start, __global const int* geom_column_list,
+                   const TlStepParams p, __global TlContact* out, __global const int* prev_offsets,
+                   __global const TlContact* prev, int has_prev) {
   float4 pi = position[i];
   float3 xi = pi.xyz;
   float ri = pi.w;
@@ -87,8 +93,11 @@ int visit_contacts(int i, int write, int limit, __global const float4* position,
       }
     }
   }
-  // static geometry (walls, ground) in index order
-  for (int g = 0; g < (fixed_i ? 0 : p.geoms); ++g) {
+  // static geometry (walls, ground, boxes) near the particle's column, in index order
+  int column = ci.y * p.grid_nx + ci.x;
+  int geom_end = fixed_i ? 0 : geom_column_start[column + 1];
+  for (int k = fixed_i ? 0 : geom_column_start[column]; k < geom_end; ++k) {
+    int g = geom_column_list[k];
     float3 n;
     float gap = sphere_geom(xi, ri, geoms + g, &n);
     if (gap >= contact_margin(ri, ri, p)) continue;
@@ -102,27 +111,29 @@ int visit_contacts(int i, int write, int limit, __global const float4* position,
 }
 
 __kernel void contact_count(__global const float4* position, __global const float4* velocity,
-                            __global const int* cell_start,
-                            __global const int* cell_particles, __global const TlGeom* geoms,
-                            __global int* counts, __global TlContact* unused_out,
-                            __global const int* prev_offsets, __global const TlContact* prev,
-                            const TlStepParams p) {
+                            __global const int* cell_start, __global const int* cell_particles,
+                            __global const TlGeom* geoms, __global const int* geom_column_start,
+                            __global const int* geom_column_list, __global int* counts,
+                            __global TlContact* unused_out, __global const int* prev_offsets,
+                            __global const TlContact* prev, const TlStepParams p) {
   int i = get_global_id(0);
   if (i >= p.particles) return;
-  counts[i] = visit_contacts(i, 0, 0, position, velocity, cell_start, cell_particles, geoms, p, unused_out,
-                             prev_offsets, prev, 0);
+  counts[i] =
+      visit_contacts(i, 0, 0, position, velocity, cell_start, cell_particles, geoms,
+                     geom_column_start, geom_column_list, p, unused_out, prev_offsets, prev, 0);
 }
 
 __kernel void contact_write(__global const float4* position, __global const float4* velocity,
-                            __global const int* cell_start,
-                            __global const int* cell_particles, __global const TlGeom* geoms,
-                            __global const int* offsets, __global TlContact* contacts,
-                            __global const int* prev_offsets, __global const TlContact* prev,
-                            const TlStepParams p, int has_prev) {
+                            __global const int* cell_start, __global const int* cell_particles,
+                            __global const TlGeom* geoms, __global const int* geom_column_start,
+                            __global const int* geom_column_list, __global const int* offsets,
+                            __global TlContact* contacts, __global const int* prev_offsets,
+                            __global const TlContact* prev, const TlStepParams p, int has_prev) {
   int i = get_global_id(0);
   if (i >= p.particles) return;
-  visit_contacts(i, 1, offsets[i + 1] - offsets[i], position, velocity, cell_start, cell_particles, geoms, p, contacts + offsets[i],
-                 prev_offsets, prev, has_prev);
+  visit_contacts(i, 1, offsets[i + 1] - offsets[i], position, velocity, cell_start, cell_particles,
+                 geoms, geom_column_start, geom_column_list, p, contacts + offsets[i], prev_offsets,
+                 prev, has_prev);
 }
 
 // contacts per body (both sides), for the body -> contact adjacency

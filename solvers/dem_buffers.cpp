@@ -10,6 +10,8 @@ DemBuffers::DemBuffers(Device& dev)
       omega(dev, 1),
       rotation(dev, 1),
       geoms(dev, 1),
+      geom_column_start(dev, 2),
+      geom_column_list(dev, 1),
       particle_cell(dev, 1),
       cell_counts(dev, 1),
       cell_start(dev, 1),

@@ -25,6 +25,8 @@ struct DemBuffers {
                           omega.bytes(),
                           rotation.bytes(),
                           geoms.bytes(),
+                          geom_column_start.bytes(),
+                          geom_column_list.bytes(),
                           particle_cell.bytes(),
                           cell_counts.bytes(),
                           cell_start.bytes(),
@@ -58,6 +60,9 @@ struct DemBuffers {
   // particle state (layouts in kernels/dem_types.h)
   Buffer<cl_float4> position, velocity, omega, rotation;
   Buffer<TlGeom> geoms;
+  // static geometry binned by the grid's (x, y) columns (CSR, each list in index order): the
+  // geometries whose bounds, grown by one cell, reach the column (planes reach every column)
+  Buffer<int> geom_column_start, geom_column_list;
 
   // broad phase: particle cell, per-cell counts and starts, particles sorted by cell
   Buffer<int> particle_cell, cell_counts, cell_start, cell_fill, cell_particles;

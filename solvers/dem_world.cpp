@@ -129,6 +129,53 @@ void DemWorld::update_params() {
     sweep_kind_ = settings_.sweep;
     sweep_ = make_sweep(sweep_kind_, dev_, p.particles);
   }
+  bin_geoms();
+}
+
+void DemWorld::bin_geoms() {
+  const TlStepParams& p = params_;
+  const int nx = p.grid_nx, ny = p.grid_ny;
+  const double cell = p.cell_size;
+  const Vec3 origin(p.grid_origin.s[0], p.grid_origin.s[1], p.grid_origin.s[2]);
+  // the columns a geometry can reach: its bounds grown by one cell, which holds the farthest a
+  // particle's centre can be from a surface it touches (radius and margin, cell size above),
+  // with half a cell to spare for the kernel's float rounding of a particle's column; clamped to
+  // the grid as the kernel clamps a particle's cell. Planes reach everywhere
+  struct ColumnRange {
+    int i0, i1, j0, j1;
+  };
+  const auto column = [&](double x, double x0, int n) {
+    return std::clamp(static_cast<int>(std::floor((x - x0) / cell)), 0, n - 1);
+  };
+  std::vector<ColumnRange> ranges;
+  ranges.reserve(geoms_.size());
+  for (const StaticGeom& g : geoms_) {
+    if (g.type == StaticGeom::Type::Plane) {
+      ranges.push_back({0, nx - 1, 0, ny - 1});
+      continue;
+    }
+    const Vec3 reach = g.axes.cwiseAbs() * g.half + Vec3::Constant(cell);
+    ranges.push_back({column(g.centre.x() - reach.x(), origin.x(), nx),
+                      column(g.centre.x() + reach.x(), origin.x(), nx),
+                      column(g.centre.y() - reach.y(), origin.y(), ny),
+                      column(g.centre.y() + reach.y(), origin.y(), ny)});
+  }
+  // count per column, prefix sum, then fill in geometry order (each list ascending)
+  std::vector<int> start(static_cast<size_t>(nx) * ny + 1, 0);
+  for (const ColumnRange& r : ranges)
+    for (int j = r.j0; j <= r.j1; ++j)
+      for (int i = r.i0; i <= r.i1; ++i) ++start[static_cast<size_t>(j) * nx + i + 1];
+  for (size_t c = 1; c < start.size(); ++c) start[c] += start[c - 1];
+  std::vector<int> list(std::max(start.back(), 1));
+  std::vector<int> fill(start.begin(), start.end() - 1);
+  for (size_t g = 0; g < ranges.size(); ++g) {
+    const ColumnRange& r = ranges[g];
+    for (int j = r.j0; j <= r.j1; ++j)
+      for (int i = r.i0; i <= r.i1; ++i)
+        list[fill[static_cast<size_t>(j) * nx + i]++] = static_cast<int>(g);
+  }
+  buffers_.geom_column_start.upload(start);
+  buffers_.geom_column_list.upload(list);
 }
 
 void DemWorld::set_particles(const Particles& in) {
@@ -309,14 +356,16 @@ void DemWorld::narrow_phase() {
     b.owner_offsets[prev].resize(n + 1);
     b.owner_offsets[prev].fill(0);
   }
-  set_args(k_contact_count_, b.position, b.velocity, b.cell_start, b.cell_particles, b.geoms, b.contact_counts,
-           b.contacts[cur], b.owner_offsets[prev], b.contacts[prev], p);
+  set_args(k_contact_count_, b.position, b.velocity, b.cell_start, b.cell_particles, b.geoms,
+           b.geom_column_start, b.geom_column_list, b.contact_counts, b.contacts[cur],
+           b.owner_offsets[prev], b.contacts[prev], p);
   launch(dev_, k_contact_count_, n, "contact_count");
   scan_.exclusive(b.contact_counts, b.owner_offsets[cur], n);
   b.n_contacts = b.owner_offsets[cur].read_one(n);
   b.contacts[cur].resize(std::max(b.n_contacts, 1));
-  set_args(k_contact_write_, b.position, b.velocity, b.cell_start, b.cell_particles, b.geoms, b.owner_offsets[cur],
-           b.contacts[cur], b.owner_offsets[prev], b.contacts[prev], p, b.has_previous ? 1 : 0);
+  set_args(k_contact_write_, b.position, b.velocity, b.cell_start, b.cell_particles, b.geoms,
+           b.geom_column_start, b.geom_column_list, b.owner_offsets[cur], b.contacts[cur],
+           b.owner_offsets[prev], b.contacts[prev], p, b.has_previous ? 1 : 0);
   launch(dev_, k_contact_write_, n, "contact_write");
 }
 

@@ -102,6 +102,9 @@ class DemWorld {
 
  private:
   void update_params();
+  // the static geometry binned by the grid's (x, y) columns (DemBuffers::geom_column_*), made
+  // whenever the grid or the geometry changes
+  void bin_geoms();
   // one step; records the residual after every sweep when `history` is given
   void step_impl(std::vector<double>* history);
 
