@@ -195,8 +195,8 @@ TEST(Replay, AnEnsemblesMeanRefusesRunsThatDoNotShareTheirTimeBase) {
 // HD27 at D400 replayed on an ensemble of two piles (seeds 4 and 5): the simulation is the mean
 // of its members, the second member is the dig a single replay on seed 5 gives, bit for bit, and
 // the two piles dig differently (what the ensemble averages out). The mean carries the members'
-// spread: exactly zero while the bucket is still outside the pile (the machine alone does not
-// know which pile lies ahead), beyond zero in the dig; a single pile carries none
+// spread: negligible while the bucket is still outside the pile (the machine alone does not know
+// which pile lies ahead), beyond that through the dig; a single pile carries none
 TEST(Replay, APileEnsembleIsTheMeanOfItsPilesDigs) {
   const vehicle::Scenario sc = vehicle::load_scenario("hd27");
   MeasuredRun measured;
@@ -230,9 +230,12 @@ TEST(Replay, APileEnsembleIsTheMeanOfItsPilesDigs) {
   EXPECT_EQ(mean.spread->members, 2);
   EXPECT_EQ(mean.spread->variance.columns, ensemble_variance(ensemble.members()).columns);
   // the bucket's tip (the members agree on it until they touch soil) comes within one grain
-  // diameter of the pile's toe at t_near; before it every channel's raw variance is exactly 0,
-  // and the pooled one until a window before; the forces' spread is beyond 0 from where the
-  // members first differ to the dig's end
+  // diameter of the pile's toe at t_near. Before it the members differ by rounding at most (their
+  // last bits may differ from the start: 1e-11 N in the forces was seen on seeds 2-4 with other
+  // inputs), so the spread is negligible against any sensor: below (1e-6 σ)² of the default
+  // noise model in every channel, in the raw variance and, up to a window before t_near, in the
+  // pooled one. From where the soil first shows (the forces' spread beyond that) to the dig's end
+  // the forces' pooled spread is beyond it at every sample
   const TimeSeries raw = ensemble_variance(ensemble.members(), 0.0);
   const auto& t = mean.series[Channel::t];
   const auto& tip = m0.series[Channel::bucket_tip_x];
@@ -240,29 +243,34 @@ TEST(Replay, APileEnsembleIsTheMeanOfItsPilesDigs) {
   std::size_t toe = 0;
   while (toe < t.size() && tip[toe] < near) ++toe;
   ASSERT_LT(toe, t.size());
-  std::size_t first = t.size();  // the first sample where the members differ in some channel
-  for (std::size_t c = 1; c < kChannelCount; ++c)
-    for (std::size_t i = 0; i < t.size(); ++i)
-      if (raw.columns[c][i] != 0.0) {
-        first = std::min(first, i);
-        break;
-      }
-  std::printf(
-      "[ measured ] HD27-D400 piles 4 and 5: the tip a grain from the toe at %.2f s, members "
-      "differ from %.2f s\n",
-      t[toe], t[first]);
-  EXPECT_GE(first, toe);
-  for (std::size_t c = 1; c < kChannelCount; ++c)
-    for (std::size_t i = 0; i < t.size() && t[i] < t[toe] - kSpreadHalfWindow; ++i)
-      ASSERT_EQ(mean.spread->variance.columns[c][i], 0.0)
+  const auto& noise = default_sensor_noise();
+  auto negligible = [&](std::size_t c) {
+    const double bound = 1e-6 * noise.at(kChannelNames[c]);
+    return bound * bound;
+  };
+  for (std::size_t c = 1; c < kChannelCount; ++c) {
+    for (std::size_t i = 0; i < toe; ++i)
+      ASSERT_LE(raw.columns[c][i], negligible(c)) << kChannelNames[c] << " at " << t[i] << " s";
+    for (std::size_t i = 0; i < toe && t[i] < t[toe] - kSpreadHalfWindow; ++i)
+      ASSERT_LE(mean.spread->variance.columns[c][i], negligible(c))
           << kChannelNames[c] << " at " << t[i] << " s";
-  std::size_t positive = 0, dug = 0;
-  for (std::size_t i = first; i < t.size() && t[i] < sc.dig_end; ++i, ++dug)
-    if (mean.spread->variance[Channel::f_lift][i] > 0.0 &&
-        mean.spread->variance[Channel::f_traction][i] > 0.0)
-      ++positive;
+  }
+  const std::size_t f_lift = static_cast<std::size_t>(Channel::f_lift);
+  std::size_t soil = toe;
+  while (soil < t.size() && raw.columns[f_lift][soil] <= negligible(f_lift)) ++soil;
+  ASSERT_LT(soil, t.size());
+  std::printf(
+      "[ measured ] HD27-D400 piles 4 and 5: the tip a grain from the toe at %.2f s, the lift "
+      "forces differ from %.2f s\n",
+      t[toe], t[soil]);
+  std::size_t beyond = 0, dug = 0;
+  for (std::size_t i = soil; i < t.size() && t[i] < sc.dig_end; ++i, ++dug)
+    if (mean.spread->variance[Channel::f_lift][i] > negligible(f_lift) &&
+        mean.spread->variance[Channel::f_traction][i] >
+            negligible(static_cast<std::size_t>(Channel::f_traction)))
+      ++beyond;
   ASSERT_GT(dug, 0u);
-  EXPECT_EQ(positive, dug);
+  EXPECT_EQ(beyond, dug);
 
   ReplayOptions single;
   single.pile_seed = 5;
