@@ -34,7 +34,8 @@ std::string spread_note(const Residuals& res) {
   if (res.spread_members == 0) return "";
   std::ostringstream s;
   s << "Judged against the sensor noise and the simulation's own spread over " << res.spread_members
-    << " piles, σ² + (1 + 1/N) v; the spread's mean share of that variance:";
+    << " piles, σ² + (1 + 1/N) v (MSE_w: the mean of r² / (1 + (1 + 1/N) v / σ²)); the spread's "
+       "mean share of that variance:";
   for (std::size_t c = 1; c < kChannelCount; ++c)
     s << (c > 1 ? ", " : " ") << kChannelNames[c] << " " << std::setprecision(2) << std::fixed
       << res.spread_share_of(c) << std::defaultfloat;
@@ -60,9 +61,10 @@ std::string diagnosis_report(const Diagnosis& d, const std::vector<MeasuredRun>&
                : cal      ? "calibration"
                           : "validation")
            << ")\n\n"
-           << "Baseline residual, largest cells (excess = ln max(MSE / (" << kNoiseAllowance
-           << " σ²), 1); run total " << std::setprecision(3) << d.residuals_before[i].excess
-           << "):\n\n"
+           << "Baseline residual, largest cells (excess = ln max("
+           << (d.residuals_before[i].spread_members > 0 ? "MSE_w" : "MSE") << " / ("
+           << kNoiseAllowance << " σ²), 1); run total " << std::setprecision(3)
+           << d.residuals_before[i].excess << "):\n\n"
            << residual_signature(d.residuals_before[i], runs[i].run, d.simulated_before[i]) << "\n"
            << spread_note(d.residuals_before[i]);
     if (d.scan_rms_m[i] && *d.scan_rms_m[i] > kScanWarning)
