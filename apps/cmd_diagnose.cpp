@@ -129,7 +129,8 @@ void add_diagnose_command(CLI::App& app) {
   cmd->add_option(
          "--pile-ensemble", a->pile_ensemble,
          "dig N piles per simulation (seeds pile-seed, pile-seed + 1, ...) and compare their "
-         "mean: a smoother objective where the grains' arrangement scatters the dig "
+         "mean: a smoother objective where the grains' arrangement scatters the dig; with 2 or "
+         "more, residuals are judged against the piles' own spread as well as the sensor noise "
          "(docs/sim2real.md); N times the cost")
       ->capture_default_str()
       ->check(CLI::Range(1, sim2real::kMaxPileEnsemble));

@@ -1012,12 +1012,37 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
     json a = json::array();
     for (const auto& res : per_run) {
       json cells = json::array();
-      for (const auto& c : res.cells)
-        cells.push_back({{"channel", kChannelNames[c.channel]}, {"phase", res.phases[c.phase].name},
-                         {"rms", c.rms}, {"mean", c.mean}, {"sigma", c.sigma}, {"excess", c.excess}});
+      for (const auto& c : res.cells) {
+        json cell = {{"channel", kChannelNames[c.channel]},
+                     {"phase", res.phases[c.phase].name},
+                     {"rms", c.rms},
+                     {"mean", c.mean},
+                     {"sigma", c.sigma},
+                     {"excess", c.excess}};
+        // the simulation's own spread the cell was judged with, when there was one
+        if (res.spread_members > 0) {
+          cell["spread"] = c.spread;
+          cell["spread_share"] = c.spread_share;
+        }
+        cells.push_back(cell);
+      }
       a.push_back({{"excess", res.excess}, {"cells", cells}});
     }
     return a;
+  };
+  // the simulation's own spread in a run's likelihood (sim2real/residuals.hpp): null when the
+  // sensor noise alone judged it, else the piles and each channel's mean share of the variance
+  // its residual was judged against, for the baseline and for the model with what was found
+  auto spread_json = [](const Residuals& before, const Residuals& after) {
+    if (before.spread_members == 0) return json(nullptr);
+    json share_before = json::object(), share_after = json::object();
+    for (std::size_t c = 1; c < kChannelCount; ++c) {
+      share_before[kChannelNames[c]] = before.spread_share_of(c);
+      share_after[kChannelNames[c]] = after.spread_share_of(c);
+    }
+    return json{{"members", before.spread_members},
+                {"variance_share_before", share_before},
+                {"variance_share_after", share_after}};
   };
   auto fitted_json = [](const FittedEffect& f) {
     return json{{"candidate", f.candidate.label()}, {"effect", f.effect}, {"spec", f.spec},
@@ -1058,6 +1083,8 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
     json r = {{"dir", d.runs[i]}, {"role", cal && val ? "calibration and validation" : cal ? "calibration" : "validation"}};
     if (d.scan_rms_m[i]) r["scan_rms_m"] = *d.scan_rms_m[i];
     if (i < d.piles.size()) r["piles"] = d.piles[i];
+    if (i < d.residuals_before.size() && i < d.residuals_after.size())
+      r["model_spread"] = spread_json(d.residuals_before[i], d.residuals_after[i]);
     runs.push_back(r);
   }
   // the correction discovered, with the error over the held-out runs before and after the model
@@ -1074,21 +1101,25 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
   }
   json tried = json::array();
   for (const auto& c : d.discovery_tried) tried.push_back(correction_json(c));
-  return {{"effects_found", found},
-          {"discovered", discovered},
-          {"discovery", {{"ran", d.discovery_ran}, {"tried", tried}}},
-          {"error_before", table_json(d.error_before)},
-          {"error_after", table_json(d.error_after)},
-          {"unexplained", d.unexplained},
-          {"excess_before", d.excess_before},
-          {"excess_after", d.excess_after},
-          {"significant_excess", kSignificantExcess},
-          {"runs", runs},
-          {"rounds", rounds},
-          {"residuals_before", residuals_json(d.residuals_before)},
-          {"residuals_after", residuals_json(d.residuals_after)},
-          {"simulations", d.simulations},
-          {"wall_s", d.wall_s}};
+  return {
+      {"effects_found", found},
+      {"discovered", discovered},
+      {"discovery", {{"ran", d.discovery_ran}, {"tried", tried}}},
+      {"error_before", table_json(d.error_before)},
+      {"error_after", table_json(d.error_after)},
+      {"unexplained", d.unexplained},
+      {"excess_before", d.excess_before},
+      {"excess_after", d.excess_after},
+      {"significant_excess", kSignificantExcess},
+      // whether any run's residual was judged against the simulation's own spread too
+      {"model_spread_used", std::any_of(d.residuals_before.begin(), d.residuals_before.end(),
+                                        [](const Residuals& r) { return r.spread_members > 0; })},
+      {"runs", runs},
+      {"rounds", rounds},
+      {"residuals_before", residuals_json(d.residuals_before)},
+      {"residuals_after", residuals_json(d.residuals_after)},
+      {"simulations", d.simulations},
+      {"wall_s", d.wall_s}};
 }
 
 }  // namespace talus::sim2real

@@ -1,6 +1,8 @@
 // The sim-to-real loop (issue 6, SPEC §6; docs/sim2real.md): given measured runs, simulate their
 // inputs with the baseline model, measure the residual per channel and phase against the data's
-// own noise (sim2real/residuals.hpp), and look for the effect the model lacks among candidates
+// own noise (sim2real/residuals.hpp; with a pile ensemble, also against the simulation's own
+// spread between piles, which the replay's run carries, so every excess and likelihood below
+// uses it without a second code path), and look for the effect the model lacks among candidates
 // (the built-in effects, vehicle/effect.hpp, and any a plug-in brings).
 //
 // One round of the search:

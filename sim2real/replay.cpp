@@ -58,14 +58,15 @@ Run dig_run(const vehicle::Scenario& scenario, const std::string& fidelity, cons
   return run;
 }
 
-Run ensemble_mean(const std::vector<Run>& runs) {
-  if (runs.empty()) throw Error("ensemble_mean: no runs");
+namespace {
+
+// every member on the first's time base, labels and marks (Error naming the first that differs)
+void check_members(const std::vector<Run>& runs, const std::string& who) {
+  if (runs.empty()) throw Error(who + ": no runs");
   const Run& first = runs.front();
-  if (runs.size() == 1) return first;
-  // every member on the first's time base, labels and marks
   for (std::size_t m = 1; m < runs.size(); ++m) {
     const Run& r = runs[m];
-    const std::string which = "ensemble_mean: run " + std::to_string(m) + " (" + r.label() + ")";
+    const std::string which = who + ": run " + std::to_string(m) + " (" + r.label() + ")";
     if (r.series.size() != first.series.size() || r.series[Channel::t] != first.series[Channel::t])
       throw Error(which +
                   " has other sample times than run 0; an ensemble shares its scenario and level");
@@ -75,6 +76,58 @@ Run ensemble_mean(const std::vector<Run>& runs) {
         r.summary.dig_end_s != first.summary.dig_end_s)
       throw Error(which + " has another scenario, level or phase marks than run 0");
   }
+}
+
+}  // namespace
+
+TimeSeries ensemble_variance(const std::vector<Run>& runs, double half_window_s) {
+  check_members(runs, "ensemble_variance");
+  if (runs.size() < 2)
+    throw Error("ensemble_variance: " + std::to_string(runs.size()) +
+                " run; a sample variance needs 2 or more members");
+  if (!(half_window_s >= 0.0) || !std::isfinite(half_window_s))
+    throw Error("ensemble_variance: half_window_s = " + message_number(half_window_s) +
+                "; give a finite window of 0 s (no pooling) or more");
+  const auto& t = runs.front().series[Channel::t];
+  const std::size_t samples = t.size();
+  const double n = static_cast<double>(runs.size());
+  TimeSeries variance;
+  variance[Channel::t] = t;
+  for (std::size_t c = 0; c < kChannelCount; ++c) {
+    if (static_cast<Channel>(c) == Channel::t) continue;
+    // the unbiased sample variance at each sample: the members' mean first, then their squared
+    // departures from it (two passes: members that agree give exactly 0)
+    std::vector<double> raw(samples, 0.0);
+    for (std::size_t i = 0; i < samples; ++i) {
+      double mean = 0.0;
+      for (const Run& r : runs) mean += r.series.columns[c][i];
+      mean /= n;
+      double sum2 = 0.0;
+      for (const Run& r : runs) {
+        const double d = r.series.columns[c][i] - mean;
+        sum2 += d * d;
+      }
+      raw[i] = sum2 / (n - 1.0);
+    }
+    // pooled: the mean of the samples within ±half_window_s (the window shrinks at the run's ends)
+    auto& pooled = variance.columns[c];
+    pooled.assign(samples, 0.0);
+    std::size_t lo = 0, hi = 0;  // the window [lo, hi) of sample i
+    for (std::size_t i = 0; i < samples; ++i) {
+      while (t[lo] < t[i] - half_window_s) ++lo;
+      while (hi < samples && t[hi] <= t[i] + half_window_s) ++hi;
+      double sum = 0.0;
+      for (std::size_t j = lo; j < hi; ++j) sum += raw[j];
+      pooled[i] = sum / static_cast<double>(hi - lo);
+    }
+  }
+  return variance;
+}
+
+Run ensemble_mean(const std::vector<Run>& runs) {
+  check_members(runs, "ensemble_mean");
+  const Run& first = runs.front();
+  if (runs.size() == 1) return first;
   // sums in member order, then one division: the same runs give the same mean, bit for bit
   Run mean = first;
   const double n = static_cast<double>(runs.size());
@@ -92,6 +145,8 @@ Run ensemble_mean(const std::vector<Run>& runs) {
   mean.summary.loaded_mass_kg /= n;
   mean.summary.work_J /= n;
   mean.summary.details["pile_ensemble"] = runs.size();
+  // the members' spread, which the residuals add to the sensor noise (sim2real/residuals.hpp)
+  mean.spread = RunSpread{static_cast<int>(runs.size()), ensemble_variance(runs)};
   return mean;
 }
 

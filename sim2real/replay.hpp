@@ -43,9 +43,26 @@ Run dig_run(const vehicle::Scenario& scenario, const std::string& fidelity, cons
 // the run's operator inputs and pile toe; InputError naming the metadata's field 'scenario'
 vehicle::Scenario measured_scenario(const MeasuredRun& measured);
 
+// the half-width of the window over which the members' variance is pooled: see
+// ensemble_variance (measured on HD27-D400, docs/sim2real.md "The simulation's own spread")
+inline constexpr double kSpreadHalfWindow = 0.2;  // s
+
+// the members' spread, per channel at their shared sample times (t is theirs): the unbiased
+// sample variance v(t) = Σ_k (x_k(t) − x̄(t))² / (N − 1), then pooled, each sample the mean of
+// those within ±half_window_s. Why pooled: the sample variance of N = 3 members has 2 degrees of
+// freedom, so at single instants it falls near zero by chance, and a residual divided by
+// σ² + v there reads as far beyond its spread (for a spread 100 times the sensor's variance the
+// mean of r²/(σ² + v) is about ln 100 − 0.58 ≈ 4 times what it should be). Pooling m samples
+// that scatter independently gives about (N − 1) m degrees of freedom. Error for fewer than 2
+// runs, runs that do not share their time base (as ensemble_mean), or a negative window
+TimeSeries ensemble_variance(const std::vector<Run>& runs,
+                             double half_window_s = kSpreadHalfWindow);
+
 // the ensemble's mean run: every channel averaged sample by sample, loaded mass and work
 // averaged; the runs must share their time base (the same scenario at the same level) and their
-// labels and phase marks, which the mean keeps. Error naming the first run that differs
+// labels and phase marks, which the mean keeps. Error naming the first run that differs. Two or
+// more runs: the mean carries their spread (Run::spread: N and ensemble_variance), which the
+// residuals add to the sensor noise; one run is returned as it is, without a spread
 Run ensemble_mean(const std::vector<Run>& runs);
 
 // piles in one simulation's ensemble at most: a bound far above what smooths a D400 dig (3 to 5)
@@ -82,7 +99,8 @@ class Replay {
   // pile simulation or without a pile
   std::optional<double> scan_rms_m() const { return scan_rms_; }
   // a pile scenario's last simulation, pile by pile in seed order: the ensemble's members, whose
-  // mean simulate() returned (empty without a pile: those simulations may run on several threads)
+  // mean simulate() returned with their spread (Run::spread, for 2 or more piles; empty without a
+  // pile: those simulations may run on several threads)
   const std::vector<Run>& members() const { return members_; }
   int simulations() const;
   double wall_s() const;  // time spent in simulate(), pile build included (summed over threads)

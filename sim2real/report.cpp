@@ -30,6 +30,19 @@ std::string residual_signature(const Residuals& res, const Run& measured, const 
   return s.str();
 }
 
+std::string spread_note(const Residuals& res) {
+  if (res.spread_members == 0) return "";
+  std::ostringstream s;
+  s << "Judged against the sensor noise and the simulation's own spread over " << res.spread_members
+    << " piles, σ² + (1 + 1/N) v (MSE_w: the mean of r² / (1 + (1 + 1/N) v / σ²)); the spread's "
+       "mean share of that variance:";
+  for (std::size_t c = 1; c < kChannelCount; ++c)
+    s << (c > 1 ? ", " : " ") << kChannelNames[c] << " " << std::setprecision(2) << std::fixed
+      << res.spread_share_of(c) << std::defaultfloat;
+  s << ".\n\n";
+  return s.str();
+}
+
 std::vector<TableRow> error_table(const std::vector<TableRow>& rows) {
   std::vector<TableRow> table = rows;
   table.push_back(mean_row(rows, "mean over runs"));
@@ -44,10 +57,16 @@ std::string diagnosis_report(const Diagnosis& d, const std::vector<MeasuredRun>&
     const bool cal = std::find(d.calibration.begin(), d.calibration.end(), i) != d.calibration.end();
     const bool val = std::find(d.validation.begin(), d.validation.end(), i) != d.validation.end();
     report << "## " << runs[i].run.label() << " (" << d.runs[i] << "; "
-           << (cal && val ? "calibration and validation" : cal ? "calibration" : "validation") << ")\n\n"
-           << "Baseline residual, largest cells (excess = ln max(MSE / (" << kNoiseAllowance
-           << " σ²), 1); run total " << std::setprecision(3) << d.residuals_before[i].excess << "):\n\n"
-           << residual_signature(d.residuals_before[i], runs[i].run, d.simulated_before[i]) << "\n";
+           << (cal && val ? "calibration and validation"
+               : cal      ? "calibration"
+                          : "validation")
+           << ")\n\n"
+           << "Baseline residual, largest cells (excess = ln max("
+           << (d.residuals_before[i].spread_members > 0 ? "MSE_w" : "MSE") << " / ("
+           << kNoiseAllowance << " σ²), 1); run total " << std::setprecision(3)
+           << d.residuals_before[i].excess << "):\n\n"
+           << residual_signature(d.residuals_before[i], runs[i].run, d.simulated_before[i]) << "\n"
+           << spread_note(d.residuals_before[i]);
     if (d.scan_rms_m[i] && *d.scan_rms_m[i] > kScanWarning)
       report << "Warning: the measured pile scan lies " << *d.scan_rms_m[i] << " m (RMS) from the simulated pile's; "
              << "the residual includes that difference.\n\n";

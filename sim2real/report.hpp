@@ -19,6 +19,10 @@ inline constexpr double kScanWarning = 0.1;
 // the largest residual cells of a run as a markdown table, with what each moves with
 std::string residual_signature(const Residuals& residuals, const Run& measured, const Run& simulated);
 
+// a line saying the residual was judged against the simulation's own spread too, with the spread's
+// share of the variance per channel (Residuals::spread_share_of); empty without a spread
+std::string spread_note(const Residuals& residuals);
+
 // per-run error rows with their mean over the runs as the last row ("mean over runs"): the
 // report's tables and the CSV files'
 std::vector<TableRow> error_table(const std::vector<TableRow>& rows);

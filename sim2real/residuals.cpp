@@ -87,7 +87,13 @@ std::vector<Phase> run_phases(const Run& measured) {
   return phases;
 }
 
-std::vector<double> residual_series(const Run& simulated, const Run& measured, std::size_t channel) {
+namespace {
+
+// a column on the simulation's sample times (a channel, or its spread's variance) at the measured
+// times: linear between the simulation's samples, as the run itself is read; InputError when the
+// simulation does not cover the measurement
+std::vector<double> at_measured_times(const Run& simulated, const std::vector<double>& column,
+                                      const Run& measured) {
   const auto& tm = measured.series[Channel::t];
   const auto& ts = simulated.series[Channel::t];
   if (ts.empty() || ts.front() > tm.front() + 1e-9 || ts.back() < tm.back() - 1e-9)
@@ -97,7 +103,44 @@ std::vector<double> residual_series(const Run& simulated, const Run& measured, s
                      " s; the scenario's duration must cover the measured run");
   std::vector<double> at(tm.begin(), tm.end());
   for (double& v : at) v = std::clamp(v, ts.front(), ts.back());
-  const auto sim = interpolate(ts, simulated.series.columns[channel], at);
+  return interpolate(ts, column, at);
+}
+
+// a spread must be an ensemble's (two or more members) on the run's own sample times, with a
+// finite, non-negative variance everywhere; it is made by code (ensemble_mean), so a bad one is
+// a program error, named by its field
+void check_spread(const Run& simulated) {
+  const RunSpread& s = *simulated.spread;
+  const std::string which =
+      "compute_residuals: the simulated run " + simulated.label() + "'s spread";
+  if (s.members < 2)
+    throw Error(
+        which + " has members = " + std::to_string(s.members) +
+        "; a spread comes from an ensemble of 2 or more (ensemble_mean), else leave it empty");
+  if (s.variance[Channel::t] != simulated.series[Channel::t])
+    throw Error(which +
+                ": variance's t is not the run's sample times; compute it from the members the run "
+                "is the mean of");
+  for (std::size_t c = 1; c < kChannelCount; ++c) {
+    const auto& v = s.variance.columns[c];
+    if (v.size() != simulated.series.size())
+      throw Error(which + ": variance's " + std::string(kChannelNames[c]) + " has " +
+                  std::to_string(v.size()) + " samples for the run's " +
+                  std::to_string(simulated.series.size()));
+    for (std::size_t i = 0; i < v.size(); ++i)
+      if (!std::isfinite(v[i]) || v[i] < 0.0)
+        throw Error(which + ": variance's " + std::string(kChannelNames[c]) + " is " +
+                    message_number(v[i]) + " at t = " + message_number(s.variance[Channel::t][i]) +
+                    " s; a variance is finite and at least 0");
+  }
+}
+
+}  // namespace
+
+std::vector<double> residual_series(const Run& simulated, const Run& measured,
+                                    std::size_t channel) {
+  const auto& tm = measured.series[Channel::t];
+  const auto sim = at_measured_times(simulated, simulated.series.columns[channel], measured);
   std::vector<double> r(tm.size());
   for (size_t i = 0; i < tm.size(); ++i) r[i] = measured.series.columns[channel][i] - sim[i];
   return r;
@@ -107,8 +150,24 @@ Residuals compute_residuals(const Run& simulated, const Run& measured, const std
   Residuals out;
   out.phases = run_phases(measured);
   const auto& tm = measured.series[Channel::t];
+  if (simulated.spread) {
+    check_spread(simulated);
+    out.spread_members = simulated.spread->members;
+  }
+  // the measured run stands for one more arrangement and the mean has its own error: (1 + 1/N) v
+  const double inflation = simulated.spread ? 1.0 + 1.0 / simulated.spread->members : 0.0;
   for (size_t c = 1; c < kChannelCount; ++c) {
     const std::vector<double> r = residual_series(simulated, measured, c);
+    // the model's variance per sample, (1 + 1/N) v, and the sample's variance in units of the
+    // sensor's, w = 1 + (1 + 1/N) v / σ²: exactly 1 without a spread
+    std::vector<double> model(tm.size(), 0.0), w(tm.size(), 1.0);
+    if (simulated.spread) {
+      const auto v = at_measured_times(simulated, simulated.spread->variance.columns[c], measured);
+      for (size_t i = 0; i < tm.size(); ++i) {
+        model[i] = inflation * v[i];
+        w[i] = 1.0 + model[i] / (sigma[c] * sigma[c]);
+      }
+    }
     for (size_t p = 0; p < out.phases.size(); ++p) {
       // samples of the phase: [t0, t1) except the last phase, which keeps its end
       const Phase& ph = out.phases[p];
@@ -117,24 +176,35 @@ Residuals compute_residuals(const Run& simulated, const Run& measured, const std
       cell.channel = c;
       cell.phase = p;
       cell.sigma = sigma[c];
-      double sum = 0.0, sum2 = 0.0;
+      double sum = 0.0, sum2 = 0.0, sum2w = 0.0, sum_log_w = 0.0, sum_model = 0.0, sum_share = 0.0;
       for (size_t i = 0; i < tm.size(); ++i) {
         if (tm[i] < ph.t0 || tm[i] > ph.t1 || (!last && tm[i] >= ph.t1)) continue;
         sum += r[i];
         sum2 += r[i] * r[i];
+        sum2w += r[i] * r[i] / w[i];
+        sum_log_w += std::log(w[i]);
+        sum_model += model[i];
+        sum_share += (w[i] - 1.0) / w[i];
         ++cell.samples;
       }
       if (cell.samples == 0) continue;
       cell.mean = sum / cell.samples;
       const double mse = sum2 / cell.samples;
       cell.rms = std::sqrt(mse);
-      cell.excess = std::log(std::max(mse / (kNoiseAllowance * sigma[c] * sigma[c]), 1.0));
+      cell.spread = std::sqrt(sum_model / cell.samples);
+      cell.spread_share = sum_share / cell.samples;
+      // the mean square in units of the sensor noise the residual would have if the piles agreed
+      const double mse_w = sum2w / cell.samples;
+      cell.excess = std::log(std::max(mse_w / (kNoiseAllowance * sigma[c] * sigma[c]), 1.0));
       out.excess += cell.excess;
       // the Gaussian log-likelihood's cell term, weighted by the cell's share of the channel's
-      // samples (a short phase counts for its length); the smallest ratio counted: a residual a
-      // thousandth of the noise is as good as none
+      // samples (a short phase counts for its length), with its log-determinant (0 without a
+      // spread); the smallest ratio counted: a residual a thousandth of the noise is as good as
+      // none
       constexpr double kSmallestRatio = 1e-6;
-      out.log_ratio += double(cell.samples) / double(tm.size()) * std::log(std::max(mse / (sigma[c] * sigma[c]), kSmallestRatio));
+      out.log_ratio += double(cell.samples) / double(tm.size()) *
+                       (std::log(std::max(mse_w / (sigma[c] * sigma[c]), kSmallestRatio)) +
+                        sum_log_w / cell.samples);
       out.cells.push_back(cell);
     }
   }
@@ -146,6 +216,17 @@ double Residuals::excess_of(const std::vector<std::size_t>& channels) const {
   for (const auto& cell : cells)
     if (std::find(channels.begin(), channels.end(), cell.channel) != channels.end()) sum += cell.excess;
   return sum;
+}
+
+double Residuals::spread_share_of(std::size_t channel) const {
+  double share = 0.0;
+  int samples = 0;
+  for (const auto& cell : cells)
+    if (cell.channel == channel) {
+      share += cell.spread_share * cell.samples;
+      samples += cell.samples;
+    }
+  return samples > 0 ? share / samples : 0.0;
 }
 
 Correlate strongest_correlate(const std::vector<double>& residual, const Run& measured) {

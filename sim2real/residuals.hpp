@@ -13,6 +13,26 @@
 // is e = ln max(MSE / (κ σ_c²), 1), κ = kNoiseAllowance. A perfect model leaves MSE ≈ σ² and e = 0;
 // a residual twice the noise leaves e = ln(4/κ) ≈ 1. The excess of a run is the sum over its
 // cells; it is the quantity the loop fits effects to and calls explained or not.
+//
+// The simulation's own spread (issue 17): a simulated run that is the mean of a pile ensemble
+// (sim2real/replay.hpp) carries its members' variance v_c(t) (Run::spread). A measured dig is one
+// pile arrangement: y = f(θ*) + a + n, with a the arrangement's departure from the mean dig
+// (variance v, the spread the simulation shows between its own piles, if it is right) and n the
+// sensor noise (σ²). The ensemble's mean is m = f(θ) + ā with ā the mean of N independent
+// arrangements (variance v/N). At the true parameter the residual r = y − m has mean zero and
+// variance σ² + v + v/N = σ² + (1 + 1/N) v, so each sample i is judged against that: with the
+// sample's variance in units of the sensor's, w_i = 1 + (1 + 1/N) v_c(t_i) / σ_c², a cell's mean
+// square becomes MSE_w = (1/n) Σ r_i² / w_i (the residual in units of the sensor noise it would
+// have if the piles agreed), and
+//   excess     e = ln max(MSE_w / (κ σ²), 1)
+//   log_ratio    Σ (n_cell / n) [ln(MSE_w / σ²) + (1/n_cell) Σ ln w_i]
+// The second term of the log-ratio is the Gaussian likelihood's log-determinant: without it a
+// parameter that makes the digging more chaotic would fit better merely by widening its own
+// spread. Without a spread w_i = 1 exactly: r²/1, ln 1 = 0 and the numbers are today's, bit for
+// bit. The cell's rms and mean stay the raw residual's (channel units), as the report prints.
+// Where v is estimated from few members it is pooled over a short window first (see
+// ensemble_variance in sim2real/replay.hpp: the division by a 2-degree-of-freedom estimate would
+// otherwise blow up wherever the members agree by chance).
 #pragma once
 #include <cstddef>
 #include <string>
@@ -48,7 +68,12 @@ struct ResidualCell {
   double rms = 0.0;         // root-mean-square residual, measured minus simulated [channel unit]
   double mean = 0.0;        // mean residual [channel unit]
   double sigma = 0.0;       // the measured channel's noise [channel unit]
-  double excess = 0.0;      // ln max(MSE / (κ σ²), 1)
+  double excess = 0.0;      // ln max(MSE_w / (κ σ²), 1); MSE_w = MSE without a spread
+  // the simulation's own spread over the cell, zero without one: sqrt of the cell's mean of
+  // (1 + 1/N) v [channel unit], and the model's mean share of the variance each sample is judged
+  // against, (1 + 1/N) v / (σ² + (1 + 1/N) v), in [0, 1)
+  double spread = 0.0;
+  double spread_share = 0.0;
 };
 
 struct Residuals {
@@ -60,12 +85,18 @@ struct Residuals {
   // objective (the floored excess is flat near the optimum and would leave a parameter anywhere
   // within the noise)
   double log_ratio = 0.0;
+  // N of the simulated run's spread the residual was judged with; 0: none (the sensor noise alone)
+  int spread_members = 0;
   // the excess of the cells of these channels (an effect's signature)
   double excess_of(const std::vector<std::size_t>& channels) const;
+  // a channel's spread_share averaged over its cells' samples (0 without a spread)
+  double spread_share_of(std::size_t channel) const;
 };
 
 // the simulated run interpolated at the measured times of each phase (InputError when it does
-// not cover them); sigma from noise_sigmas(measured)
+// not cover them); sigma from noise_sigmas(measured). A simulated run with a spread (Run::spread)
+// is judged against σ² + (1 + 1/N) v per sample (the header comment); a spread that is not on the
+// run's own sample times, or holds a negative or non-finite variance, is an Error
 Residuals compute_residuals(const Run& simulated, const Run& measured, const std::vector<double>& sigma);
 
 // the residual series of one channel at the measured times (measured minus simulated)

@@ -54,10 +54,22 @@ struct RunSummary {
 // the summary as summary.json's object (Error when a detail's key is one of the contract's)
 nlohmann::json to_json(const RunSummary& summary);
 
+// a simulation's own spread (issue 17): what the run would scatter by if it were dug again on
+// another pile arrangement. The pile ensemble's mean carries it (sim2real/replay.hpp,
+// ensemble_mean), and compute_residuals (sim2real/residuals.hpp) adds it to the sensor noise.
+// Held in memory only: the run files do not carry it, a measured run never has one
+struct RunSpread {
+  int members = 0;  // N, the members the run is the mean of (2 or more)
+  // per channel at the run's own sample times (t is the run's t): the members' unbiased sample
+  // variance [channel unit²], pooled over a short window (ensemble_variance)
+  TimeSeries variance;
+};
+
 struct Run {
   std::filesystem::path dir;
   TimeSeries series;
   RunSummary summary;
+  std::optional<RunSpread> spread;  // absent: one simulation, or a measured run
 
   // a row label: "<scenario>-<fidelity>" when both are known, else the directory name
   std::string label() const;

@@ -8,6 +8,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "tests/sim2real/synthetic_runs.hpp"
+
 namespace talus::sim2real {
 namespace {
 
@@ -120,6 +122,43 @@ TEST(Diagnose, JsonHasTheIssuesFields) {
   }
   EXPECT_DOUBLE_EQ(j["error_after"]["mean"].get<double>(), 0.05);
   EXPECT_FALSE(j["unexplained"].get<bool>());
+  // no ensemble: the sensor noise alone judged the residual, and the JSON says so
+  EXPECT_FALSE(j["model_spread_used"].get<bool>());
+  EXPECT_TRUE(j["runs"][0]["model_spread"].is_null());
+}
+
+// a run judged against a simulation's spread: diagnosis.json names the piles and each channel's
+// mean share of the variance (the residuals' own numbers), and every cell its spread
+TEST(Diagnose, JsonReportsTheModelSpreadItUsed) {
+  sim2real::Run measured;
+  measured.series = test::reference_series();
+  measured.summary = test::reference_summary();
+  sim2real::Run simulated;
+  simulated.series = test::simulated_series();
+  simulated.spread = RunSpread{3, {}};
+  simulated.spread->variance[Channel::t] = simulated.series[Channel::t];
+  for (std::size_t c = 1; c < kChannelCount; ++c)
+    simulated.spread->variance.columns[c].assign(simulated.series.size(), c == 1 ? 4e6 : 0.0);
+  const std::vector<double> sigma(kChannelCount, 1e3);
+  Diagnosis d;
+  d.runs = {"a"};
+  d.calibration = d.validation = {0};
+  d.error_before = d.error_after = {{"a", {0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1}, 0.1}};
+  d.residuals_before = {compute_residuals(simulated, measured, sigma)};
+  d.residuals_after = d.residuals_before;
+  d.scan_rms_m.resize(1);
+  const auto j = diagnosis_json(d);
+  EXPECT_TRUE(j["model_spread_used"].get<bool>());
+  const auto& spread = j["runs"][0]["model_spread"];
+  ASSERT_TRUE(spread.is_object());
+  EXPECT_EQ(spread["members"].get<int>(), 3);
+  // f_lift: (1 + 1/3) 4e6 / (1e6 + (1 + 1/3) 4e6) in every sample; f_tilt has no spread
+  EXPECT_NEAR(spread["variance_share_before"]["f_lift"].get<double>(), 16.0 / 19.0, 1e-12);
+  EXPECT_EQ(spread["variance_share_after"]["f_tilt"].get<double>(), 0.0);
+  const auto& cell = j["residuals_before"][0]["cells"][0];
+  EXPECT_EQ(cell["channel"], "f_lift");
+  EXPECT_NEAR(cell["spread"].get<double>(), std::sqrt(4.0 / 3.0 * 4e6), 1e-6);
+  EXPECT_NEAR(cell["spread_share"].get<double>(), 16.0 / 19.0, 1e-12);
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 #include "host/error.hpp"
 #include "sim2real/synthetic.hpp"
 #include "synthetic_runs.hpp"
+#include "terrain/pile.hpp"
 #include "tests/solvers/dem_test_util.hpp"
 #include "vehicle/scenario.hpp"
 
@@ -129,6 +130,47 @@ TEST(Replay, AnEnsemblesMeanAveragesEveryChannelAndTheScalars) {
   EXPECT_EQ(one.series.columns, b.series.columns);
 }
 
+// the members' spread by hand: three runs whose f_lift at sample i is 1, 2 and 4 (+ i) and whose
+// other channels agree. The sample variance is ((1 − 7/3)² + (2 − 7/3)² + (4 − 7/3)²) / 2 = 7/3 at
+// every sample; at 100 Hz a window of ±0.015 s pools 3 samples (2 at the ends)
+TEST(Replay, AnEnsemblesSpreadIsTheMembersUnbiasedSampleVariance) {
+  std::vector<sim2real::Run> runs(3);
+  const double offsets[] = {1.0, 2.0, 4.0};
+  for (std::size_t k = 0; k < runs.size(); ++k) {
+    runs[k].series = test::reference_series();
+    runs[k].summary = test::reference_summary();
+    auto& f = runs[k].series[Channel::f_lift];
+    for (std::size_t i = 0; i < f.size(); ++i) f[i] = offsets[k] + static_cast<double>(i);
+  }
+  // f_tilt differs at one sample only: 0, 0, 3 at sample 100 (mean 1, variance (1 + 1 + 4) / 2 = 3)
+  runs[2].series[Channel::f_tilt][100] += 3.0;
+  const TimeSeries raw = ensemble_variance(runs, 0.0);
+  EXPECT_EQ(raw[Channel::t], runs[0].series[Channel::t]);
+  for (std::size_t i = 0; i < raw.size(); i += 97)
+    EXPECT_NEAR(raw[Channel::f_lift][i], 7.0 / 3.0, 1e-9) << i;
+  EXPECT_NEAR(raw[Channel::f_tilt][100], 3.0, 1e-9);
+  EXPECT_EQ(raw[Channel::f_tilt][99], 0.0);  // members that agree: exactly 0
+  EXPECT_EQ(raw[Channel::power][100], 0.0);
+  // pooled over ±0.015 s: samples 99, 100 and 101 share the 3 of sample 100 as 1 each
+  const TimeSeries pooled = ensemble_variance(runs, 0.015);
+  EXPECT_NEAR(pooled[Channel::f_tilt][99], 1.0, 1e-12);
+  EXPECT_NEAR(pooled[Channel::f_tilt][100], 1.0, 1e-12);
+  EXPECT_NEAR(pooled[Channel::f_tilt][101], 1.0, 1e-12);
+  EXPECT_EQ(pooled[Channel::f_tilt][98], 0.0);
+  EXPECT_EQ(pooled[Channel::f_tilt][102], 0.0);
+  EXPECT_NEAR(pooled[Channel::f_lift][0], 7.0 / 3.0, 1e-9);  // the end: 2 samples pooled
+
+  // the mean carries N and the pooled variance at kSpreadHalfWindow; one run has no spread
+  const sim2real::Run mean = ensemble_mean(runs);
+  ASSERT_TRUE(mean.spread.has_value());
+  EXPECT_EQ(mean.spread->members, 3);
+  EXPECT_EQ(mean.spread->variance.columns, ensemble_variance(runs).columns);
+  EXPECT_FALSE(ensemble_mean({runs[0]}).spread.has_value());
+  // fewer than two members, or a negative window, have no sample variance
+  EXPECT_THROW(ensemble_variance({runs[0]}), Error);
+  EXPECT_THROW(ensemble_variance(runs, -0.1), Error);
+}
+
 // members on other sample times or of another scenario are not averaged
 TEST(Replay, AnEnsemblesMeanRefusesRunsThatDoNotShareTheirTimeBase) {
   sim2real::Run a;
@@ -152,7 +194,9 @@ TEST(Replay, AnEnsemblesMeanRefusesRunsThatDoNotShareTheirTimeBase) {
 
 // HD27 at D400 replayed on an ensemble of two piles (seeds 4 and 5): the simulation is the mean
 // of its members, the second member is the dig a single replay on seed 5 gives, bit for bit, and
-// the two piles dig differently (what the ensemble averages out)
+// the two piles dig differently (what the ensemble averages out). The mean carries the members'
+// spread: negligible while the bucket is still outside the pile (the machine alone does not know
+// which pile lies ahead), beyond that through the dig; a single pile carries none
 TEST(Replay, APileEnsembleIsTheMeanOfItsPilesDigs) {
   const vehicle::Scenario sc = vehicle::load_scenario("hd27");
   MeasuredRun measured;
@@ -181,11 +225,59 @@ TEST(Replay, APileEnsembleIsTheMeanOfItsPilesDigs) {
   EXPECT_NE(m0.series[Channel::f_lift], m1.series[Channel::f_lift]);
   ASSERT_TRUE(ensemble.scan_rms_m().has_value());
 
+  // the spread: the members' variance pooled at kSpreadHalfWindow
+  ASSERT_TRUE(mean.spread.has_value());
+  EXPECT_EQ(mean.spread->members, 2);
+  EXPECT_EQ(mean.spread->variance.columns, ensemble_variance(ensemble.members()).columns);
+  // the bucket's tip (the members agree on it until they touch soil) comes within one grain
+  // diameter of the pile's toe at t_near. Before it the members differ by rounding at most (their
+  // last bits may differ from the start: 1e-11 N in the forces was seen on seeds 2-4 with other
+  // inputs), so the spread is negligible against any sensor: below (1e-6 σ)² of the default
+  // noise model in every channel, in the raw variance and, up to a window before t_near, in the
+  // pooled one. From where the soil first shows (the forces' spread beyond that) to the dig's end
+  // the forces' pooled spread is beyond it at every sample
+  const TimeSeries raw = ensemble_variance(ensemble.members(), 0.0);
+  const auto& t = mean.series[Channel::t];
+  const auto& tip = m0.series[Channel::bucket_tip_x];
+  const double near = measured.meta.pile_toe_x_m - level_preset("D400").diameter;
+  std::size_t toe = 0;
+  while (toe < t.size() && tip[toe] < near) ++toe;
+  ASSERT_LT(toe, t.size());
+  const auto& noise = default_sensor_noise();
+  auto negligible = [&](std::size_t c) {
+    const double bound = 1e-6 * noise.at(kChannelNames[c]);
+    return bound * bound;
+  };
+  for (std::size_t c = 1; c < kChannelCount; ++c) {
+    for (std::size_t i = 0; i < toe; ++i)
+      ASSERT_LE(raw.columns[c][i], negligible(c)) << kChannelNames[c] << " at " << t[i] << " s";
+    for (std::size_t i = 0; i < toe && t[i] < t[toe] - kSpreadHalfWindow; ++i)
+      ASSERT_LE(mean.spread->variance.columns[c][i], negligible(c))
+          << kChannelNames[c] << " at " << t[i] << " s";
+  }
+  const std::size_t f_lift = static_cast<std::size_t>(Channel::f_lift);
+  std::size_t soil = toe;
+  while (soil < t.size() && raw.columns[f_lift][soil] <= negligible(f_lift)) ++soil;
+  ASSERT_LT(soil, t.size());
+  std::printf(
+      "[ measured ] HD27-D400 piles 4 and 5: the tip a grain from the toe at %.2f s, the lift "
+      "forces differ from %.2f s\n",
+      t[toe], t[soil]);
+  std::size_t beyond = 0, dug = 0;
+  for (std::size_t i = soil; i < t.size() && t[i] < sc.dig_end; ++i, ++dug)
+    if (mean.spread->variance[Channel::f_lift][i] > negligible(f_lift) &&
+        mean.spread->variance[Channel::f_traction][i] >
+            negligible(static_cast<std::size_t>(Channel::f_traction)))
+      ++beyond;
+  ASSERT_GT(dug, 0u);
+  EXPECT_EQ(beyond, dug);
+
   ReplayOptions single;
   single.pile_seed = 5;
   Replay alone(measured, single, &dev);
   const sim2real::Run r = alone.simulate(none);
   ASSERT_EQ(alone.members().size(), 1u);
+  EXPECT_FALSE(r.spread.has_value());
   EXPECT_EQ(r.series.columns, m1.series.columns);
   EXPECT_EQ(r.summary.loaded_mass_kg, m1.summary.loaded_mass_kg);
 }

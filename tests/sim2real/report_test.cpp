@@ -48,6 +48,27 @@ TEST(Report, NamesTheResidualTheScanWarningAndTheVerdict) {
   EXPECT_EQ(rows, 1 + kSignatureCells);  // the separator line and the cells
 }
 
+// a residual judged against a simulation's spread says so under its table, with the spread's
+// share per channel; one judged against the sensor noise alone says nothing more
+TEST(Report, SaysWhenTheSimulationsSpreadJudgedTheResidual) {
+  MeasuredRun measured;
+  measured.run.series = test::reference_series();
+  measured.run.summary = test::reference_summary();
+  sim2real::Run simulated;
+  simulated.series = test::simulated_series();
+  simulated.summary = test::simulated_summary();
+  const std::vector<double> sigma(kChannelCount, 1e3);
+  EXPECT_EQ(spread_note(compute_residuals(simulated, measured.run, sigma)), "");
+  simulated.spread = RunSpread{3, {}};
+  simulated.spread->variance[Channel::t] = simulated.series[Channel::t];
+  for (std::size_t c = 1; c < kChannelCount; ++c)
+    simulated.spread->variance.columns[c].assign(simulated.series.size(), c == 1 ? 4e6 : 0.0);
+  const std::string note = spread_note(compute_residuals(simulated, measured.run, sigma));
+  // f_lift's share: (4/3) 4e6 / (1e6 + (4/3) 4e6) = 16/19 = 0.84
+  for (const char* part : {"own spread over 3 piles", "f_lift 0.84", "f_tilt 0.00"})
+    EXPECT_NE(note.find(part), std::string::npos) << part << "\n" << note;
+}
+
 // the error table's last row is the mean of the absolute values over the runs
 TEST(Report, ErrorTableEndsWithTheMeanRow) {
   const std::vector<TableRow> rows = {{"a", {0.1, 0.2, 0.3, 0.4, 0.5, -0.2, 0.1}, 0.3},

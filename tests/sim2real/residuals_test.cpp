@@ -4,7 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <random>
 
 #include "host/error.hpp"
@@ -75,6 +77,188 @@ TEST(Residuals, APerfectModelLeavesNoExcessAndABiasDoes) {
       EXPECT_NEAR(cell.mean, -3.0 * sigma[1], 0.5 * sigma[1]);
     }
   }
+}
+
+// the law before issue 17's spread, written out here as the reference: per cell MSE against σ²
+struct SensorOnly {
+  std::vector<double> excess;  // per cell, in compute_residuals' order
+  double total = 0.0, log_ratio = 0.0;
+};
+SensorOnly sensor_only_law(const sim2real::Run& simulated, const sim2real::Run& measured,
+                           const std::vector<double>& sigma) {
+  SensorOnly out;
+  const auto phases = run_phases(measured);
+  const auto& tm = measured.series[Channel::t];
+  for (size_t c = 1; c < kChannelCount; ++c) {
+    const auto r = residual_series(simulated, measured, c);
+    for (size_t p = 0; p < phases.size(); ++p) {
+      const bool last = p + 1 == phases.size();
+      double sum2 = 0.0;
+      int n = 0;
+      for (size_t i = 0; i < tm.size(); ++i) {
+        if (tm[i] < phases[p].t0 || tm[i] > phases[p].t1 || (!last && tm[i] >= phases[p].t1))
+          continue;
+        sum2 += r[i] * r[i];
+        ++n;
+      }
+      if (n == 0) continue;
+      const double mse = sum2 / n;
+      out.excess.push_back(std::log(std::max(mse / (kNoiseAllowance * sigma[c] * sigma[c]), 1.0)));
+      out.total += out.excess.back();
+      out.log_ratio +=
+          double(n) / double(tm.size()) * std::log(std::max(mse / (sigma[c] * sigma[c]), 1e-6));
+    }
+  }
+  return out;
+}
+
+// a spread of the run's shape holding `v` in every channel, from an ensemble of `members`
+RunSpread uniform_spread(const sim2real::Run& run, int members, double v) {
+  RunSpread spread;
+  spread.members = members;
+  spread.variance[Channel::t] = run.series[Channel::t];
+  for (size_t c = 1; c < kChannelCount; ++c)
+    spread.variance.columns[c].assign(run.series.size(), v);
+  return spread;
+}
+
+// without a spread, and with one that is zero everywhere, the residuals are the sensor-noise law's
+// bit for bit: w = 1 exactly, r² / 1 = r² and ln 1 = 0 (issue 17: the spread must not move a
+// diagnosis of runs without an ensemble)
+TEST(Residuals, AZeroSpreadLeavesTheSensorNoiseLawBitForBit) {
+  auto rng = fresh_rng();
+  const sim2real::Run measured = noisy_reference(0.01, rng);
+  const auto sigma = noise_sigmas(measured.series);
+  sim2real::Run model;
+  model.series = test::simulated_series();  // off by several σ in several channels and phases
+  const SensorOnly reference = sensor_only_law(model, measured, sigma);
+  const Residuals none = compute_residuals(model, measured, sigma);
+  ASSERT_EQ(none.cells.size(), reference.excess.size());
+  EXPECT_GT(reference.total, 1.0);  // the case is not trivial: cells beyond noise
+  for (size_t k = 0; k < none.cells.size(); ++k)
+    EXPECT_EQ(none.cells[k].excess, reference.excess[k]) << k;
+  EXPECT_EQ(none.excess, reference.total);
+  EXPECT_EQ(none.log_ratio, reference.log_ratio);
+  EXPECT_EQ(none.spread_members, 0);
+
+  sim2real::Run zero = model;
+  zero.spread = uniform_spread(model, 3, 0.0);
+  const Residuals with_zero = compute_residuals(zero, measured, sigma);
+  ASSERT_EQ(with_zero.cells.size(), none.cells.size());
+  for (size_t k = 0; k < none.cells.size(); ++k) {
+    EXPECT_EQ(with_zero.cells[k].excess, none.cells[k].excess) << k;
+    EXPECT_EQ(with_zero.cells[k].rms, none.cells[k].rms) << k;
+    EXPECT_EQ(with_zero.cells[k].mean, none.cells[k].mean) << k;
+    EXPECT_EQ(with_zero.cells[k].spread, 0.0);
+    EXPECT_EQ(with_zero.cells[k].spread_share, 0.0);
+  }
+  EXPECT_EQ(with_zero.excess, none.excess);
+  EXPECT_EQ(with_zero.log_ratio, none.log_ratio);
+  EXPECT_EQ(with_zero.spread_members, 3);
+}
+
+// the law by hand on one channel: σ = 1, f_lift's residual ±2 everywhere, its spread v = 3 over the
+// first half and v = 0.75 over the second, N = 3, so (1 + 1/N) v = 4 and 1 and w = 5 and 2. The
+// other channels have no residual and no spread, so only f_lift's terms differ between the two
+TEST(Residuals, EachSampleIsJudgedAgainstSigmaSquaredPlusOnePlusOneOverNTimesV) {
+  sim2real::Run measured;
+  measured.series = test::reference_series();  // 1001 samples, no marks: one phase
+  sim2real::Run model = measured;
+  const size_t n = measured.series.size();
+  for (size_t i = 0; i < n; ++i) measured.series[Channel::f_lift][i] += i % 2 == 0 ? 2.0 : -2.0;
+  const std::vector<double> sigma(kChannelCount, 1.0);
+  const Residuals none = compute_residuals(model, measured, sigma);
+  model.spread = uniform_spread(model, 3, 0.0);
+  const size_t half = n / 2;  // samples [0, half) at v = 3, [half, n) at v = 0.75
+  for (size_t i = 0; i < n; ++i) model.spread->variance[Channel::f_lift][i] = i < half ? 3.0 : 0.75;
+  const Residuals with = compute_residuals(model, measured, sigma);
+  ASSERT_EQ(with.cells.size(), 13u);
+  const ResidualCell& cell = with.cells[0];
+  ASSERT_EQ(cell.channel, static_cast<size_t>(Channel::f_lift));
+  const double a = double(half) / double(n), b = 1.0 - a;  // the two halves' shares of the samples
+  // MSE_w = 4 (a / 5 + b / 2); without the spread MSE = 4 and the excess is ln(4 / 1.5)
+  const double mse_w = 4.0 * (a / 5.0 + b / 2.0);
+  EXPECT_NEAR(none.cells[0].excess, std::log(4.0 / kNoiseAllowance), 1e-12);
+  EXPECT_NEAR(cell.excess, std::log(std::max(mse_w / kNoiseAllowance, 1.0)), 1e-12);
+  EXPECT_NEAR(cell.rms, 2.0, 1e-12);  // the raw residual's, as before
+  EXPECT_NEAR(cell.spread, std::sqrt(4.0 * a + 1.0 * b), 1e-12);
+  EXPECT_NEAR(cell.spread_share, a * 4.0 / 5.0 + b * 1.0 / 2.0, 1e-12);
+  EXPECT_NEAR(with.spread_share_of(static_cast<size_t>(Channel::f_lift)), cell.spread_share, 1e-15);
+  // the log-ratio's cell term: ln MSE_w plus the mean of ln w (the log-determinant), against ln 4
+  EXPECT_NEAR(with.log_ratio - none.log_ratio,
+              std::log(mse_w) + a * std::log(5.0) + b * std::log(2.0) - std::log(4.0), 1e-12);
+  // the other channels are untouched
+  EXPECT_EQ(with.excess - cell.excess, none.excess - none.cells[0].excess);
+}
+
+// a channel whose residual is what another pile arrangement gives, drawn from a known spread: the
+// measured run is one arrangement a_0 plus sensor noise, the model the mean of N = 3 others, so
+// r = a_0 − ā + n with variance σ² + (1 + 1/N) v. With the spread the dig is within noise; without
+// it the same residual is far beyond noise (v = 100 σ² in the dig, 0 outside it)
+TEST(Residuals, AResidualAsLargeAsTheSimulationsSpreadIsWithinNoiseOnlyWithIt) {
+  auto rng = fresh_rng();
+  constexpr int kMembers = 3;
+  constexpr double kSpreadOverNoise = 10.0;  // √v / σ in the dig
+  sim2real::Run clean;
+  clean.series = test::reference_series();
+  sim2real::Run measured = noisy_reference(0.01, rng);  // sensor noise σ_c on every channel
+  const auto sigma = noise_sigmas(measured.series);
+  sim2real::Run model = clean;
+  model.spread = uniform_spread(clean, kMembers, 0.0);
+  const auto& t = clean.series[Channel::t];
+  for (size_t c = 1; c < kChannelCount; ++c) {
+    const double sd = kSpreadOverNoise * sigma[c];
+    std::normal_distribution<double> arrangement(0.0, sd);
+    for (size_t i = 0; i < t.size(); ++i) {
+      if (t[i] < test::kDigStart || t[i] >= test::kDigEnd) continue;
+      double mean = 0.0;
+      for (int k = 0; k < kMembers; ++k) mean += arrangement(rng);
+      measured.series.columns[c][i] += arrangement(rng);
+      model.series.columns[c][i] += mean / kMembers;
+      model.spread->variance.columns[c][i] = sd * sd;
+    }
+  }
+  const Residuals with = compute_residuals(model, measured, sigma);
+  sim2real::Run blind = model;
+  blind.spread.reset();
+  const Residuals without = compute_residuals(blind, measured, sigma);
+  std::printf("[ measured ] a spread of %g σ in the dig: excess %.3f with it, %.3f without\n",
+              kSpreadOverNoise, with.excess, without.excess);
+  // within noise with it (the perfect model's bound above); without it every channel's dig cell
+  // has MSE ≈ (1 + (1 + 1/3) 100) σ², excess ≈ ln(134.3 / 1.5) ≈ 4.5
+  EXPECT_LT(with.excess, 0.5);
+  for (const auto& cell : without.cells) {
+    if (with.phases[cell.phase].name == "dig") {
+      EXPECT_GT(cell.excess, 4.0) << kChannelNames[cell.channel];
+    }
+  }
+  // the model's share of the variance in the dig: (4/3 · 100) / (1 + 4/3 · 100) ≈ 0.993
+  const double share = (1.0 + 1.0 / kMembers) * kSpreadOverNoise * kSpreadOverNoise;
+  for (const auto& cell : with.cells) {
+    if (with.phases[cell.phase].name != "dig") continue;
+    EXPECT_NEAR(cell.spread_share, share / (1.0 + share), 1e-12) << kChannelNames[cell.channel];
+  }
+}
+
+// a spread made by hand wrongly is a program error that names the field
+TEST(Residuals, ASpreadOffTheRunsTimesOrNegativeIsAnError) {
+  sim2real::Run measured;
+  measured.series = test::reference_series();
+  const std::vector<double> sigma(kChannelCount, 1.0);
+  sim2real::Run model = measured;
+  model.spread = uniform_spread(model, 1, 0.0);
+  EXPECT_THROW(compute_residuals(model, measured, sigma), Error);
+  model.spread = uniform_spread(model, 2, 0.0);
+  model.spread->variance[Channel::f_tilt][7] = -1.0;
+  try {
+    compute_residuals(model, measured, sigma);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("variance's f_tilt"), std::string::npos) << e.what();
+  }
+  model.spread = uniform_spread(model, 2, 0.0);
+  model.spread->variance[Channel::t][3] += 1e-3;
+  EXPECT_THROW(compute_residuals(model, measured, sigma), Error);
 }
 
 TEST(Residuals, PhasesFollowTheDigMarks) {
