@@ -78,6 +78,29 @@ void check_members(const std::vector<Run>& runs, const std::string& who) {
   }
 }
 
+// a per-sample variance pooled: each sample the mean of those within ±half_window_s of it (the
+// window shrinks at the run's ends)
+std::vector<double> pooled(const std::vector<double>& t, const std::vector<double>& raw,
+                           double half_window_s) {
+  const std::size_t samples = t.size();
+  std::vector<double> out(samples, 0.0);
+  std::size_t lo = 0, hi = 0;  // the window [lo, hi) of sample i
+  for (std::size_t i = 0; i < samples; ++i) {
+    while (t[lo] < t[i] - half_window_s) ++lo;
+    while (hi < samples && t[hi] <= t[i] + half_window_s) ++hi;
+    double sum = 0.0;
+    for (std::size_t j = lo; j < hi; ++j) sum += raw[j];
+    out[i] = sum / static_cast<double>(hi - lo);
+  }
+  return out;
+}
+
+void check_window(double half_window_s, const std::string& who) {
+  if (!(half_window_s >= 0.0) || !std::isfinite(half_window_s))
+    throw Error(who + ": half_window_s = " + message_number(half_window_s) +
+                "; give a finite window of 0 s (no pooling) or more");
+}
+
 }  // namespace
 
 TimeSeries ensemble_variance(const std::vector<Run>& runs, double half_window_s) {
@@ -85,9 +108,7 @@ TimeSeries ensemble_variance(const std::vector<Run>& runs, double half_window_s)
   if (runs.size() < 2)
     throw Error("ensemble_variance: " + std::to_string(runs.size()) +
                 " run; a sample variance needs 2 or more members");
-  if (!(half_window_s >= 0.0) || !std::isfinite(half_window_s))
-    throw Error("ensemble_variance: half_window_s = " + message_number(half_window_s) +
-                "; give a finite window of 0 s (no pooling) or more");
+  check_window(half_window_s, "ensemble_variance");
   const auto& t = runs.front().series[Channel::t];
   const std::size_t samples = t.size();
   const double n = static_cast<double>(runs.size());
@@ -109,19 +130,42 @@ TimeSeries ensemble_variance(const std::vector<Run>& runs, double half_window_s)
       }
       raw[i] = sum2 / (n - 1.0);
     }
-    // pooled: the mean of the samples within ±half_window_s (the window shrinks at the run's ends)
-    auto& pooled = variance.columns[c];
-    pooled.assign(samples, 0.0);
-    std::size_t lo = 0, hi = 0;  // the window [lo, hi) of sample i
-    for (std::size_t i = 0; i < samples; ++i) {
-      while (t[lo] < t[i] - half_window_s) ++lo;
-      while (hi < samples && t[hi] <= t[i] + half_window_s) ++hi;
-      double sum = 0.0;
-      for (std::size_t j = lo; j < hi; ++j) sum += raw[j];
-      pooled[i] = sum / static_cast<double>(hi - lo);
-    }
+    // pooled: the mean of the samples within ±half_window_s
+    variance.columns[c] = pooled(t, raw, half_window_s);
   }
   return variance;
+}
+
+TimeSeries sensitivity_variance(const Run& fitted, const std::vector<Run>& perturbed,
+                                double half_window_s) {
+  if (perturbed.empty())
+    throw Error(
+        "sensitivity_variance: no perturbed runs; give the simulations at parameters "
+        "within the fit's uncertainty");
+  std::vector<Run> all = {fitted};
+  all.insert(all.end(), perturbed.begin(), perturbed.end());
+  check_members(all, "sensitivity_variance");
+  check_window(half_window_s, "sensitivity_variance");
+  const auto& t = fitted.series[Channel::t];
+  const double m = static_cast<double>(perturbed.size());
+  TimeSeries s;
+  s[Channel::t] = t;
+  for (std::size_t c = 0; c < kChannelCount; ++c) {
+    if (static_cast<Channel>(c) == Channel::t) continue;
+    // the mean square departure from the fitted run: its own value is the centre (not the
+    // perturbed runs' mean), as the measured run is compared with the fitted one
+    std::vector<double> raw(t.size(), 0.0);
+    for (std::size_t i = 0; i < t.size(); ++i) {
+      double sum2 = 0.0;
+      for (const Run& r : perturbed) {
+        const double d = r.series.columns[c][i] - fitted.series.columns[c][i];
+        sum2 += d * d;
+      }
+      raw[i] = sum2 / m;
+    }
+    s.columns[c] = pooled(t, raw, half_window_s);
+  }
+  return s;
 }
 
 Run ensemble_mean(const std::vector<Run>& runs) {
@@ -146,7 +190,7 @@ Run ensemble_mean(const std::vector<Run>& runs) {
   mean.summary.work_J /= n;
   mean.summary.details["pile_ensemble"] = runs.size();
   // the members' spread, which the residuals add to the sensor noise (sim2real/residuals.hpp)
-  mean.spread = RunSpread{static_cast<int>(runs.size()), ensemble_variance(runs)};
+  mean.spread = RunSpread{static_cast<int>(runs.size()), ensemble_variance(runs), 0, {}};
   return mean;
 }
 

@@ -58,6 +58,18 @@ inline constexpr double kSpreadHalfWindow = 0.2;  // s
 TimeSeries ensemble_variance(const std::vector<Run>& runs,
                              double half_window_s = kSpreadHalfWindow);
 
+// the simulation's sensitivity around a fitted run (issue 17, sim2real/diagnose.hpp): per channel
+// at the fitted run's sample times, the perturbed runs' mean square departure from it,
+// s(t) = (1/M) Σ_m (x_m(t) − x̂(t))², pooled over ±half_window_s as ensemble_variance's (a
+// departure of M = 2 simulations has as few degrees of freedom as an ensemble of three). The
+// perturbed runs are the same simulation at parameters within the fit's uncertainty (an
+// orthogonal two-level design: their mean square departure is the delta method's variance of the
+// fitted run where it is smooth in the parameters, and twice a realisation's variance where it is
+// chaotic in them). Error for no perturbed runs, runs that do not share the fitted run's time base
+// (as ensemble_mean), or a negative window
+TimeSeries sensitivity_variance(const Run& fitted, const std::vector<Run>& perturbed,
+                                double half_window_s = kSpreadHalfWindow);
+
 // the ensemble's mean run: every channel averaged sample by sample, loaded mass and work
 // averaged; the runs must share their time base (the same scenario at the same level) and their
 // labels and phase marks, which the mean keeps. Error naming the first run that differs. Two or

@@ -106,33 +106,46 @@ std::vector<double> at_measured_times(const Run& simulated, const std::vector<do
   return interpolate(ts, column, at);
 }
 
-// a spread must be an ensemble's (two or more members) on the run's own sample times, with a
-// finite, non-negative variance everywhere; it is made by code (ensemble_mean), so a bad one is
-// a program error, named by its field
-void check_spread(const Run& simulated) {
-  const RunSpread& s = *simulated.spread;
-  const std::string which =
-      "compute_residuals: the simulated run " + simulated.label() + "'s spread";
-  if (s.members < 2)
-    throw Error(
-        which + " has members = " + std::to_string(s.members) +
-        "; a spread comes from an ensemble of 2 or more (ensemble_mean), else leave it empty");
-  if (s.variance[Channel::t] != simulated.series[Channel::t])
+// a spread holds an ensemble's variance (two or more members), a sensitivity (one or more
+// simulations), or both, each on the run's own sample times, finite and non-negative everywhere;
+// it is made by code (ensemble_mean, the diagnosis), so a bad one is a program error, named by its
+// field
+void check_variance(const Run& simulated, const TimeSeries& variance, const std::string& which) {
+  if (variance[Channel::t] != simulated.series[Channel::t])
     throw Error(which +
-                ": variance's t is not the run's sample times; compute it from the members the run "
-                "is the mean of");
+                "'s t is not the run's sample times; compute it from the simulations the run "
+                "is judged with");
   for (std::size_t c = 1; c < kChannelCount; ++c) {
-    const auto& v = s.variance.columns[c];
+    const auto& v = variance.columns[c];
     if (v.size() != simulated.series.size())
-      throw Error(which + ": variance's " + std::string(kChannelNames[c]) + " has " +
+      throw Error(which + "'s " + std::string(kChannelNames[c]) + " has " +
                   std::to_string(v.size()) + " samples for the run's " +
                   std::to_string(simulated.series.size()));
     for (std::size_t i = 0; i < v.size(); ++i)
       if (!std::isfinite(v[i]) || v[i] < 0.0)
-        throw Error(which + ": variance's " + std::string(kChannelNames[c]) + " is " +
-                    message_number(v[i]) + " at t = " + message_number(s.variance[Channel::t][i]) +
+        throw Error(which + "'s " + std::string(kChannelNames[c]) + " is " + message_number(v[i]) +
+                    " at t = " + message_number(variance[Channel::t][i]) +
                     " s; a variance is finite and at least 0");
   }
+}
+
+void check_spread(const Run& simulated) {
+  const RunSpread& s = *simulated.spread;
+  const std::string which =
+      "compute_residuals: the simulated run " + simulated.label() + "'s spread";
+  if (s.members == 1 || s.members < 0)
+    throw Error(
+        which + " has members = " + std::to_string(s.members) +
+        "; an ensemble's spread comes from 2 or more (ensemble_mean), else set members to 0");
+  if (s.sensitivity_runs < 0)
+    throw Error(which + " has sensitivity_runs = " + std::to_string(s.sensitivity_runs) +
+                "; give the simulations behind the sensitivity, or 0 for none");
+  if (s.members == 0 && s.sensitivity_runs == 0)
+    throw Error(which +
+                " has neither an ensemble (members 0) nor a sensitivity (sensitivity_runs 0); "
+                "leave the spread empty instead");
+  if (s.members > 0) check_variance(simulated, s.variance, which + ": variance");
+  if (s.sensitivity_runs > 0) check_variance(simulated, s.sensitivity, which + ": sensitivity");
 }
 
 }  // namespace
@@ -153,20 +166,27 @@ Residuals compute_residuals(const Run& simulated, const Run& measured, const std
   if (simulated.spread) {
     check_spread(simulated);
     out.spread_members = simulated.spread->members;
+    out.sensitivity_runs = simulated.spread->sensitivity_runs;
   }
   // the measured run stands for one more arrangement and the mean has its own error: (1 + 1/N) v
-  const double inflation = simulated.spread ? 1.0 + 1.0 / simulated.spread->members : 0.0;
+  const double inflation = out.spread_members > 0 ? 1.0 + 1.0 / out.spread_members : 0.0;
   for (size_t c = 1; c < kChannelCount; ++c) {
     const std::vector<double> r = residual_series(simulated, measured, c);
-    // the model's variance per sample, (1 + 1/N) v, and the sample's variance in units of the
-    // sensor's, w = 1 + (1 + 1/N) v / σ²: exactly 1 without a spread
+    // the model's variance per sample, (1 + 1/N) v + s, and the sample's variance in units of
+    // the sensor's, w = 1 + ((1 + 1/N) v + s) / σ²: exactly 1 without a spread
     std::vector<double> model(tm.size(), 0.0), w(tm.size(), 1.0);
     if (simulated.spread) {
-      const auto v = at_measured_times(simulated, simulated.spread->variance.columns[c], measured);
-      for (size_t i = 0; i < tm.size(); ++i) {
-        model[i] = inflation * v[i];
-        w[i] = 1.0 + model[i] / (sigma[c] * sigma[c]);
+      if (out.spread_members > 0) {
+        const auto v =
+            at_measured_times(simulated, simulated.spread->variance.columns[c], measured);
+        for (size_t i = 0; i < tm.size(); ++i) model[i] = inflation * v[i];
       }
+      if (out.sensitivity_runs > 0) {
+        const auto sv =
+            at_measured_times(simulated, simulated.spread->sensitivity.columns[c], measured);
+        for (size_t i = 0; i < tm.size(); ++i) model[i] += sv[i];
+      }
+      for (size_t i = 0; i < tm.size(); ++i) w[i] = 1.0 + model[i] / (sigma[c] * sigma[c]);
     }
     for (size_t p = 0; p < out.phases.size(); ++p) {
       // samples of the phase: [t0, t1) except the last phase, which keeps its end

@@ -33,6 +33,14 @@
 // Where v is estimated from few members it is pooled over a short window first (see
 // ensemble_variance in sim2real/replay.hpp: the division by a 2-degree-of-freedom estimate would
 // otherwise blow up wherever the members agree by chance).
+//
+// The simulation's sensitivity (issue 17): a run simulated with fitted parameters θ̂ may also carry
+// s_c(t), the mean square departure from it of simulations at parameters within the fit's
+// uncertainty (RunSpread::sensitivity, sim2real/diagnose.hpp). Measured = f(θ*) + a + n, simulated
+// = f(θ̂) + â: the parameter's error f(θ*) − f(θ̂) and, where the simulation is chaotic in its
+// parameter, the two realisations' difference a − â are what s estimates, so it adds as it is:
+// each sample is judged against σ² + (1 + 1/N) v + s, through the same w and the same formulas
+// (N = 0, no ensemble: σ² + s).
 #pragma once
 #include <cstddef>
 #include <string>
@@ -70,8 +78,8 @@ struct ResidualCell {
   double sigma = 0.0;       // the measured channel's noise [channel unit]
   double excess = 0.0;      // ln max(MSE_w / (κ σ²), 1); MSE_w = MSE without a spread
   // the simulation's own spread over the cell, zero without one: sqrt of the cell's mean of
-  // (1 + 1/N) v [channel unit], and the model's mean share of the variance each sample is judged
-  // against, (1 + 1/N) v / (σ² + (1 + 1/N) v), in [0, 1)
+  // m = (1 + 1/N) v + s [channel unit], and the model's mean share of the variance each sample is
+  // judged against, m / (σ² + m), in [0, 1)
   double spread = 0.0;
   double spread_share = 0.0;
 };
@@ -87,6 +95,10 @@ struct Residuals {
   double log_ratio = 0.0;
   // N of the simulated run's spread the residual was judged with; 0: none (the sensor noise alone)
   int spread_members = 0;
+  // the simulations behind the sensitivity it was judged with too; 0: none
+  int sensitivity_runs = 0;
+  // whether any model variance (ensemble or sensitivity) judged it
+  bool judged_with_spread() const { return spread_members > 0 || sensitivity_runs > 0; }
   // the excess of the cells of these channels (an effect's signature)
   double excess_of(const std::vector<std::size_t>& channels) const;
   // a channel's spread_share averaged over its cells' samples (0 without a spread)
@@ -95,8 +107,9 @@ struct Residuals {
 
 // the simulated run interpolated at the measured times of each phase (InputError when it does
 // not cover them); sigma from noise_sigmas(measured). A simulated run with a spread (Run::spread)
-// is judged against σ² + (1 + 1/N) v per sample (the header comment); a spread that is not on the
-// run's own sample times, or holds a negative or non-finite variance, is an Error
+// is judged against σ² + (1 + 1/N) v + s per sample (the header comment); a spread with neither
+// part, one of one member, one not on the run's own sample times, or one holding a negative or
+// non-finite variance is an Error
 Residuals compute_residuals(const Run& simulated, const Run& measured, const std::vector<double>& sigma);
 
 // the residual series of one channel at the measured times (measured minus simulated)

@@ -55,14 +55,23 @@ struct RunSummary {
 nlohmann::json to_json(const RunSummary& summary);
 
 // a simulation's own spread (issue 17): what the run would scatter by if it were dug again on
-// another pile arrangement. The pile ensemble's mean carries it (sim2real/replay.hpp,
-// ensemble_mean), and compute_residuals (sim2real/residuals.hpp) adds it to the sensor noise.
-// Held in memory only: the run files do not carry it, a measured run never has one
+// another pile arrangement, or simulated again at parameters within the fit's uncertainty. The
+// pile ensemble's mean carries the first (sim2real/replay.hpp, ensemble_mean), the diagnosis adds
+// the second to a fitted model's run (sim2real/diagnose.hpp, "sensitivity"), and
+// compute_residuals (sim2real/residuals.hpp) adds both to the sensor noise. Held in memory only:
+// the run files do not carry it, a measured run never has one
 struct RunSpread {
-  int members = 0;  // N, the members the run is the mean of (2 or more)
+  int members = 0;  // N, the members the run is the mean of (2 or more), or 0: no ensemble
   // per channel at the run's own sample times (t is the run's t): the members' unbiased sample
-  // variance [channel unit²], pooled over a short window (ensemble_variance)
+  // variance [channel unit²], pooled over a short window (ensemble_variance); empty with N = 0
   TimeSeries variance;
+  // the simulations at parameters within the fit's uncertainty behind `sensitivity` (1 or more),
+  // or 0: none
+  int sensitivity_runs = 0;
+  // per channel at the run's own sample times: their mean square departure from the run
+  // [channel unit²], pooled as the ensemble's (sensitivity_variance), added to the residual's
+  // variance as it is; empty with sensitivity_runs = 0
+  TimeSeries sensitivity;
 };
 
 struct Run {

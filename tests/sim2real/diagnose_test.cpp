@@ -135,7 +135,7 @@ TEST(Diagnose, JsonReportsTheModelSpreadItUsed) {
   measured.summary = test::reference_summary();
   sim2real::Run simulated;
   simulated.series = test::simulated_series();
-  simulated.spread = RunSpread{3, {}};
+  simulated.spread = RunSpread{3, {}, 0, {}};
   simulated.spread->variance[Channel::t] = simulated.series[Channel::t];
   for (std::size_t c = 1; c < kChannelCount; ++c)
     simulated.spread->variance.columns[c].assign(simulated.series.size(), c == 1 ? 4e6 : 0.0);

@@ -171,6 +171,41 @@ TEST(Replay, AnEnsemblesSpreadIsTheMembersUnbiasedSampleVariance) {
   EXPECT_THROW(ensemble_variance(runs, -0.1), Error);
 }
 
+// the sensitivity by hand: a fitted run and two perturbed ones whose f_lift departs from it by +1
+// and −3 at every sample, and whose f_tilt departs by 2 at sample 100 in one of them. The mean
+// square departure from the fitted run (not from the perturbed runs' own mean, which would give
+// ((1 + 1)² + (−3 + 1)²) / 2 = 4) is (1 + 9) / 2 = 5; f_tilt's is 4 / 2 = 2 at sample 100, pooled
+// over ±0.015 s as 2/3 at samples 99–101
+TEST(Replay, ASensitivityIsThePerturbedRunsMeanSquareDepartureFromTheFit) {
+  sim2real::Run fitted;
+  fitted.series = test::reference_series();
+  fitted.summary = test::reference_summary();
+  std::vector<sim2real::Run> perturbed(2, fitted);
+  const double departure[] = {1.0, -3.0};
+  for (std::size_t k = 0; k < perturbed.size(); ++k)
+    for (double& f : perturbed[k].series[Channel::f_lift]) f += departure[k];
+  perturbed[1].series[Channel::f_tilt][100] += 2.0;
+  const TimeSeries raw = sensitivity_variance(fitted, perturbed, 0.0);
+  EXPECT_EQ(raw[Channel::t], fitted.series[Channel::t]);
+  for (std::size_t i = 0; i < raw.size(); i += 97)
+    EXPECT_NEAR(raw[Channel::f_lift][i], 5.0, 1e-9) << i;
+  EXPECT_NEAR(raw[Channel::f_tilt][100], 2.0, 1e-12);
+  EXPECT_EQ(raw[Channel::f_tilt][99], 0.0);  // runs that agree with the fit: exactly 0
+  EXPECT_EQ(raw[Channel::power][100], 0.0);
+  const TimeSeries pooled = sensitivity_variance(fitted, perturbed, 0.015);
+  for (std::size_t i = 99; i <= 101; ++i) EXPECT_NEAR(pooled[Channel::f_tilt][i], 2.0 / 3.0, 1e-12);
+  EXPECT_EQ(pooled[Channel::f_tilt][98], 0.0);
+  // the default pools over kSpreadHalfWindow, as the ensemble's
+  EXPECT_EQ(sensitivity_variance(fitted, perturbed).columns,
+            sensitivity_variance(fitted, perturbed, kSpreadHalfWindow).columns);
+  // no perturbed run, one on other sample times, or a negative window: an Error
+  EXPECT_THROW(sensitivity_variance(fitted, {}), Error);
+  sim2real::Run later = fitted;
+  for (double& t : later.series[Channel::t]) t += 0.01;
+  EXPECT_THROW(sensitivity_variance(fitted, {later}), Error);
+  EXPECT_THROW(sensitivity_variance(fitted, perturbed, -0.1), Error);
+}
+
 // members on other sample times or of another scenario are not averaged
 TEST(Replay, AnEnsemblesMeanRefusesRunsThatDoNotShareTheirTimeBase) {
   sim2real::Run a;

@@ -191,6 +191,56 @@ TEST(Residuals, EachSampleIsJudgedAgainstSigmaSquaredPlusOnePlusOneOverNTimesV) 
   EXPECT_EQ(with.excess - cell.excess, none.excess - none.cells[0].excess);
 }
 
+// the sensitivity adds to the residual's variance as it is, beside the ensemble's (1 + 1/N) v: on
+// f_lift (residual ±2, σ = 1) a sensitivity s = 3 alone gives w = 4; with an ensemble's v = 3 of
+// N = 3 members and s = 1, w = 1 + 4 + 1 = 6. The other channels have neither
+TEST(Residuals, ASensitivityAddsToTheVarianceAsItIsBesideTheEnsembles) {
+  sim2real::Run measured;
+  measured.series = test::reference_series();  // no marks: one phase
+  sim2real::Run model = measured;
+  const size_t n = measured.series.size();
+  for (size_t i = 0; i < n; ++i) measured.series[Channel::f_lift][i] += i % 2 == 0 ? 2.0 : -2.0;
+  const std::vector<double> sigma(kChannelCount, 1.0);
+  const Residuals none = compute_residuals(model, measured, sigma);
+  auto sensitivity = [&](double s) {
+    TimeSeries out;
+    out[Channel::t] = model.series[Channel::t];
+    for (size_t c = 1; c < kChannelCount; ++c)
+      out.columns[c].assign(n, c == static_cast<size_t>(Channel::f_lift) ? s : 0.0);
+    return out;
+  };
+  // the sensitivity alone (no ensemble: members 0)
+  model.spread = RunSpread{0, {}, 2, sensitivity(3.0)};
+  const Residuals alone = compute_residuals(model, measured, sigma);
+  EXPECT_EQ(alone.spread_members, 0);
+  EXPECT_EQ(alone.sensitivity_runs, 2);
+  EXPECT_TRUE(alone.judged_with_spread());
+  EXPECT_NEAR(alone.cells[0].excess, std::log(std::max(4.0 / 4.0 / kNoiseAllowance, 1.0)), 1e-12);
+  EXPECT_NEAR(alone.cells[0].spread, std::sqrt(3.0), 1e-12);
+  EXPECT_NEAR(alone.cells[0].spread_share, 3.0 / 4.0, 1e-12);
+  EXPECT_NEAR(alone.log_ratio - none.log_ratio, std::log(1.0) + std::log(4.0) - std::log(4.0),
+              1e-12);
+  // both: the variances add
+  model.spread = uniform_spread(model, 3, 0.0);
+  for (double& v : model.spread->variance[Channel::f_lift]) v = 3.0;
+  model.spread->sensitivity_runs = 4;
+  model.spread->sensitivity = sensitivity(1.0);
+  const Residuals both = compute_residuals(model, measured, sigma);
+  EXPECT_EQ(both.spread_members, 3);
+  EXPECT_EQ(both.sensitivity_runs, 4);
+  EXPECT_NEAR(both.cells[0].spread, std::sqrt(5.0), 1e-12);
+  EXPECT_NEAR(both.cells[0].spread_share, 5.0 / 6.0, 1e-12);
+  EXPECT_NEAR(both.log_ratio - none.log_ratio, std::log(4.0 / 6.0) + std::log(6.0) - std::log(4.0),
+              1e-12);
+  // the other channels are untouched by either
+  EXPECT_EQ(both.excess - both.cells[0].excess, none.excess - none.cells[0].excess);
+  EXPECT_EQ(alone.excess - alone.cells[0].excess, none.excess - none.cells[0].excess);
+  // a residual beyond the sensor noise (excess ln(4 / 1.5)) is within noise against either
+  EXPECT_GT(none.excess, 0.5);
+  EXPECT_EQ(alone.excess, 0.0);
+  EXPECT_EQ(both.excess, 0.0);
+}
+
 // a channel whose residual is what another pile arrangement gives, drawn from a known spread: the
 // measured run is one arrangement a_0 plus sensor noise, the model the mean of N = 3 others, so
 // r = a_0 − ā + n with variance σ² + (1 + 1/N) v. With the spread the dig is within noise; without
@@ -259,6 +309,22 @@ TEST(Residuals, ASpreadOffTheRunsTimesOrNegativeIsAnError) {
   model.spread = uniform_spread(model, 2, 0.0);
   model.spread->variance[Channel::t][3] += 1e-3;
   EXPECT_THROW(compute_residuals(model, measured, sigma), Error);
+  // a spread with neither part, or a sensitivity that is negative somewhere, names what is wrong
+  model.spread = RunSpread{};
+  try {
+    compute_residuals(model, measured, sigma);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("neither"), std::string::npos) << e.what();
+  }
+  model.spread = RunSpread{0, {}, 2, uniform_spread(model, 2, 0.0).variance};
+  model.spread->sensitivity[Channel::f_tilt][7] = -1.0;
+  try {
+    compute_residuals(model, measured, sigma);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("sensitivity's f_tilt"), std::string::npos) << e.what();
+  }
 }
 
 TEST(Residuals, PhasesFollowTheDigMarks) {
