@@ -2,8 +2,10 @@
 
 #include <nlopt.h>
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <atomic>
+#include <bitset>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -230,6 +232,12 @@ std::vector<Candidate> candidate_set(const vehicle::EffectPlugins& plugins) {
   return out;
 }
 
+int SensitivityJudgement::simulations() const {
+  int sum = curvature_simulations;
+  for (const auto& r : runs) sum += r.simulations;
+  return sum;
+}
+
 TableRow mean_row(const std::vector<TableRow>& rows, const std::string& name) {
   TableRow m;
   m.name = name;
@@ -343,8 +351,198 @@ class Search {
   // search (a mean would hide it among runs the effect does not touch)
   double worst_run() const {
     double worst = 0.0;
-    for (const auto& r : current_residuals_) worst = std::max(worst, r.excess);
+    for (const auto& r : judged_valid_ ? judged_ : current_residuals_)
+      worst = std::max(worst, r.excess);
     return worst;
+  }
+
+  // the sensitivity judgement of the current model (the header's "Sensitivity"): every run beyond
+  // noise judged again against the spread the simulation shows for parameter changes within the
+  // fit's uncertainty; the judged residuals decide from now on, until the model changes
+  void judge(const std::string& after) {
+    SensitivityJudgement j;
+    j.after = after;
+    j.runs.resize(runs_.size());
+    judged_ = current_residuals_;
+    judged_valid_ = true;
+    std::vector<std::size_t> beyond;
+    for (std::size_t i = 0; i < runs_.size(); ++i) {
+      j.runs[i].excess_without = j.runs[i].excess_with = current_residuals_[i].excess;
+      if (current_residuals_[i].excess >= kSignificantExcess)
+        beyond.push_back(i);
+      else
+        j.runs[i].reason = "within noise without it";
+    }
+    const auto skip = [&](const std::string& reason) {
+      j.reason = reason;
+      for (std::size_t i : beyond) j.runs[i].reason = reason;
+      say("sensitivity (" + after + "): not used, " + reason);
+      d_.sensitivity.push_back(j);
+    };
+    if (beyond.empty()) return skip("every run is within noise without it");
+    // the fitted parameters: the found candidates' (a learned correction keeps its coefficients,
+    // fitted by regression, not by the likelihood whose curvature is measured here)
+    std::vector<double> x0;
+    std::vector<std::pair<std::size_t, std::size_t>> slots;  // (found effect, its parameter)
+    for (std::size_t f = 0; f < d_.found.size(); ++f)
+      for (std::size_t k = 0; k < d_.found[f].x.size(); ++k) {
+        x0.push_back(d_.found[f].x[k]);
+        slots.emplace_back(f, k);
+      }
+    if (x0.empty())
+      return skip(d_.found.empty() ? "no effect was added, so no parameter was fitted"
+                                   : "no fitted parameter: the effects found carry none the "
+                                     "likelihood fitted");
+    const std::size_t p = x0.size();
+    const double h = kSensitivityStep;
+    // 1. the curvature of the calibration runs' negative log-likelihood, Σ (n_i / 2) log_ratio_i
+    // (sim2real/residuals.hpp), by central differences around the fit (the stencil moved inside
+    // the box when the fit lies within a step of a bound)
+    std::vector<double> c = x0;
+    for (double& v : c) v = std::clamp(v, h, 1.0 - h);
+    std::vector<std::vector<double>> points;
+    const auto point = [&](std::vector<double> y) {
+      points.push_back(std::move(y));
+      return points.size() - 1;
+    };
+    const bool moved = c != x0;
+    const std::size_t centre = moved ? point(c) : 0;
+    std::vector<std::size_t> plus(p), minus(p);
+    std::vector<std::vector<std::size_t>> both_plus(p, std::vector<std::size_t>(p)),
+        both_minus(p, std::vector<std::size_t>(p));
+    for (std::size_t k = 0; k < p; ++k) {
+      std::vector<double> y = c;
+      y[k] = c[k] + h;
+      plus[k] = point(y);
+      y[k] = c[k] - h;
+      minus[k] = point(y);
+      for (std::size_t l = 0; l < k; ++l) {
+        y = c;
+        y[k] += h;
+        y[l] += h;
+        both_plus[k][l] = point(y);
+        y = c;
+        y[k] -= h;
+        y[l] -= h;
+        both_minus[k][l] = point(y);
+      }
+    }
+    const std::size_t ncal = d_.calibration.size();
+    std::vector<double> log_ratio(points.size() * ncal, 0.0);
+    const std::vector<Failure> curvature_failures =
+        run_tasks(points.size() * ncal, threads_, [&](std::size_t t) {
+          const std::size_t i = d_.calibration[t % ncal];
+          const Run r = simulate_found_at(i, points[t / ncal]);
+          log_ratio[t] = compute_residuals(r, runs_[i].run, sigma_[i]).log_ratio;
+        });
+    j.curvature_simulations = static_cast<int>(points.size() * ncal);
+    for (const Failure& f : curvature_failures)
+      if (f.failed) return skip("a simulation for the curvature failed (" + f.what + ")");
+    const auto nll = [&](std::size_t pt) {
+      double sum = 0.0;
+      for (std::size_t q = 0; q < ncal; ++q) {
+        const std::size_t i = d_.calibration[q];
+        const double li =
+            pt == points.size() ? current_residuals_[i].log_ratio : log_ratio[pt * ncal + q];
+        sum += 0.5 * static_cast<double>(runs_[i].run.series.size()) * li;
+      }
+      return sum;
+    };
+    const double f0 = nll(moved ? centre : points.size());
+    Eigen::MatrixXd hessian(p, p);
+    for (std::size_t k = 0; k < p; ++k)
+      hessian(k, k) = (nll(plus[k]) - 2.0 * f0 + nll(minus[k])) / (h * h);
+    for (std::size_t k = 0; k < p; ++k)
+      for (std::size_t l = 0; l < k; ++l) {
+        // f(c + h e_k + h e_l) + f(c − h e_k − h e_l) − 2 f(c) = h² (H_kk + H_ll + 2 H_kl)
+        const double mixed =
+            (nll(both_plus[k][l]) + nll(both_minus[k][l]) - 2.0 * f0) / (2.0 * h * h) -
+            0.5 * (hessian(k, k) + hessian(l, l));
+        hessian(k, l) = hessian(l, k) = mixed;
+      }
+    // 2. the covariance, its inverse, with the eigenvalues held to [1/step², 1/tolerance²]: an
+    // uncertainty no larger than the probe (where the likelihood does not curve up within it)
+    // and no smaller than the fit's own resolution
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(hessian);
+    const double lowest = 1.0 / (h * h), highest = 1.0 / (kFitTolerance * kFitTolerance);
+    Eigen::VectorXd lambda = eigen.eigenvalues();
+    j.curvature_in_range = true;
+    for (Eigen::Index k = 0; k < lambda.size(); ++k) {
+      if (!(lambda(k) >= lowest && lambda(k) <= highest)) j.curvature_in_range = false;
+      lambda(k) = std::isfinite(lambda(k)) ? std::clamp(lambda(k), lowest, highest) : lowest;
+    }
+    // a square root of the covariance: L Lᵀ = V Λ⁻¹ Vᵀ
+    const Eigen::MatrixXd root =
+        eigen.eigenvectors() * lambda.cwiseInverse().cwiseSqrt().asDiagonal();
+    const Eigen::MatrixXd covariance = root * root.transpose();
+    for (std::size_t k = 0; k < p; ++k) {
+      const std::size_t f = slots[k].first, q = slots[k].second;
+      const FittedEffect& fe = d_.found[f];
+      const double se = std::sqrt(covariance(k, k));
+      auto at = [&](double u) {
+        std::vector<double> y = fe.x;
+        y[q] = std::clamp(u, 0.0, 1.0);
+        return make_candidate(fe.candidate, y, options_.plugins)->parameters()[q];
+      };
+      const auto fitted = at(fe.x[q]);
+      j.parameters.push_back({fe.candidate.label(), fitted.name, fitted.unit, fitted.value, se,
+                              at(fe.x[q] - se).value, at(fe.x[q] + se).value});
+    }
+    // 3. the design: the columns 1..p of the Sylvester-Hadamard matrix of order M = 2^⌈log2(p +
+    // 1)⌉ (balanced and orthogonal), so the points' departures L s_m have the covariance itself
+    std::size_t m = 1;
+    while (m < p + 1) m *= 2;
+    j.design_points = static_cast<int>(m);
+    std::vector<std::vector<double>> design(m, x0);
+    for (std::size_t r = 0; r < m; ++r) {
+      Eigen::VectorXd sign(p);
+      for (std::size_t k = 0; k < p; ++k)
+        sign(k) = std::bitset<64>(r & (k + 1)).count() % 2 == 0 ? 1.0 : -1.0;
+      const Eigen::VectorXd step = root * sign;
+      for (std::size_t k = 0; k < p; ++k) design[r][k] = std::clamp(x0[k] + step(k), 0.0, 1.0);
+    }
+    // 4. every run beyond noise at the design's points, judged against σ² + (1 + 1/N) v + s
+    std::vector<Run> perturbed(beyond.size() * m);
+    const std::vector<Failure> design_failures = run_tasks(
+        perturbed.size(), threads_,
+        [&](std::size_t t) { perturbed[t] = simulate_found_at(beyond[t / m], design[t % m]); });
+    for (std::size_t b = 0; b < beyond.size(); ++b) {
+      const std::size_t i = beyond[b];
+      SensitivityRun& jr = j.runs[i];
+      jr.simulations = static_cast<int>(m);
+      const auto failure =
+          std::find_if(design_failures.begin() + static_cast<std::ptrdiff_t>(b * m),
+                       design_failures.begin() + static_cast<std::ptrdiff_t>((b + 1) * m),
+                       [](const Failure& f) { return f.failed; });
+      if (failure != design_failures.begin() + static_cast<std::ptrdiff_t>((b + 1) * m)) {
+        jr.reason = "a simulation of the design failed (" + failure->what + ")";
+        continue;
+      }
+      std::vector<Run> runs(perturbed.begin() + static_cast<std::ptrdiff_t>(b * m),
+                            perturbed.begin() + static_cast<std::ptrdiff_t>((b + 1) * m));
+      for (Run& r : runs) r.summary.fidelity = current_runs_[i].summary.fidelity;
+      Run with = current_runs_[i];
+      if (!with.spread) with.spread = RunSpread{};
+      with.spread->sensitivity_runs = static_cast<int>(m);
+      with.spread->sensitivity = sensitivity_variance(current_runs_[i], runs);
+      judged_[i] = compute_residuals(with, runs_[i].run, sigma_[i]);
+      jr.used = true;
+      jr.excess_with = judged_[i].excess;
+    }
+    j.used = std::any_of(j.runs.begin(), j.runs.end(), [](const auto& r) { return r.used; });
+    if (!j.used) j.reason = "every run's design failed";
+    std::string line = "sensitivity (" + after + "): " + std::to_string(p) + " parameter" +
+                       (p > 1 ? "s" : "") + " (";
+    for (std::size_t k = 0; k < j.parameters.size(); ++k)
+      line += (k ? ", " : "") + j.parameters[k].parameter + " " +
+              message_number(j.parameters[k].value) + " [" + message_number(j.parameters[k].low) +
+              ", " + message_number(j.parameters[k].high) + "]";
+    line += "), " + std::to_string(j.simulations()) + " simulations;";
+    for (std::size_t i : beyond)
+      line += " run " + std::to_string(i) + " excess " + message_number(j.runs[i].excess_without) +
+              " -> " + message_number(j.runs[i].excess_with);
+    say(line);
+    d_.sensitivity.push_back(j);
   }
 
   // one round: one effect more when a candidate explains enough of what is left; false when none
@@ -398,7 +596,8 @@ class Search {
 
   // discovery: a learned correction per target, fitted on the calibration runs against the current
   // model, simulated on every run; the best added when it explains enough of what is left
-  void discover() {
+  // true when it added one
+  bool discover() {
     d_.discovery_ran = true;
     // the sensor channels whose own excess is beyond noise on the calibration runs, largest first
     std::vector<std::pair<double, std::string>> own;
@@ -476,7 +675,7 @@ class Search {
     if (!best || best->explained < kMinExplained) {
       say("discovery: no correction explains " + message_number(100.0 * kMinExplained) +
           " % of the excess left");
-      return;
+      return false;
     }
     d_.discovered = *best;
     FittedEffect f;
@@ -492,6 +691,7 @@ class Search {
     f.score = best->score;
     say("discovery: added " + best->expression);
     add(f);
+    return true;
   }
 
   // the correction simulated on every run: its excess, the share it explains (counted as a
@@ -554,9 +754,11 @@ class Search {
 
   // after: the runs with the effects found (the last round's simulations)
   Diagnosis finish() {
+    // the verdict is the judged residuals' (a judgement that skips says why)
+    if (!judged_valid_) judge("end");
     d_.simulations = simulations_;
     d_.simulated_after = current_runs_;
-    d_.residuals_after = current_residuals_;
+    d_.residuals_after = judged_;
     if (d_.found.empty()) {
       d_.error_after = d_.error_before;
     } else {
@@ -789,6 +991,28 @@ class Search {
     return r;
   }
 
+  // run i simulated with the effects found, their fitted parameters (in found order, each
+  // effect's in its own order) at the normalised values x; a learned correction at its own
+  // coefficients. At the fit's x, the same simulation as the current model's
+  Run simulate_found_at(std::size_t i, const std::vector<double>& x) {
+    std::vector<std::unique_ptr<vehicle::Effect>> effects;
+    std::size_t at = 0;
+    for (const auto& f : d_.found) {
+      if (f.x.empty()) {
+        effects.push_back(vehicle::make_effect(f.spec, options_.plugins));
+        continue;
+      }
+      const std::vector<double> xf(x.begin() + static_cast<std::ptrdiff_t>(at),
+                                   x.begin() + static_cast<std::ptrdiff_t>(at + f.x.size()));
+      at += f.x.size();
+      effects.push_back(make_candidate(f.candidate, xf, options_.plugins));
+    }
+    vehicle::EffectSet set = in_hook_order(std::move(effects));
+    Run r = replays_[i]->simulate(set);
+    ++simulations_;
+    return r;
+  }
+
   // the model's state (the effects found and every run's simulation), to try a candidate on it
   struct Model {
     std::vector<std::string> specs;
@@ -946,6 +1170,7 @@ class Search {
 
   // the effect joins the model; every run is simulated again with it
   void add(const FittedEffect& f) {
+    judged_valid_ = false;
     d_.found.push_back(f);
     found_specs_.push_back(f.spec);
     current_cal_ = f.excess_calibration;
@@ -972,6 +1197,10 @@ class Search {
   double current_cal_ = 0.0, current_val_ = 0.0;
   std::vector<Run> current_runs_;
   std::vector<Residuals> current_residuals_;
+  // the current model's residuals as the last sensitivity judgement left them, when it judged
+  // this model (judged_valid_); they decide "beyond noise" until the model changes
+  std::vector<Residuals> judged_;
+  bool judged_valid_ = false;
 };
 
 }  // namespace
@@ -987,9 +1216,13 @@ Diagnosis diagnose(const std::vector<MeasuredRun>& runs, const DiagnoseOptions& 
   const std::vector<Candidate> candidates = candidate_set(options.plugins);
   for (int round = 0; round < options.max_effects && search.worst_run() >= kSignificantExcess; ++round) {
     if (!search.round(round + 1, candidates)) break;
+    // what is left judged against the simulation's sensitivity to what was fitted
+    search.judge("round " + std::to_string(round + 1));
   }
-  // discovery: when what is left is beyond noise, or when asked
-  if (options.discover || search.worst_run() >= kSignificantExcess) search.discover();
+  // discovery: when what is left is beyond noise (and beyond the sensitivity), or when asked
+  if (options.discover || search.worst_run() >= kSignificantExcess) {
+    if (search.discover()) search.judge("discovery");
+  }
   // the model with what was found, against the data
   Diagnosis d = search.finish();
   d.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -1019,8 +1252,9 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
                      {"mean", c.mean},
                      {"sigma", c.sigma},
                      {"excess", c.excess}};
-        // the simulation's own spread the cell was judged with, when there was one
-        if (res.spread_members > 0) {
+        // the simulation's own spread the cell was judged with (ensemble and sensitivity), when
+        // there was one
+        if (res.judged_with_spread()) {
           cell["spread"] = c.spread;
           cell["spread_share"] = c.spread_share;
         }
@@ -1076,6 +1310,43 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
                       {"pairs", pairs},
                       {"added", r.added}});
   }
+  // the sensitivity judgements (docs/sim2real.md): each with its parameters' uncertainty, its cost
+  // and every run's excess without and with the spread
+  auto run_judgement_json = [](const SensitivityRun& r) {
+    json j = {{"used", r.used},
+              {"simulations", r.simulations},
+              {"excess_without", r.excess_without},
+              {"excess_with", r.excess_with}};
+    if (!r.used) j["reason"] = r.reason;
+    return j;
+  };
+  json sensitivity = json::array();
+  int sensitivity_simulations = 0;
+  for (const auto& j : d.sensitivity) {
+    json parameters = json::array();
+    for (const auto& p : j.parameters)
+      parameters.push_back({{"effect", p.effect},
+                            {"parameter", p.parameter},
+                            {"unit", p.unit},
+                            {"value", p.value},
+                            {"standard_error_box", p.standard_error_box},
+                            {"low", p.low},
+                            {"high", p.high}});
+    json per_run = json::array();
+    for (const auto& r : j.runs) per_run.push_back(run_judgement_json(r));
+    json entry = {{"after", j.after},
+                  {"used", j.used},
+                  {"parameters", parameters},
+                  {"step_box", j.step},
+                  {"curvature_in_range", j.curvature_in_range},
+                  {"curvature_simulations", j.curvature_simulations},
+                  {"design_points", j.design_points},
+                  {"simulations", j.simulations()},
+                  {"runs", per_run}};
+    if (!j.used) entry["reason"] = j.reason;
+    sensitivity.push_back(entry);
+    sensitivity_simulations += j.simulations();
+  }
   json runs = json::array();
   for (std::size_t i = 0; i < d.runs.size(); ++i) {
     const bool cal = std::find(d.calibration.begin(), d.calibration.end(), i) != d.calibration.end();
@@ -1085,6 +1356,9 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
     if (i < d.piles.size()) r["piles"] = d.piles[i];
     if (i < d.residuals_before.size() && i < d.residuals_after.size())
       r["model_spread"] = spread_json(d.residuals_before[i], d.residuals_after[i]);
+    // the judgement that gave the verdict
+    if (!d.sensitivity.empty() && i < d.sensitivity.back().runs.size())
+      r["sensitivity_spread"] = run_judgement_json(d.sensitivity.back().runs[i]);
     runs.push_back(r);
   }
   // the correction discovered, with the error over the held-out runs before and after the model
@@ -1114,6 +1388,10 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
       // whether any run's residual was judged against the simulation's own spread too
       {"model_spread_used", std::any_of(d.residuals_before.begin(), d.residuals_before.end(),
                                         [](const Residuals& r) { return r.spread_members > 0; })},
+      // whether the verdict judged some run against the simulation's sensitivity to the fit
+      {"sensitivity_used", !d.sensitivity.empty() && d.sensitivity.back().used},
+      {"sensitivity", sensitivity},
+      {"sensitivity_simulations", sensitivity_simulations},
       {"runs", runs},
       {"rounds", rounds},
       {"residuals_before", residuals_json(d.residuals_before)},

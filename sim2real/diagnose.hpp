@@ -33,6 +33,18 @@
 // Rounds repeat (each fits one more effect on top of those added, which keep their values) until
 // every run's excess is within noise, nothing qualifies, or max_effects are added. "Unexplained"
 // means some run keeps an excess beyond noise at the end.
+// Sensitivity (issue 17): "unexplained" must mean a missing effect, not the simulation's
+// sensitivity to the fitted parameters. After a round adds an effect (and after the discovery
+// adds one), every run still beyond noise is judged again against the spread the simulation
+// shows for parameter changes within the fit's uncertainty: the covariance of the found effects'
+// fitted parameters from the curvature of the calibration runs' log-likelihood (central
+// differences at kSensitivityStep in the normalised box; eigenvalues held to [1/step²,
+// 1/kFitTolerance²]), each such run simulated at the points of a two-level orthogonal design
+// around the fit scaled by that covariance (2^⌈log2(p + 1)⌉ points for p parameters), and their
+// mean square departure from the fitted run added to the residual's variance
+// (RunSpread::sensitivity, one law: compute_residuals). The rounds go on, the discovery runs and
+// the verdict is given on that judgement. Its cost: p(p + 1) simulations per calibration run for
+// the curvature, and the design's points per run judged.
 // Discovery (issue 17, sim2real/discovery.hpp): when an excess beyond noise remains after the
 // rounds (or when asked), a sparse learned correction is fitted per target on the calibration
 // runs, each simulated on all runs, and the best is added when it removes at least kMinExplained
@@ -69,6 +81,12 @@ inline constexpr double kMinExplained = 0.5;
 // the excess one fitted parameter must pay for, per run (in the units of Residuals::excess: one
 // channel-phase cell whose mean-square residual is e^0.2 = 1.22 times the noise allowance)
 inline constexpr double kParameterPenalty = 0.2;
+// the step of the likelihood's central differences for the sensitivity's curvature, in the box
+// normalised to [0, 1]: ten times the fit's stopping tolerance (1e-3), so the differences measure
+// the likelihood rather than the optimiser's last step, and a hundredth of the box, so they stay
+// near the fit. A direction the likelihood does not curve up in within it is taken as uncertain by
+// this step (the smallest honest statement: the data do not pin it down within the probe)
+inline constexpr double kSensitivityStep = 0.01;
 // a run's excess below this counts as within noise (one cell whose mean-square residual is
 // e^0.5 = 1.65 times the allowance, or a few cells barely above it)
 inline constexpr double kSignificantExcess = 0.5;
@@ -145,10 +163,47 @@ struct DiagnosisRound {
   bool added = false;                    // fitted[0] was added, or pairs[0]'s two effects
 };
 
+// one fitted parameter in a sensitivity judgement: its value and the fit's uncertainty
+struct SensitivityParameter {
+  std::string effect;     // the candidate's label
+  std::string parameter;  // the parameter's name
+  std::string unit;
+  double value = 0.0;  // fitted
+  // one standard error in the normalised box (sqrt of the covariance's diagonal), and the values
+  // at the fit ∓ that error (clamped to the range; asymmetric on a logarithmic range)
+  double standard_error_box = 0.0;
+  double low = 0.0, high = 0.0;
+};
+
+// one run's judgement against the sensitivity spread
+struct SensitivityRun {
+  bool used = false;
+  std::string reason;                              // why not, when not used
+  int simulations = 0;                             // the design's simulations of this run
+  double excess_without = 0.0, excess_with = 0.0;  // the run's excess without and with it
+};
+
+// the judgement after a round or the discovery added an effect (see the header comment)
+struct SensitivityJudgement {
+  std::string after;  // "round 1", "discovery", or "end" (nothing was judged before the verdict)
+  bool used = false;
+  std::string reason;  // why not, when not used
+  std::vector<SensitivityParameter> parameters;
+  double step = kSensitivityStep;
+  // whether the log-likelihood's Hessian was positive definite with every eigenvalue within
+  // [1/step², 1/kFitTolerance²] (else they were held there)
+  bool curvature_in_range = false;
+  int curvature_simulations = 0;     // of the calibration runs, for the Hessian
+  int design_points = 0;             // simulations per run judged
+  std::vector<SensitivityRun> runs;  // per run (all of them)
+  int simulations() const;           // the curvature's and the design's
+};
+
 struct Diagnosis {
   std::vector<std::string> runs;          // directories, in the given order
   std::vector<std::size_t> calibration, validation;  // indices into runs
-  std::vector<Residuals> residuals_before, residuals_after;  // per run
+  // per run; after: as the verdict judged them (with the sensitivity spread where it was used)
+  std::vector<Residuals> residuals_before, residuals_after;
   // the simulations behind them, labelled "<scenario>-baseline" and "<scenario>-with-effects"
   std::vector<Run> simulated_before, simulated_after;
   std::vector<TableRow> error_before, error_after;            // per run (paper's seven metrics)
@@ -165,6 +220,8 @@ struct Diagnosis {
   bool discovery_ran = false;
   std::vector<DiscoveredCorrection> discovery_tried;
   std::optional<DiscoveredCorrection> discovered;
+  // the sensitivity judgements in order; the last judged the verdict (sensitivity.back().runs)
+  std::vector<SensitivityJudgement> sensitivity;
   int simulations = 0;
   double wall_s = 0.0;
 };

@@ -43,6 +43,33 @@ std::string spread_note(const Residuals& res) {
   return s.str();
 }
 
+std::string sensitivity_note(const Diagnosis& d) {
+  if (d.sensitivity.empty()) return "";
+  const SensitivityJudgement& j = d.sensitivity.back();
+  std::ostringstream s;
+  s << std::setprecision(4);
+  if (!j.used) {
+    s << "\nSensitivity spread not used (" << j.after << "): " << j.reason << ".\n";
+    return s.str();
+  }
+  s << "\nSensitivity spread (" << j.after
+    << "): what is left judged against σ² + (1 + 1/N) v + s, s from the fitted parameters within "
+       "one standard error (";
+  for (std::size_t k = 0; k < j.parameters.size(); ++k) {
+    const auto& p = j.parameters[k];
+    s << (k ? ", " : "") << p.effect << " " << p.parameter << " " << p.value << " [" << p.low
+      << ", " << p.high << "] " << p.unit;
+  }
+  s << "; " << j.design_points << " simulations per run judged, " << j.curvature_simulations
+    << " for the curvature); excess";
+  for (std::size_t i = 0; i < j.runs.size(); ++i)
+    if (j.runs[i].used)
+      s << " run " << i << " " << std::setprecision(3) << j.runs[i].excess_without << " -> "
+        << j.runs[i].excess_with;
+  s << ".\n";
+  return s.str();
+}
+
 std::vector<TableRow> error_table(const std::vector<TableRow>& rows) {
   std::vector<TableRow> table = rows;
   table.push_back(mean_row(rows, "mean over runs"));
@@ -83,6 +110,7 @@ std::string diagnosis_report(const Diagnosis& d, const std::vector<MeasuredRun>&
              << " % of the excess of the " << f.explained_on << " runs)\n";
     report << (d.unexplained ? "\nAn excess beyond noise remains: UNEXPLAINED in part.\n" : "\nWhat remains is within noise.\n");
   }
+  report << sensitivity_note(d);
   // what the discovery fitted beyond the candidates
   if (d.discovery_ran) {
     report << "\n## Discovery (a term outside the candidates)\n\n";

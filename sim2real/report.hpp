@@ -23,6 +23,12 @@ std::string residual_signature(const Residuals& residuals, const Run& measured, 
 // share of the variance per channel (Residuals::spread_share_of); empty without a spread
 std::string spread_note(const Residuals& residuals);
 
+// a line saying whether the verdict judged what is left against the simulation's sensitivity to
+// the fitted parameters (the last of Diagnosis::sensitivity): the parameters within one standard
+// error, the simulations it cost, and each judged run's excess without and with it, or why it was
+// not used; empty when nothing was judged
+std::string sensitivity_note(const Diagnosis& d);
+
 // per-run error rows with their mean over the runs as the last row ("mean over runs"): the
 // report's tables and the CSV files'
 std::vector<TableRow> error_table(const std::vector<TableRow>& rows);

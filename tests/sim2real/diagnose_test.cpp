@@ -161,5 +161,53 @@ TEST(Diagnose, JsonReportsTheModelSpreadItUsed) {
   EXPECT_NEAR(cell["spread_share"].get<double>(), 16.0 / 19.0, 1e-12);
 }
 
+// diagnosis.json says per run whether the sensitivity spread judged it, its simulations and the
+// excess before and after it (the verdict's judgement, the last), and lists every judgement with
+// its parameters' uncertainty and its cost; a judgement that skipped says why
+TEST(Diagnose, JsonReportsTheSensitivityJudgements) {
+  Diagnosis d;
+  d.runs = {"a", "b"};
+  d.calibration = {0};
+  d.validation = {1};
+  d.error_before = d.error_after = {{"a", {0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1}, 0.1},
+                                    {"b", {0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1}, 0.1}};
+  d.residuals_before.resize(2);
+  d.residuals_after.resize(2);
+  d.scan_rms_m.resize(2);
+  SensitivityJudgement skipped;
+  skipped.after = "round 1";
+  skipped.reason = "every run is within noise without it";
+  skipped.runs = {{false, "within noise without it", 0, 0.1, 0.1},
+                  {false, "within noise without it", 0, 0.2, 0.2}};
+  SensitivityJudgement used;
+  used.after = "round 2";
+  used.used = true;
+  used.parameters = {{"hydraulic_lag", "time_constant", "s", 0.3, 0.002, 0.299, 0.301}};
+  used.curvature_in_range = true;
+  used.curvature_simulations = 2;
+  used.design_points = 2;
+  used.runs = {{false, "within noise without it", 0, 0.1, 0.1}, {true, "", 2, 1.7, 0.05}};
+  d.sensitivity = {skipped, used};
+  const auto j = diagnosis_json(d);
+  EXPECT_TRUE(j["sensitivity_used"].get<bool>());
+  EXPECT_EQ(j["sensitivity_simulations"].get<int>(), 4);  // 2 for the curvature, 2 for run b
+  ASSERT_EQ(j["sensitivity"].size(), 2u);
+  EXPECT_EQ(j["sensitivity"][0]["reason"], "every run is within noise without it");
+  EXPECT_FALSE(j["sensitivity"][1].contains("reason"));
+  const auto& p = j["sensitivity"][1]["parameters"][0];
+  EXPECT_EQ(p["parameter"], "time_constant");
+  EXPECT_DOUBLE_EQ(p["low"].get<double>(), 0.299);
+  EXPECT_EQ(j["sensitivity"][1]["design_points"].get<int>(), 2);
+  // per run: the verdict's judgement
+  const auto& a = j["runs"][0]["sensitivity_spread"];
+  EXPECT_FALSE(a["used"].get<bool>());
+  EXPECT_EQ(a["reason"], "within noise without it");
+  const auto& b = j["runs"][1]["sensitivity_spread"];
+  EXPECT_TRUE(b["used"].get<bool>());
+  EXPECT_EQ(b["simulations"].get<int>(), 2);
+  EXPECT_DOUBLE_EQ(b["excess_without"].get<double>(), 1.7);
+  EXPECT_DOUBLE_EQ(b["excess_with"].get<double>(), 0.05);
+}
+
 }  // namespace
 }  // namespace talus::sim2real

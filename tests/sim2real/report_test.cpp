@@ -69,6 +69,32 @@ TEST(Report, SaysWhenTheSimulationsSpreadJudgedTheResidual) {
     EXPECT_NE(note.find(part), std::string::npos) << part << "\n" << note;
 }
 
+// the verdict's sensitivity judgement in one line: the parameters within one standard error, the
+// simulations, the judged runs' excess without and with it; or why it was not used
+TEST(Report, SaysInALineWhetherTheSensitivitySpreadJudgedTheVerdict) {
+  Diagnosis d;
+  EXPECT_EQ(sensitivity_note(d), "");
+  SensitivityJudgement j;
+  j.after = "round 1";
+  j.used = true;
+  j.parameters = {{"soil_cohesion", "cohesion", "Pa", 5012.0, 0.004, 4950.0, 5070.0}};
+  j.curvature_simulations = 4;
+  j.design_points = 2;
+  j.runs = {{true, "", 2, 2.5, 0.12}, {false, "within noise without it", 0, 0.3, 0.3}};
+  d.sensitivity = {j};
+  const std::string used = sensitivity_note(d);
+  for (const char* part :
+       {"Sensitivity spread (round 1)", "soil_cohesion cohesion 5012 [4950, 5070] Pa",
+        "2 simulations per run judged, 4 for the curvature", "run 0 2.5 -> 0.12"})
+    EXPECT_NE(used.find(part), std::string::npos) << part << "\n" << used;
+  EXPECT_EQ(used.find("run 1"), std::string::npos) << used;  // not judged: within noise
+  j.used = false;
+  j.reason = "no effect was added, so no parameter was fitted";
+  d.sensitivity = {j};
+  EXPECT_NE(sensitivity_note(d).find("not used (round 1): no effect was added"), std::string::npos)
+      << sensitivity_note(d);
+}
+
 // the error table's last row is the mean of the absolute values over the runs
 TEST(Report, ErrorTableEndsWithTheMeanRow) {
   const std::vector<TableRow> rows = {{"a", {0.1, 0.2, 0.3, 0.4, 0.5, -0.2, 0.1}, 0.3},
