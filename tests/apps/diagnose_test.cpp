@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -197,6 +198,98 @@ TEST(DiagnoseTest, TwoEffectsOfSimilarSizeAreFoundTogether) {
   EXPECT_TRUE(names.count("sensor_bias")) << context << ": " << j["effects_found"].dump();
   const double before = j["error_before"]["mean"], after = j["error_after"]["mean"];
   EXPECT_LE(after, 0.7 * before) << context;
+  fs::remove_all(base);
+}
+
+// the judgement of the sensitivity spread after round `round` (nullptr when there was none)
+const nlohmann::json* judgement_after(const nlohmann::json& j, int round) {
+  for (const auto& s : j["sensitivity"])
+    if (s["after"] == "round " + std::to_string(round)) return &s;
+  return nullptr;
+}
+
+// a candidate whose simulation is chaotic in its parameter (tests/apps/hidden_effects.c,
+// chaotic_bias: a traction offset of 60-90 kN, beyond sensor_bias's ±20 kN, whose 2.5 kN
+// realisation changes with any change of the offset), given to the loop: its fit can never
+// reproduce the data's realisation, so what it leaves (two realisations' difference, variance
+// 3.1 σ² of f_traction) is beyond the sensor noise, and within the spread the simulation shows at
+// the fitted offset ± its uncertainty. The loop must add it and call what is left explained
+constexpr int kChaoticRound = 1;
+std::string chaotic_draw(std::mt19937_64& rng) {
+  return "chaotic_bias:bias=" +
+         std::to_string(std::uniform_real_distribution<double>(60e3, 90e3)(rng));
+}
+
+TEST(DiagnoseTest, WhatTheSimulationsSensitivityToAFittedParameterLeavesIsNotUnexplained) {
+  const unsigned seed = test_seed();
+  std::mt19937_64 rng(seed);
+  const std::string spec = chaotic_draw(rng);
+  const std::string context = "TALUS_TEST_SEED=" + std::to_string(seed) + ", effect " + spec;
+  const fs::path base =
+      fs::temp_directory_path() / ("talus_diagnose_chaotic_" + std::to_string(seed));
+  fs::remove_all(base);
+  const std::string plugin = std::string(" --effect-plugin ") + TALUS_SENSITIVE_EFFECT;
+  synthesise(base, plugin + " --effect " + spec, seed);
+  const auto j = diagnose(base, " --max-effects 1" + plugin);
+  ASSERT_GE(j["effects_found"].size(), 1u) << context << ": " << j["rounds"].dump();
+  EXPECT_EQ(j["effects_found"][0]["name"], "chaotic_bias") << context;
+  const nlohmann::json* judged = judgement_after(j, kChaoticRound);
+  ASSERT_NE(judged, nullptr) << context << ": " << j["sensitivity"].dump();
+  // the case shows: some run is beyond noise without the sensitivity spread (else this tests
+  // nothing), and every run is within it with it
+  double worst_without = 0.0, worst_with = 0.0;
+  for (const auto& r : (*judged)["runs"]) {
+    worst_without = std::max(worst_without, r["excess_without"].get<double>());
+    worst_with = std::max(worst_with, r["excess_with"].get<double>());
+  }
+  ASSERT_GE(worst_without, 0.5) << context << ": " << judged->dump();
+  EXPECT_TRUE((*judged)["used"].get<bool>()) << context << ": " << judged->dump();
+  EXPECT_LT(worst_with, 0.5) << context << ": " << judged->dump();
+  EXPECT_FALSE(j["unexplained"].get<bool>()) << context;
+  EXPECT_FALSE(j["discovery"]["ran"].get<bool>()) << context;  // nothing left to discover
+  // its cost: 2 simulations for the curvature of one parameter on the calibration run, and 2 (the
+  // design's points) per run judged
+  EXPECT_EQ((*judged)["curvature_simulations"].get<int>(), 2) << context;
+  EXPECT_EQ((*judged)["design_points"].get<int>(), 2) << context;
+  fs::remove_all(base);
+}
+
+TEST(DiagnoseTest, AMissingEffectBesideTheSimulationsSensitivityIsStillUnexplained) {
+  // the same chaotic candidate, and on top an effect that is no candidate (the hidden plug-in's
+  // valve dead band on the lift, 2.5-3.5 mm/s, tests/apps/hidden_effects.c; a baseline excess of
+  // 2-6 per run, less than the offset's 11-19, so the offset is added first; at 4.5 mm/s a
+  // held-out run's 9 left the offset 49 %, seed 102): after the
+  // chaotic bias is added, what is left must stay beyond the sensitivity spread, so the loop
+  // goes on to the discovery (and says unexplained unless a correction explains it)
+  const unsigned seed = test_seed();
+  std::mt19937_64 rng(seed);
+  const std::string spec = chaotic_draw(rng);
+  const std::string missing =
+      "dead_band:k=" + std::to_string(std::uniform_real_distribution<double>(0.0025, 0.0035)(rng)) +
+      ",cylinder=0";
+  const std::string context =
+      "TALUS_TEST_SEED=" + std::to_string(seed) + ", effects " + spec + " and " + missing;
+  const fs::path base =
+      fs::temp_directory_path() / ("talus_diagnose_chaotic_missing_" + std::to_string(seed));
+  fs::remove_all(base);
+  const std::string plugin = std::string(" --effect-plugin ") + TALUS_SENSITIVE_EFFECT;
+  synthesise(base,
+             plugin + " --effect " + spec + " --effect-plugin " + TALUS_HIDDEN_EFFECTS +
+                 " --effect " + missing,
+             seed);
+  const auto j = diagnose(base, " --max-effects 1" + plugin);
+  std::set<std::string> names;
+  for (const auto& f : j["effects_found"]) names.insert(f["name"].get<std::string>());
+  ASSERT_TRUE(names.count("chaotic_bias")) << context << ": " << j["rounds"].dump();
+  const nlohmann::json* judged = judgement_after(j, kChaoticRound);
+  ASSERT_NE(judged, nullptr) << context << ": " << j["sensitivity"].dump();
+  EXPECT_TRUE((*judged)["used"].get<bool>()) << context << ": " << judged->dump();
+  double worst_with = 0.0;
+  for (const auto& r : (*judged)["runs"])
+    worst_with = std::max(worst_with, r["excess_with"].get<double>());
+  EXPECT_GE(worst_with, 0.5) << context << ": " << judged->dump();
+  EXPECT_TRUE(j["discovery"]["ran"].get<bool>()) << context;
+  EXPECT_TRUE(j["unexplained"].get<bool>() || !j["discovered"].is_null()) << context;
   fs::remove_all(base);
 }
 
