@@ -125,7 +125,9 @@ if ensembles:
     def paired(changed, base, key):
         by_seed = {r["seed"]: r[key] for r in base}
         d = [r[key] / by_seed[r["seed"]] - 1 for r in changed if r["seed"] in by_seed]
-        se = statistics.stdev(d) / len(d) ** 0.5 if len(d) > 1 else float("nan")
+        if len(d) < 2:
+            return f"{100 * statistics.mean(d):+.1f} % (one pile)"
+        se = statistics.stdev(d) / len(d) ** 0.5
         return f"{100 * statistics.mean(d):+.1f} ± {100 * se:.1f} %"
 
     for s in scenarios:
@@ -139,5 +141,6 @@ if ensembles:
                 (wm, wc) = mean_cv([r["work_J"] for r in rs])
                 knob = f"{rs[0]['dt_s'] * 1e3:g} ms, {rs[0]['iterations']}"
                 change = lambda key: "-" if k == "level's" else paired(rs, base, key)
-                print(f"| {s.upper()} | {level} | {knob} | {len(rs)} | {mm / 1e3:.2f} ({100 * mc:.0f} %) "
-                      f"| {change('loaded_mass_kg')} | {wm / 1e3:.0f} ({100 * wc:.0f} %) | {change('work_J')} |")
+                cv = lambda c: f"{100 * c:.0f} %" if len(rs) > 1 else "one pile"
+                print(f"| {s.upper()} | {level} | {knob} | {len(rs)} | {mm / 1e3:.2f} ({cv(mc)}) "
+                      f"| {change('loaded_mass_kg')} | {wm / 1e3:.0f} ({cv(wc)}) | {change('work_J')} |")
