@@ -10,6 +10,20 @@
 namespace talus::sim2real {
 namespace {
 
+// the synthetic pair: the measured reference and the simulated run
+MeasuredRun reference_run() {
+  MeasuredRun measured;
+  measured.run.series = test::reference_series();
+  measured.run.summary = test::reference_summary();
+  return measured;
+}
+sim2real::Run simulated_run() {
+  sim2real::Run simulated;
+  simulated.series = test::simulated_series();
+  simulated.summary = test::simulated_summary();
+  return simulated;
+}
+
 // a one-run diagnosis: the measured reference, the simulated run's residual, nothing found
 Diagnosis one_run_diagnosis(const MeasuredRun& measured, const Run& simulated) {
   Diagnosis d;
@@ -29,12 +43,8 @@ Diagnosis one_run_diagnosis(const MeasuredRun& measured, const Run& simulated) {
 // far from the simulated pile's; the effects say UNEXPLAINED; both tables end with the mean over
 // runs
 TEST(Report, NamesTheResidualTheScanWarningAndTheVerdict) {
-  MeasuredRun measured;
-  measured.run.series = test::reference_series();
-  measured.run.summary = test::reference_summary();
-  sim2real::Run simulated;
-  simulated.series = test::simulated_series();
-  simulated.summary = test::simulated_summary();
+  const MeasuredRun measured = reference_run();
+  const sim2real::Run simulated = simulated_run();
   const Diagnosis d = one_run_diagnosis(measured, simulated);
   const std::string report = diagnosis_report(d, {measured});
   for (const char* part : {"# talus diagnose", "(runs/fb35; calibration and validation)", "| bucket_tip_z | dig |",
@@ -51,12 +61,8 @@ TEST(Report, NamesTheResidualTheScanWarningAndTheVerdict) {
 // a residual judged against a simulation's spread says so under its table, with the spread's
 // share per channel; one judged against the sensor noise alone says nothing more
 TEST(Report, SaysWhenTheSimulationsSpreadJudgedTheResidual) {
-  MeasuredRun measured;
-  measured.run.series = test::reference_series();
-  measured.run.summary = test::reference_summary();
-  sim2real::Run simulated;
-  simulated.series = test::simulated_series();
-  simulated.summary = test::simulated_summary();
+  const MeasuredRun measured = reference_run();
+  sim2real::Run simulated = simulated_run();
   const std::vector<double> sigma(kChannelCount, 1e3);
   EXPECT_EQ(spread_note(compute_residuals(simulated, measured.run, sigma)), "");
   simulated.spread = RunSpread{3, {}, 0, {}};
