@@ -32,7 +32,10 @@ Scene settle10k_scene() {
   m.friction = 0.5;
   m.young = 1.0e8;
   m.poisson = 0.45;  // as the LIGGGHTS input
+  // neither LIGGGHTS's input nor Bullet's has rolling resistance, on grains or walls: the
+  // gravel-covered ground of the piles (Material::ground_rolling) is not this box's
   m.rolling = 0.0;
+  m.ground_rolling = 0.0;
   DemSettings s;
   s.dt = 4.0e-3;
   s.iterations = 30;
