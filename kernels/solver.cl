@@ -314,6 +314,21 @@ __kernel void row_residual(__global const TlRow* rows, int n_rows, __global cons
   residual[k] = rn * rn + rt * rt + rr * rr;
 }
 
+// the sum of each block of `block` consecutive values, one work-item a block, in index order: the
+// host reads one float per block instead of one per row (at D50 the download of 1.9 M residuals
+// and their sum on the host were 17 % of a GPU step, bench/RESULTS.md). A plain loop and no
+// work-group reduction: the order of the sum is fixed by `block` alone, whatever the device, and
+// PoCL pays for barriers (a local-memory tree cost the CPU a third more than this)
+__kernel void sum_blocks(__global const float* values, int n, int block, __global float* sums) {
+  int g = get_global_id(0);
+  int begin = g * block;
+  if (begin >= n) return;
+  int end = min(begin + block, n);
+  float s = 0.0f;
+  for (int i = begin; i < end; ++i) s += values[i];
+  sums[g] = s;
+}
+
 // copies the solved impulses back to the contacts for the next step's warm start
 __kernel void store_impulses(__global const TlRow* rows, int n_rows, __global TlContact* contacts) {
   int k = get_global_id(0);

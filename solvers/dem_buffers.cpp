@@ -36,6 +36,7 @@ DemBuffers::DemBuffers(Device& dev)
       delta_lin(dev, 1),
       delta_ang(dev, 1),
       residual(dev, 1),
+      residual_block_sums(dev, 1),
       first_non_finite(dev, 1) {}
 
 std::size_t DemBuffers::device_bytes() const {

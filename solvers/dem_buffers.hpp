@@ -53,6 +53,7 @@ struct DemBuffers {
                           delta_lin.bytes(),
                           delta_ang.bytes(),
                           residual.bytes(),
+                          residual_block_sums.bytes(),
                           first_non_finite.bytes()})
       f(b);
   }
@@ -87,7 +88,9 @@ struct DemBuffers {
   // rows and the Jacobi impulse changes
   Buffer<TlRow> rows;
   Buffer<cl_float4> delta_lin, delta_ang;
+  // each row's squared residual, and their sums in blocks (DemWorld::residual)
   Buffer<float> residual;
+  Buffer<float> residual_block_sums;
 
   // the lowest index of a particle with a non-finite state (INT_MAX: none), checked every step
   Buffer<int> first_non_finite;

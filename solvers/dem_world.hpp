@@ -90,8 +90,8 @@ class DemWorld {
   void store_impulses();
   void integrate();
 
-  // RMS of the row residuals (kernels/solver.cl row_residual) [m/s], summed on the host in
-  // row order in double
+  // RMS of the row residuals (kernels/solver.cl row_residual) [m/s]: summed in blocks of
+  // kResidualBlock rows on the device (sum_blocks), the blocks' sums on the host in double
   double residual();
   // one step that records the residual after every sweep (diagnostics, convergence tables)
   std::vector<double> step_recording_residuals();
@@ -127,7 +127,8 @@ class DemWorld {
   cl::Kernel k_contact_count_, k_contact_write_;
   cl::Kernel k_adj_count_, k_adj_fill_, k_adj_sort_;
   cl::Kernel k_colour_round_, k_colour_hist_, k_colour_scatter_, k_colour_ranges_, k_identity_;
-  cl::Kernel k_prepare_, k_gravity_, k_apply_impulses_, k_store_, k_integrate_, k_residual_;
+  cl::Kernel k_prepare_, k_gravity_, k_apply_impulses_, k_store_, k_integrate_, k_residual_,
+      k_sum_blocks_;
   cl::Kernel k_first_non_finite_;
 };
 
