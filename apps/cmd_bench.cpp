@@ -213,6 +213,83 @@ void add_bench_dig(CLI::App& bench) {
   });
 }
 
+// the legend's name of a device from `talus bench dem`'s "device" string: the device's own name
+// without the platform and the sizes ("NVIDIA CUDA / NVIDIA H100 80GB HBM3 (132 compute units,
+// ...)" -> "NVIDIA H100 80GB HBM3")
+std::string device_label(const std::string& description) {
+  std::string name = description;
+  if (auto slash = name.find(" / "); slash != std::string::npos) name = name.substr(slash + 3);
+  if (auto paren = name.find(" ("); paren != std::string::npos) name = name.substr(0, paren);
+  return name;
+}
+
+// the levels of one `talus bench dem --json` file as points of the throughput figure (the 10k
+// settling case has no level and is left out); InputError naming the file and the field
+std::vector<ThroughputPoint> throughput_points(const std::string& path, const std::string& label) {
+  const nlohmann::json j = read_json_file(path, "a `talus bench dem --json` result to plot");
+  const std::string fix = "; plot a file written by `talus bench dem --json`";
+  if (!j.is_object() || !j.contains("results") || !j.at("results").is_array())
+    throw InputError(path + ": no 'results' array" + fix);
+  std::string device = label;
+  if (device.empty())
+    device = j.contains("device") && j.at("device").is_string()
+                 ? device_label(j.at("device").get<std::string>())
+                 : path;
+  std::vector<ThroughputPoint> points;
+  for (size_t k = 0; k < j.at("results").size(); ++k) {
+    const nlohmann::json& r = j.at("results")[k];
+    const std::string where = path + ": results[" + std::to_string(k) + "]";
+    if (!r.is_object() || !r.contains("level") || !r.at("level").is_string())
+      throw InputError(where + ": no 'level' name" + fix);
+    const std::string level = r.at("level").get<std::string>();
+    if (level == "settle10k") continue;
+    const FidelityPreset& preset = fidelity_preset(level);
+    auto positive = [&](const char* key) {
+      if (!r.contains(key) || !r.at(key).is_number() || !(r.at(key).get<double>() > 0.0))
+        throw InputError(where + " (" + level + "): '" + key + "' must be a positive number" + fix);
+      return r.at(key).get<double>();
+    };
+    points.push_back({level, 1e3 * preset.diameter, positive("contact_updates_per_s"),
+                      positive("realtime_factor"), device});
+  }
+  if (points.empty())
+    throw InputError(path + ": no level to plot (only the 10k settling case)" + fix);
+  return points;
+}
+
+// talus bench plot: the throughput figure of one or more devices from their JSON files
+void add_bench_plot(CLI::App& bench) {
+  struct Options {
+    std::vector<std::string> files;
+    std::vector<std::string> labels;
+    std::string out;
+  };
+  auto opt = std::make_shared<Options>();
+  auto* plot = bench.add_subcommand("plot",
+                                    "draw the throughput figure of one or more `talus bench dem "
+                                    "--json` files, one line per file (device)");
+  plot->add_option("files", opt->files, "`talus bench dem --json` result files")
+      ->required()
+      ->check(CLI::ExistingFile);
+  plot->add_option("--labels", opt->labels,
+                   "the legend's name of each file, in order (default: its device)")
+      ->delimiter(',');
+  plot->add_option("--out", opt->out, "the figure (PNG)")->required();
+  plot->callback([opt] {
+    if (!opt->labels.empty() && opt->labels.size() != opt->files.size())
+      throw InputError("--labels: " + std::to_string(opt->labels.size()) + " names for " +
+                       std::to_string(opt->files.size()) +
+                       " files; give one per file, comma-separated, or none");
+    check_writable(opt->out, "--out");
+    std::vector<ThroughputPoint> points;
+    for (size_t k = 0; k < opt->files.size(); ++k) {
+      auto more = throughput_points(opt->files[k], opt->labels.empty() ? "" : opt->labels[k]);
+      points.insert(points.end(), more.begin(), more.end());
+    }
+    throughput_figure(points).write_png(opt->out, kFigureWidth, kFigureHeight);
+  });
+}
+
 }  // namespace
 
 void add_bench_command(CLI::App& app) {
@@ -231,6 +308,7 @@ void add_bench_command(CLI::App& app) {
   auto* dem = bench->add_subcommand("dem", "DEM throughput per fidelity level and the 10k settling case");
   bench->require_subcommand(1);
   add_bench_dig(*bench);
+  add_bench_plot(*bench);
   dem->add_option("--levels", opt->levels, "comma-separated levels (D400,D200,D100,D50)")->capture_default_str();
   dem->add_option("--json", opt->json, "write the results as JSON to this file");
   dem->add_option(
@@ -261,7 +339,8 @@ void add_bench_command(CLI::App& app) {
       for (size_t k = 0; k < presets.size(); ++k)
         points.push_back({presets[k]->name, 1e3 * presets[k]->diameter,
                           results[k].at("contact_updates_per_s").get<double>(),
-                          results[k].at("realtime_factor").get<double>()});
+                          results[k].at("realtime_factor").get<double>(),
+                          device_label(dev.description())});
       throughput_figure(points).write_png(opt->plot, kFigureWidth, kFigureHeight);
     }
     std::cout << j.dump(2) << "\n";

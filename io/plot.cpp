@@ -850,19 +850,34 @@ Figure throughput_figure(const std::vector<ThroughputPoint>& points) {
   Panel& speed = f.panels[1];
   updates.log_y = true;
   speed.log_y = true;
-  // the levels in order of size, one marked line per measure
+  // the devices in order of first appearance, each device's levels in order of size
+  std::vector<std::string> devices;
+  for (const ThroughputPoint& pt : points)
+    if (std::find(devices.begin(), devices.end(), pt.device) == devices.end())
+      devices.push_back(pt.device);
   std::vector<const ThroughputPoint*> sorted;
   sorted.reserve(points.size());
   for (const ThroughputPoint& pt : points) sorted.push_back(&pt);
   std::sort(sorted.begin(), sorted.end(),
             [](const ThroughputPoint* a, const ThroughputPoint* b) { return a->d_mm < b->d_mm; });
-  Series u{{}, {}, run_colour(0), LineStyle::solid, true, ""};
-  Series r{{}, {}, run_colour(1), LineStyle::solid, true, "talus"};
-  for (const ThroughputPoint* pt : sorted) {
-    u.x.push_back(pt->d_mm);
-    u.y.push_back(1e-6 * pt->contact_updates_per_s);
-    r.x.push_back(pt->d_mm);
-    r.y.push_back(pt->realtime_factor);
+  // one marked line per device and measure, one colour per device
+  std::vector<Series> u_lines, r_lines;
+  std::vector<double> all_u, all_r;
+  for (size_t k = 0; k < devices.size(); ++k) {
+    const std::string label = devices[k].empty() ? "talus" : devices[k];
+    Series u{{}, {}, run_colour(k), LineStyle::solid, true, devices.size() > 1 ? label : ""};
+    Series r{{}, {}, run_colour(k), LineStyle::solid, true, label};
+    for (const ThroughputPoint* pt : sorted) {
+      if (pt->device != devices[k]) continue;
+      u.x.push_back(pt->d_mm);
+      u.y.push_back(1e-6 * pt->contact_updates_per_s);
+      r.x.push_back(pt->d_mm);
+      r.y.push_back(pt->realtime_factor);
+    }
+    all_u.insert(all_u.end(), u.y.begin(), u.y.end());
+    all_r.insert(all_r.end(), r.y.begin(), r.y.end());
+    u_lines.push_back(std::move(u));
+    r_lines.push_back(std::move(r));
   }
   // real time, for reference, across the measured sizes
   if (!sorted.empty()) {
@@ -888,12 +903,11 @@ Figure throughput_figure(const std::vector<ThroughputPoint>& points) {
     const double bottom = std::min(std::floor(std::log10(lo)), top - kFewDecades);
     return Range{std::pow(10.0, bottom), std::pow(10.0, top)};
   };
-  updates.y_range = decades(u.y);
-  std::vector<double> speeds = r.y;
-  speeds.push_back(1.0);
-  speed.y_range = decades(speeds);
-  updates.series.push_back(std::move(u));
-  speed.series.push_back(std::move(r));
+  updates.y_range = decades(all_u);
+  all_r.push_back(1.0);
+  speed.y_range = decades(all_r);
+  for (Series& line : u_lines) updates.series.push_back(std::move(line));
+  for (Series& line : r_lines) speed.series.push_back(std::move(line));
   return f;
 }
 

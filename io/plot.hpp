@@ -141,16 +141,18 @@ struct ResolutionPoint {
 // and model family: colour by scenario, solid for the first family, dashed for the next
 Figure resolution_figure(const std::vector<ResolutionPoint>& points);
 
-// one level of the DEM throughput benchmark (talus bench dem)
+// one level of the DEM throughput benchmark (talus bench dem) on one device
 struct ThroughputPoint {
   std::string level;                   // e.g. "D200"
   double d_mm = 0.0;                   // particle diameter D [mm]
   double contact_updates_per_s = 0.0;  // contacts x sweeps per second of sweeping [1/s]
   double realtime_factor = 0.0;        // simulated time over wall time of whole steps [-]
+  std::string device;                  // the legend's name of the device measured on ("" alone)
 };
 
 // contact updates per second (top, log, in millions) and real-time factor (bottom, log) against D
-// (log), one marked line each, the real-time line with the factor 1 dashed for reference
+// (log), one marked line per device in the order the devices first appear, the real-time line
+// with the factor 1 dashed for reference
 Figure throughput_figure(const std::vector<ThroughputPoint>& points);
 
 // the colour of the i-th simulated series in every figure (a cycle of eight distinct hues)

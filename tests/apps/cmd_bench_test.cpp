@@ -50,6 +50,47 @@ TEST(CmdBench, DemPlotsThroughputAgainstParticleSize) {
   EXPECT_NE(bad.err.find("--plot"), std::string::npos) << bad.err;
 }
 
+// talus bench plot: two devices' JSON files in one figure; a file that is not a bench dem
+// result is refused naming the file and the field, and nothing is drawn
+TEST(CmdBench, PlotDrawsOneLinePerDeviceAndNamesABadField) {
+  const auto dir = std::filesystem::temp_directory_path() / "talus_bench_plot";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  auto write = [&](const std::string& name, const nlohmann::json& j) {
+    std::ofstream((dir / name).string()) << j.dump();
+    return (dir / name).string();
+  };
+  auto level = [](const char* name, double updates, double speed) {
+    return nlohmann::json{
+        {"level", name}, {"contact_updates_per_s", updates}, {"realtime_factor", speed}};
+  };
+  const std::string cpu = write(
+      "cpu.json", {{"device", "Portable Computing Language / pthread-x (2 compute units, 5 MiB)"},
+                   {"results",
+                    {level("D400", 1.1e7, 3.9),
+                     level("D200", 2.7e7, 0.033),
+                     {{"level", "settle10k"}, {"wall_s", 7.3}}}}});
+  const std::string gpu =
+      write("gpu.json", {{"device", "NVIDIA CUDA / NVIDIA H100 (132 compute units, 1 MiB)"},
+                         {"results", {level("D400", 4.1e7, 15.1), level("D50", 5.4e9, 0.042)}}});
+  const std::string png = (dir / "throughput.png").string();
+  test::Outcome o = test::run_talus("", "bench plot " + cpu + " " + gpu + " --out " + png);
+  ASSERT_EQ(o.code, 0) << o.err;
+  EXPECT_GT(std::filesystem::file_size(png), 1000u);
+  // a level with a negative rate: the file, the entry and the key
+  std::filesystem::remove(png);
+  const std::string bad = write("bad.json", {{"results", {level("D200", -1.0, 0.03)}}});
+  o = test::run_talus("", "bench plot " + cpu + " " + bad + " --out " + png);
+  EXPECT_EQ(o.code, 2) << o.err;
+  EXPECT_NE(o.err.find(bad + ": results[0] (D200): 'contact_updates_per_s'"), std::string::npos)
+      << o.err;
+  EXPECT_FALSE(std::filesystem::exists(png));
+  // a labels list that does not match the files
+  o = test::run_talus("", "bench plot " + cpu + " " + gpu + " --labels one --out " + png);
+  EXPECT_EQ(o.code, 2) << o.err;
+  EXPECT_NE(o.err.find("--labels"), std::string::npos) << o.err;
+}
+
 // bad input is refused at once (exit 2), naming what to fix: a scenario without a pile, a JSON
 // path that cannot be written, a measurement longer than the dig
 TEST(CmdBench, DigRefusesBadInputBeforeBuildingThePile) {

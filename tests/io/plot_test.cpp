@@ -403,8 +403,9 @@ TEST_F(PlotTest, ShortLogAxisIsLabelledAtEveryDoubling) {
 // the throughput figure: both panels logarithmic over a logarithmic D, the levels joined in order
 // of size whatever order they were measured in, and real time drawn across the sizes for reference
 TEST_F(PlotTest, ThroughputFigureDrawsTheLevelsInOrderOfSize) {
-  const std::vector<ThroughputPoint> levels = {
-      {"D200", 200, 3.1e7, 0.037}, {"D400", 400, 1.6e7, 4.6}, {"D100", 100, 3.2e7, 0.0054}};
+  const std::vector<ThroughputPoint> levels = {{"D200", 200, 3.1e7, 0.037, ""},
+                                               {"D400", 400, 1.6e7, 4.6, ""},
+                                               {"D100", 100, 3.2e7, 0.0054, ""}};
   const Figure f = throughput_figure(levels);
   ASSERT_EQ(f.panels.size(), 2u);
   EXPECT_TRUE(f.log_x);
@@ -418,6 +419,28 @@ TEST_F(PlotTest, ThroughputFigureDrawsTheLevelsInOrderOfSize) {
   EXPECT_EQ(f.panels[1].series[1].y, (std::vector<double>{0.0054, 0.037, 4.6}));
   f.write_png(file("throughput.png"), 1000, 800);
   EXPECT_EQ(read_png(file("throughput.png")).width, 1000);
+}
+
+// two devices: one line each in both panels, in the order the devices first appear, each in its
+// own colour and named in the legend; the axes span both devices' values
+TEST_F(PlotTest, ThroughputFigureDrawsOneLinePerDevice) {
+  const std::vector<ThroughputPoint> levels = {{"D400", 400, 1.1e7, 3.9, "EPYC"},
+                                               {"D50", 50, 5.4e9, 0.042, "H100"},
+                                               {"D200", 200, 2.7e7, 0.033, "EPYC"},
+                                               {"D400", 400, 4.1e7, 15.1, "H100"}};
+  const Figure f = throughput_figure(levels);
+  ASSERT_EQ(f.panels[0].series.size(), 2u);
+  EXPECT_EQ(f.panels[0].series[0].label, "EPYC");
+  EXPECT_EQ(f.panels[0].series[0].x, (std::vector<double>{200, 400}));
+  EXPECT_EQ(f.panels[0].series[1].label, "H100");
+  EXPECT_EQ(f.panels[0].series[1].x, (std::vector<double>{50, 400}));
+  EXPECT_FALSE(f.panels[0].series[0].colour == f.panels[0].series[1].colour);
+  // the real-time line first, then one line per device
+  ASSERT_EQ(f.panels[1].series.size(), 3u);
+  EXPECT_EQ(f.panels[1].series[2].y, (std::vector<double>{0.042, 15.1}));
+  ASSERT_TRUE(f.panels[0].y_range.has_value());
+  EXPECT_LE(f.panels[0].y_range->lo, 11.0);    // the slowest, in millions per second
+  EXPECT_GE(f.panels[0].y_range->hi, 5400.0);  // the fastest
 }
 
 // `talus plot` end to end (the tool is built next to this test)
