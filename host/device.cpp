@@ -168,4 +168,11 @@ void launch(Device& dev, cl::Kernel& kernel, size_t count, const char* what) {
   });
 }
 
+void launch_group(Device& dev, cl::Kernel& kernel, size_t size, const char* what) {
+  cl_checked(what, [&] {
+    return dev.queue().enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(size),
+                                            cl::NDRange(size));
+  });
+}
+
 }  // namespace talus

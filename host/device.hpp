@@ -167,4 +167,8 @@ inline constexpr size_t kWorkGroupSize = 64;
 // enqueues `kernel` over `count` items (padded to whole work-groups; kernels bound-check)
 void launch(Device& dev, cl::Kernel& kernel, size_t count, const char* what);
 
+// enqueues `kernel` as one work-group of `size` work-items (a chain walked by one work-item with
+// the group's help: kernels/bucket.cl)
+void launch_group(Device& dev, cl::Kernel& kernel, size_t size, const char* what);
+
 }  // namespace talus

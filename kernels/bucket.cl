@@ -1,8 +1,9 @@
 // Rows between particles and the bucket (SPEC §1 steps 3-6). The rows are made on the host from
 // Embree's closest points (solvers/bucket_rows.cpp) and solved here inside every sweep, right
 // after the particle rows. All bucket rows share one body, so they are solved one after another
-// by a single work-item: the bucket's twist changes with every row through its articulated 6x6
-// mobility W (the vehicle seen from the bucket), which is what makes the coupling strong.
+// (one chain, walked by one work-item of a work-group that loads and stores it in chunks, below):
+// the bucket's twist changes with every row through its articulated 6x6 mobility W (the vehicle
+// seen from the bucket), which is what makes the coupling strong.
 // Double-precision twins: solvers/bucket_rows.cpp (reference namespace).
 
 // the bucket's twist change from an impulse wrench [p; l] about its centre of mass: W [p; l]
@@ -32,76 +33,183 @@ __kernel void bucket_gather(__global const int* index, int n, __global const flo
   out_omega[k] = omega[i];
 }
 
+// The rows of one step are one chain: a row reads the bucket twist and the particle velocity the
+// rows before it left. Walked by one work-item straight from global memory, every row waits for
+// two dependent loads (the row, then its particle), about 1 us a row on a GPU, where that walk
+// was 44 % of a D50 step (bench/RESULTS.md "GPU"). So the chain is walked in chunks: the
+// work-group loads a chunk of rows and their particles' state into local memory together, one
+// work-item walks the chunk there in order, and the work-group writes it back. A particle with
+// several rows in a chunk is loaded once, into the slot of its first row there, and every later
+// row of it uses that slot, so it sees what the earlier rows did, exactly as in the serial walk:
+// the arithmetic and its order are the serial walk's, and the result does not depend on the chunk
+// (the work-group size; tests/solvers/bucket_rows_test.cpp holds chunks of 1, 7 and 64 to it).
+
+// the chunk of rows [base, base + count): rows, their particles' state, and each row's slot
+// (the chunk position of its particle's first row in the chunk)
+void bucket_chunk_load(__global const TlRow* rows, int base, int count,
+                       __global const float4* velocity, __global const float4* omega,
+                       __local TlRow* chunk_rows, __local float4* chunk_velocity,
+                       __local float4* chunk_omega, __local int* chunk_particle,
+                       __local int* chunk_slot) {
+  int k = get_local_id(0);
+  if (k < count) {
+    TlRow row = rows[base + k];
+    chunk_rows[k] = row;
+    chunk_particle[k] = row.a;
+    chunk_velocity[k] = velocity[row.a];
+    chunk_omega[k] = omega[row.a];
+  }
+  barrier(CLK_LOCAL_MEM_FENCE);
+  if (k < count) {
+    int a = chunk_particle[k];
+    int slot = k;
+    for (int j = 0; j < k; ++j) {
+      if (chunk_particle[j] == a) {
+        slot = j;
+        break;
+      }
+    }
+    chunk_slot[k] = slot;
+  }
+  barrier(CLK_LOCAL_MEM_FENCE);
+}
+
+// each particle of the chunk written back once, from its slot; the barrier makes the writes
+// visible to the next chunk's loads (one work-group: a global fence suffices)
+void bucket_chunk_store_particles(int count, __global float4* velocity, __global float4* omega,
+                                  __local const float4* chunk_velocity,
+                                  __local const float4* chunk_omega,
+                                  __local const int* chunk_particle, __local const int* chunk_slot) {
+  int k = get_local_id(0);
+  if (k < count && chunk_slot[k] == k) {
+    velocity[chunk_particle[k]] = chunk_velocity[k];
+    omega[chunk_particle[k]] = chunk_omega[k];
+  }
+  barrier(CLK_GLOBAL_MEM_FENCE | CLK_LOCAL_MEM_FENCE);
+}
+
 // warm start: each particle receives the impulses its bucket rows start from (the bucket's
-// share is already in its twist: the vehicle was solved with their wrench). Serial: a particle
-// may touch the bucket more than once.
+// share is already in its twist: the vehicle was solved with their wrench). A chain: a particle
+// may touch the bucket more than once. Launched as one work-group.
 __kernel void bucket_warm_start(__global const TlRow* rows, int n_rows, __global float4* velocity,
-                                __global float4* omega) {
-  if (get_global_id(0) != 0) return;
-  for (int k = 0; k < n_rows; ++k) {
-    TlRow row = rows[k];
-    int a = row.a;
-    float3 P = ROW_IMPULSE_N(row) * row.normal.xyz + row.impulse_t.xyz;
-    float4 va = velocity[a];
-    float4 wa = omega[a];
-    velocity[a] = (float4)(va.xyz - va.w * P, va.w);
-    omega[a] = (float4)(wa.xyz - wa.w * (cross(row.arm_a.xyz, P) + row.impulse_r.xyz), wa.w);
+                                __global float4* omega, __local TlRow* chunk_rows,
+                                __local float4* chunk_velocity, __local float4* chunk_omega,
+                                __local int* chunk_particle, __local int* chunk_slot) {
+  int chunk = get_local_size(0);
+  for (int base = 0; base < n_rows; base += chunk) {
+    int count = min(chunk, n_rows - base);
+    bucket_chunk_load(rows, base, count, velocity, omega, chunk_rows, chunk_velocity, chunk_omega,
+                      chunk_particle, chunk_slot);
+    // one work-item applies the chunk's rows in order
+    if (get_local_id(0) == 0) {
+      for (int k = 0; k < count; ++k) {
+        TlRow row = chunk_rows[k];
+        int s = chunk_slot[k];
+        float3 P = ROW_IMPULSE_N(row) * row.normal.xyz + row.impulse_t.xyz;
+        float4 va = chunk_velocity[s];
+        float4 wa = chunk_omega[s];
+        chunk_velocity[s] = (float4)(va.xyz - va.w * P, va.w);
+        chunk_omega[s] =
+            (float4)(wa.xyz - wa.w * (cross(row.arm_a.xyz, P) + row.impulse_r.xyz), wa.w);
+      }
+    }
+    barrier(CLK_LOCAL_MEM_FENCE);
+    bucket_chunk_store_particles(count, velocity, omega, chunk_velocity, chunk_omega,
+                                 chunk_particle, chunk_slot);
   }
 }
 
-// one sweep over the bucket rows in order: per contact normal, friction, then rolling, as
-// kernels/solver.cl solve_contact, with the bucket's side through W instead of a diagonal mass
+// one row against the bucket: normal, friction, then rolling, as kernels/solver.cl
+// solve_contact, with the bucket's side through W instead of a diagonal mass. The row's
+// impulses, the particle's velocity and omega (w: inverse mass and inertia) and the bucket's
+// twist are updated in place.
+void bucket_row_solve(TlRow* row, float4* velocity, float4* omega, const float* W, float3* vb,
+                      float3* wb) {
+  float3 va = velocity->xyz, wa = omega->xyz;
+  float ima = velocity->w, iia = omega->w;
+  float3 n = row->normal.xyz;
+  float3 arm_a = row->arm_a.xyz;
+  float3 arm_b = row->arm_b.xyz;
+  float ln = ROW_IMPULSE_N(*row);
+
+  // normal: the bucket's point velocity against the particle's (its arm is along n); the
+  // bucket holds no tensile impulse
+  float un = dot(n, *vb + cross(*wb, arm_b) - va);
+  float ln_new = normal_impulse(ln, ROW_RHS(*row), un, ROW_SIGMA(*row), ROW_INV_DN(*row), 0.0f);
+  float3 dp = (ln_new - ln) * n;
+  va -= ima * dp;
+  bucket_twist_change(W, dp, cross(arm_b, dp), vb, wb);
+  ln = ln_new;
+
+  // friction on the disc mu lambda_n
+  float3 u = (*vb + cross(*wb, arm_b)) - (va + cross(wa, arm_a));
+  float3 ut = u - dot(u, n) * n;
+  float3 lt = row->impulse_t.xyz;
+  float3 lt_new = friction_impulse(lt, ut, ROW_INV_DT(*row), ROW_FRICTION(*row) * ln);
+  float3 dlt = lt_new - lt;
+  va -= ima * dlt;
+  wa -= iia * cross(arm_a, dlt);
+  bucket_twist_change(W, dlt, cross(arm_b, dlt), vb, wb);
+
+  // rolling (on the disc) and twist (about n), both bounded by mu_r R* lambda_n
+  float3 wrel = *wb - wa;
+  float3 lr = row->impulse_r.xyz;
+  float3 lr_new = rolling_impulse(lr, wrel, n, ROW_INV_DR(*row), ROW_ROLLING_LIMIT(*row) * ln);
+  float3 dlr = lr_new - lr;
+  wa -= iia * dlr;
+  bucket_twist_change(W, (float3)(0.0f), dlr, vb, wb);
+
+  row->impulse_t = (float4)(lt_new, ln);
+  row->impulse_r = (float4)(lr_new, ROW_INV_DT(*row));
+  *velocity = (float4)(va, ima);
+  *omega = (float4)(wa, iia);
+}
+
+// one sweep over the bucket rows in order (bucket_row_solve each), chunk by chunk as above.
+// Launched as one work-group; the bucket's twist lives in work-item 0 for the whole sweep.
 __kernel void bucket_sweep(__global TlRow* rows, int n_rows, __global float4* velocity,
-                           __global float4* omega, __global TlBucketBody* bucket) {
-  if (get_global_id(0) != 0) return;
+                           __global float4* omega, __global TlBucketBody* bucket,
+                           __local TlRow* chunk_rows, __local float4* chunk_velocity,
+                           __local float4* chunk_omega, __local int* chunk_particle,
+                           __local int* chunk_slot) {
+  int chunk = get_local_size(0);
+  int k = get_local_id(0);
   float W[36];
-  for (int i = 0; i < 36; ++i) W[i] = bucket->mobility[i];
-  float3 vb = bucket->velocity.xyz;
-  float3 wb = bucket->omega.xyz;
-  for (int k = 0; k < n_rows; ++k) {
-    TlRow row = rows[k];
-    int a = row.a;
-    float4 va4 = velocity[a];
-    float4 wa4 = omega[a];
-    float3 va = va4.xyz, wa = wa4.xyz;
-    float ima = va4.w, iia = wa4.w;
-    float3 n = row.normal.xyz;
-    float3 arm_a = row.arm_a.xyz;
-    float3 arm_b = row.arm_b.xyz;
-    float ln = ROW_IMPULSE_N(row);
-
-    // normal: the bucket's point velocity against the particle's (its arm is along n); the
-    // bucket holds no tensile impulse
-    float un = dot(n, vb + cross(wb, arm_b) - va);
-    float ln_new = normal_impulse(ln, ROW_RHS(row), un, ROW_SIGMA(row), ROW_INV_DN(row), 0.0f);
-    float3 dp = (ln_new - ln) * n;
-    va -= ima * dp;
-    bucket_twist_change(W, dp, cross(arm_b, dp), &vb, &wb);
-    ln = ln_new;
-
-    // friction on the disc mu lambda_n
-    float3 u = (vb + cross(wb, arm_b)) - (va + cross(wa, arm_a));
-    float3 ut = u - dot(u, n) * n;
-    float3 lt = row.impulse_t.xyz;
-    float3 lt_new = friction_impulse(lt, ut, ROW_INV_DT(row), ROW_FRICTION(row) * ln);
-    float3 dlt = lt_new - lt;
-    va -= ima * dlt;
-    wa -= iia * cross(arm_a, dlt);
-    bucket_twist_change(W, dlt, cross(arm_b, dlt), &vb, &wb);
-
-    // rolling (on the disc) and twist (about n), both bounded by mu_r R* lambda_n
-    float3 wrel = wb - wa;
-    float3 lr = row.impulse_r.xyz;
-    float3 lr_new = rolling_impulse(lr, wrel, n, ROW_INV_DR(row), ROW_ROLLING_LIMIT(row) * ln);
-    float3 dlr = lr_new - lr;
-    wa -= iia * dlr;
-    bucket_twist_change(W, (float3)(0.0f), dlr, &vb, &wb);
-
-    rows[k].impulse_t = (float4)(lt_new, ln);
-    rows[k].impulse_r = (float4)(lr_new, ROW_INV_DT(row));
-    velocity[a] = (float4)(va, ima);
-    omega[a] = (float4)(wa, iia);
+  float3 vb = (float3)(0.0f), wb = (float3)(0.0f);
+  if (k == 0) {
+    for (int i = 0; i < 36; ++i) W[i] = bucket->mobility[i];
+    vb = bucket->velocity.xyz;
+    wb = bucket->omega.xyz;
   }
-  bucket->velocity = (float4)(vb, 0.0f);
-  bucket->omega = (float4)(wb, 0.0f);
+  for (int base = 0; base < n_rows; base += chunk) {
+    int count = min(chunk, n_rows - base);
+    bucket_chunk_load(rows, base, count, velocity, omega, chunk_rows, chunk_velocity, chunk_omega,
+                      chunk_particle, chunk_slot);
+    // one work-item walks the chunk's rows in order
+    if (k == 0) {
+      for (int j = 0; j < count; ++j) {
+        TlRow row = chunk_rows[j];
+        int s = chunk_slot[j];
+        float4 va = chunk_velocity[s];
+        float4 wa = chunk_omega[s];
+        bucket_row_solve(&row, &va, &wa, W, &vb, &wb);
+        chunk_rows[j].impulse_t = row.impulse_t;
+        chunk_rows[j].impulse_r = row.impulse_r;
+        chunk_velocity[s] = va;
+        chunk_omega[s] = wa;
+      }
+    }
+    barrier(CLK_LOCAL_MEM_FENCE);
+    // the rows' impulses and the particles back to global memory
+    if (k < count) {
+      rows[base + k].impulse_t = chunk_rows[k].impulse_t;
+      rows[base + k].impulse_r = chunk_rows[k].impulse_r;
+    }
+    bucket_chunk_store_particles(count, velocity, omega, chunk_velocity, chunk_omega,
+                                 chunk_particle, chunk_slot);
+  }
+  if (k == 0) {
+    bucket->velocity = (float4)(vb, 0.0f);
+    bucket->omega = (float4)(wb, 0.0f);
+  }
 }

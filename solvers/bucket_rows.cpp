@@ -276,9 +276,26 @@ void bucket_sweep(std::vector<ContactRow>& rows, Particles& particles, BucketBod
 
 }  // namespace reference
 
-BucketRowBlock::BucketRowBlock(Device& dev)
+namespace {
+
+// the chunk's local memory, the last five arguments of both chain kernels from `first` on
+// (kernels/bucket.cl: rows, velocities, omegas, particle indices, slots)
+void set_chunk_args(cl::Kernel& kernel, cl_uint first, size_t chunk) {
+  cl_checked("setting the bucket chunk's local memory", [&] {
+    kernel.setArg(first, cl::Local(chunk * sizeof(TlRow)));
+    kernel.setArg(first + 1, cl::Local(chunk * sizeof(cl_float4)));
+    kernel.setArg(first + 2, cl::Local(chunk * sizeof(cl_float4)));
+    kernel.setArg(first + 3, cl::Local(chunk * sizeof(cl_int)));
+    return kernel.setArg(first + 4, cl::Local(chunk * sizeof(cl_int)));
+  });
+}
+
+}  // namespace
+
+BucketRowBlock::BucketRowBlock(Device& dev, size_t chunk)
     : dev_(dev), rows_(dev, 1), body_(dev, 1), index_(dev, 1), gathered_position_(dev, 1),
-      gathered_velocity_(dev, 1), gathered_omega_(dev, 1) {
+      gathered_velocity_(dev, 1), gathered_omega_(dev, 1), chunk_(chunk) {
+  if (chunk_ == 0) throw Error("BucketRowBlock: a chunk of 0 rows (give at least 1)");
   const cl::Program& program = dev.program({"contact_law.cl", "bucket.cl"});
   gather_kernel_ = dev.kernel(program, "bucket_gather");
   warm_kernel_ = dev.kernel(program, "bucket_warm_start");
@@ -312,13 +329,15 @@ void BucketRowBlock::set_bucket(const BucketBody& bucket) { body_.upload({to_dev
 void BucketRowBlock::warm_start(Buffer<cl_float4>& velocity, Buffer<cl_float4>& omega) {
   if (rows_count_ == 0) return;
   set_args(warm_kernel_, rows_, rows_count_, velocity, omega);
-  launch(dev_, warm_kernel_, 1, "bucket_warm_start");
+  set_chunk_args(warm_kernel_, 4, chunk_);
+  launch_group(dev_, warm_kernel_, chunk_, "bucket_warm_start");
 }
 
 void BucketRowBlock::sweep(Buffer<cl_float4>& velocity, Buffer<cl_float4>& omega) {
   if (rows_count_ == 0) return;
   set_args(sweep_kernel_, rows_, rows_count_, velocity, omega, body_);
-  launch(dev_, sweep_kernel_, 1, "bucket_sweep");
+  set_chunk_args(sweep_kernel_, 5, chunk_);
+  launch_group(dev_, sweep_kernel_, chunk_, "bucket_sweep");
 }
 
 std::vector<TlRow> BucketRowBlock::rows() const {

@@ -111,7 +111,11 @@ void bucket_sweep(std::vector<ContactRow>& rows, Particles& particles, BucketBod
 // the device side: rows, the bucket's state, and the gather of the candidates' state
 class BucketRowBlock {
  public:
-  explicit BucketRowBlock(Device& dev);
+  // `chunk`: rows the sweep's work-group loads into local memory at a time (its work-group size;
+  // the results do not depend on it, kernels/bucket.cl). The default is the launches' usual
+  // work-group size, which every OpenCL device takes with this kernel's local memory
+  // (chunk x 152 bytes: 9.7 kB at 64).
+  explicit BucketRowBlock(Device& dev, size_t chunk = kWorkGroupSize);
 
   // the candidates' state (centre/radius, velocity/inverse mass, omega/inverse inertia) from the
   // particle buffers, in the order of `index`
@@ -134,6 +138,7 @@ class BucketRowBlock {
   Buffer<int> index_;
   Buffer<cl_float4> gathered_position_, gathered_velocity_, gathered_omega_;
   int rows_count_ = 0;
+  size_t chunk_;
   cl::Kernel gather_kernel_, warm_kernel_, sweep_kernel_;
 };
 

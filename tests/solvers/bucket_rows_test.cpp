@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstring>
 #include <random>
 
 #include "solvers/dem_world.hpp"
@@ -171,6 +173,75 @@ TEST(BucketRows, KernelsMatchDoubleReferenceOnRandomContacts) {
   velocity.expect_within();
   impulses.expect_within();
   twist.expect_within();
+}
+
+// the device's warm start and `sweeps` sweeps of `rows` with chunks of `chunk` rows: the particle
+// velocities and omegas, the rows and the bucket, all as the device holds them
+struct DeviceSweeps {
+  std::vector<cl_float4> velocity, omega;
+  std::vector<TlRow> rows;
+  TlBucketBody bucket;
+};
+
+DeviceSweeps device_sweeps(Device& dev, const RandomCase& c, const std::vector<TlRow>& rows, size_t chunk,
+                           int sweeps) {
+  std::vector<cl_float4> v, w;
+  for (size_t i = 0; i < c.particles.size(); ++i) {
+    v.push_back(to_float4(c.particles.velocity[i], c.particles.inv_mass[i]));
+    w.push_back(to_float4(c.particles.omega[i], c.particles.inv_inertia[i]));
+  }
+  Buffer<cl_float4> bv(dev, v.size()), bw(dev, w.size());
+  bv.upload(v);
+  bw.upload(w);
+  BucketRowBlock block(dev, chunk);
+  block.set_rows(rows);
+  block.set_bucket(c.bucket);
+  block.warm_start(bv, bw);
+  for (int s = 0; s < sweeps; ++s) block.sweep(bv, bw);
+  return {bv.download(v.size()), bw.download(w.size()), block.rows(), to_device(block.bucket())};
+}
+
+template <class T>
+bool same_bytes(const std::vector<T>& a, const std::vector<T>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0;
+}
+
+TEST(BucketRows, ChunksOfAnySizeGiveTheSerialWalkBitForBit) {
+  // kernels/bucket.cl walks the rows' chain in chunks loaded into local memory; a particle with
+  // several rows in a chunk shares one slot. Rows shuffled so that a particle's rows fall in the
+  // same chunk, in different chunks, and apart: chunks of 7 and 64 rows must give the bytes of
+  // chunks of one row (the serial walk from global memory)
+  const uint64_t seed = test::fresh_seed();
+  SCOPED_TRACE(test::seed_note(seed));
+  std::mt19937_64 rng(seed);
+  const RandomCase c = random_case(rng, 120);
+  std::vector<BucketImpulse> previous;
+  for (const auto& contact : c.contacts) {
+    BucketImpulse b;
+    b.particle = contact.particle;
+    b.normal = contact.normal;
+    b.impulse_n = 2.0;
+    b.impulse_t = 0.1 * contact.normal.unitOrthogonal();
+    previous.push_back(b);
+  }
+  const auto match = match_bucket_contacts(c.contacts, previous);
+  std::vector<TlRow> rows;
+  for (const auto& r : make_bucket_rows(c.contacts, c.particles, c.bucket, c.com, c.params, BucketMaterial{},
+                                        previous, match))
+    rows.push_back(to_device(r));
+  std::shuffle(rows.begin(), rows.end(), rng);
+  Device& dev = test::shared_device();
+  const DeviceSweeps serial = device_sweeps(dev, c, rows, 1, 4);
+  for (size_t chunk : {size_t{7}, size_t{64}}) {
+    SCOPED_TRACE("chunk " + std::to_string(chunk));
+    const DeviceSweeps got = device_sweeps(dev, c, rows, chunk, 4);
+    EXPECT_TRUE(same_bytes(got.velocity, serial.velocity));
+    EXPECT_TRUE(same_bytes(got.omega, serial.omega));
+    EXPECT_TRUE(same_bytes(got.rows, serial.rows));
+    EXPECT_EQ(std::memcmp(&got.bucket, &serial.bucket, sizeof(TlBucketBody)), 0);
+  }
+  // the sweeps did something: the bucket moved
+  EXPECT_NE(from_device(serial.bucket).velocity, c.bucket.velocity);
 }
 
 TEST(BucketRows, FrictionlessSweepsConvergeToNonPenetration) {
