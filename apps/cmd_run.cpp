@@ -236,6 +236,7 @@ nlohmann::json dig_details(const RunOptions& o, const vehicle::Scenario& sc,
       {"model", sim.multiscale() ? "multiscale (type G)" : "particles (type D)"},
       {"dt_s", preset.dt},
       {"iterations", preset.iterations},
+      {"damping_time_s", options.soil.damping_steps * preset.dt},
       {"rolling_resistance", options.soil.rolling},
       {"seed", o.seed},
       {"form_speed_m_s", options.pile.form_speed},
@@ -355,7 +356,10 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
   // real-time factor (snapshots and notes, which download the particles, are not)
   if (!effects.empty() && !o.quiet)
     std::cerr << "talus run: effects: " << effects_note(effects) << "\n";
-  DiggingSimulation sim(dev, sc, preset, pile, options, &effects);
+  // a damping-time study changes the dig's contact rows alone (the pile settled with the level's)
+  DiggingOptions dig_options = options;
+  if (o.damping_time > 0.0) dig_options.soil.damping_steps = o.damping_time / preset.dt;
+  DiggingSimulation sim(dev, sc, preset, pile, dig_options, &effects);
   if (sim.multiscale())
     write_file_atomically((dir / "terrain_start.vts").string(),
                           terrain_vts(sim.terrain().voxels()));
@@ -399,7 +403,7 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
   // outputs: snapshots' collection, time series and summary, figures
   snapshots.finish();
   run.summary.details =
-      dig_details(o, sc, preset, options, pile, scan, sim, pile_wall, dig_wall, dev, effects);
+      dig_details(o, sc, preset, dig_options, pile, scan, sim, pile_wall, dig_wall, dev, effects);
   run.dir = dir;
   write_run(o, run);
   write_dig_figures(dir, run, scan, sc, placed, final_particles, sim.loader(),
@@ -476,6 +480,10 @@ void add_run_command(CLI::App& app, const std::string& command_line) {
       ->check(number_in(kMinTimestep, kMaxTimestep, "s"));
   cmd->add_option("--iterations", opts->iterations, "study: sweeps per step instead of the level's")
       ->check(CLI::Range(1, 100000));
+  cmd->add_option("--damping-time", opts->damping_time,
+                  "study: SPOOK damping time of the dig's contacts instead of two of its steps, "
+                  "so that --dt changes the step alone (docs/validation.md) [s]")
+      ->check(number_in(kMinDampingTime, kMaxDampingTime, "s"));
   cmd->add_option("--sweep-tolerance", opts->sweep_tolerance,
                   "end a step's sweeps once the particle rows' RMS residual is below this, the "
                   "level's sweeps the cap; 0 = always the level's, as the paper's presets "

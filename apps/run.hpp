@@ -27,6 +27,9 @@ struct RunOptions {
   double rolling = -1.0;
   double dt = 0.0;
   int iterations = 0;
+  // the SPOOK damping time of the dig's contact rows [s] instead of two steps of its timestep
+  // (Material::damping_steps); 0: the default. The pile keeps the level's, as with dt
+  double damping_time = 0.0;
   // end a step's sweeps once the particle rows' RMS residual is below this [m/s]; 0: N_it always
   double sweep_tolerance = kDigSweepTolerance;
   bool residuals = false;

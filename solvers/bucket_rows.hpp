@@ -112,10 +112,11 @@ void bucket_sweep(std::vector<ContactRow>& rows, Particles& particles, BucketBod
 class BucketRowBlock {
  public:
   // `chunk`: rows the sweep's work-group loads into local memory at a time (its work-group size;
-  // the results do not depend on it, kernels/bucket.cl). The default is the launches' usual
-  // work-group size, which every OpenCL device takes with this kernel's local memory
-  // (chunk x 152 bytes: 9.7 kB at 64).
-  explicit BucketRowBlock(Device& dev, size_t chunk = kWorkGroupSize);
+  // the results do not depend on it, kernels/bucket.cl); 0 chooses by device: on a GPU the
+  // launches' usual work-group size (chunk x 152 bytes of local memory: 9.7 kB at 64), on a CPU
+  // 1, where the caches hide the loads and the chunks' barriers cost 14 % of the walk (PoCL,
+  // HD27-D200: 6.4 against 5.6 ms a step, bench/RESULTS.md 2026-11-27 "chunked")
+  explicit BucketRowBlock(Device& dev, size_t chunk = 0);
 
   // the candidates' state (centre/radius, velocity/inverse mass, omega/inverse inertia) from the
   // particle buffers, in the order of `index`

@@ -119,6 +119,31 @@ TEST(DiggingRunTest, Hd27AtD400WritesTheRunContractSnapshotsAndFigures) {
     EXPECT_GT(std::filesystem::file_size(dir / file), 100u) << file;
 }
 
+// the damping-time study (issue 11: a halved timestep also halved the contacts' SPOOK damping
+// time, two steps): the summary records the damping time the dig used, the default two steps of
+// the level's 20 ms, and a changed one changes the dig but not its pile
+TEST(DiggingRunTest, ADampingTimeStudyChangesTheDigAloneAndIsRecorded) {
+  const auto base = std::filesystem::temp_directory_path() / "talus_run_damping_default";
+  const auto study = std::filesystem::temp_directory_path() / "talus_run_damping_study";
+  for (const auto& [dir, flag] : {std::pair{base, std::string()}, std::pair{study, std::string(" --damping-time 0.01")}}) {
+    std::filesystem::remove_all(dir);
+    const std::string cmd = kTalus + " run --scenario hd27 --fidelity D400 --snapshot-interval 0 --quiet" + flag +
+                            " --out " + dir.string() + " 2>/dev/null";
+    ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  }
+  const auto a = nlohmann::json::parse(std::ifstream(base / "summary.json"));
+  const auto b = nlohmann::json::parse(std::ifstream(study / "summary.json"));
+  EXPECT_DOUBLE_EQ(a.at("damping_time_s").get<double>(), 2 * 0.02);
+  EXPECT_DOUBLE_EQ(b.at("damping_time_s").get<double>(), 0.01);
+  auto text = [](const std::filesystem::path& file) {
+    std::ifstream in(file);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  EXPECT_EQ(text(base / "scan.csv"), text(study / "scan.csv"));  // the same settled pile
+  EXPECT_NE(text(base / "timeseries.csv"), text(study / "timeseries.csv"));
+  EXPECT_NE(a.at("work_J").get<double>(), b.at("work_J").get<double>());
+}
+
 // a type-G level runs the same scenario end to end (~2 s): the run contract, the model named in
 // the summary, a loaded bucket, the terrain's surface before and after for ParaView, and the
 // aggregate step by step
