@@ -76,8 +76,8 @@ nlohmann::json bench_level(Device& dev, const FidelityPreset& preset, int steps,
           {"realtime_factor", preset.dt / median(step_s)}};
 }
 
-nlohmann::json bench_settle10k(Device& dev, double dt, int iterations, bool quiet) {
-  Scene scene = settle10k_scene();
+nlohmann::json bench_settle10k(Device& dev, double dt, int iterations, unsigned seed, bool quiet) {
+  Scene scene = settle10k_scene(seed);
   if (dt > 0) scene.settings.dt = dt;
   if (iterations > 0) scene.settings.iterations = iterations;
   DemWorld world(dev, scene.material, scene.settings, scene.bounds, scene.geoms);
@@ -107,6 +107,7 @@ nlohmann::json bench_settle10k(Device& dev, double dt, int iterations, bool quie
           {"contacts", contacts.back()},
           {"iterations", scene.settings.iterations},
           {"dt_s", scene.settings.dt},
+          {"seed", seed},
           {"sim_time_s", sim_time},
           {"wall_s", wall},
           {"wall_s_per_sim_s", wall / sim_time},
@@ -301,6 +302,7 @@ void add_bench_command(CLI::App& app) {
     bool no_settle10k = false;
     double settle_dt = 0.0;      // 0: the scene's own (terrain/scenes.cpp)
     int settle_iterations = 0;
+    unsigned settle_seed = LatticeBox{}.seed;
     bool quiet = false;
   };
   auto opt = std::make_shared<Options>();
@@ -317,10 +319,15 @@ void add_bench_command(CLI::App& app) {
   dem->add_option("--steps", opt->steps, "timed steps per level (median reported)")->check(CLI::Range(1, 1000));
   dem->add_flag("--no-settle10k", opt->no_settle10k, "skip the 10k settling case");
   dem->add_option("--settle-dt", opt->settle_dt,
-                  "timestep of the 10k settling case [s] (default 4e-3)")
+                  "timestep of the 10k settling case [s] (default: the scene's, " +
+                      (std::ostringstream() << settle10k_scene().settings.dt).str() + " s)")
       ->check(number_in(kMinTimestep, kMaxTimestep, "s"));
-  dem->add_option("--settle-iterations", opt->settle_iterations, "PGS sweeps of the 10k settling case (default 30)")
+  dem->add_option("--settle-iterations", opt->settle_iterations, "PGS sweeps of the 10k settling case (default: the scene's, " +
+                      std::to_string(settle10k_scene().settings.iterations) + ")")
       ->check(CLI::Range(1, 100000));
+  dem->add_option("--settle-seed", opt->settle_seed,
+                  "seed of the 10k settling case's lattice jitter (default: the peers' inputs')")
+      ->capture_default_str();
   dem->add_flag("--quiet", opt->quiet, "no progress on stderr");
   dem->callback([opt] {
     std::vector<const FidelityPreset*> presets;
@@ -330,7 +337,7 @@ void add_bench_command(CLI::App& app) {
     Device dev;
     nlohmann::json results = nlohmann::json::array();
     for (auto* preset : presets) results.push_back(bench_level(dev, *preset, opt->steps, opt->quiet));
-    if (!opt->no_settle10k) results.push_back(bench_settle10k(dev, opt->settle_dt, opt->settle_iterations, opt->quiet));
+    if (!opt->no_settle10k) results.push_back(bench_settle10k(dev, opt->settle_dt, opt->settle_iterations, opt->settle_seed, opt->quiet));
     nlohmann::json j = {{"device", dev.description()}, {"results", results}};
     if (!opt->json.empty()) write_json(opt->json, j);
     if (!opt->plot.empty()) {

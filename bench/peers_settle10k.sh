@@ -12,9 +12,9 @@ trap 'rm -rf "$work"' EXIT
 echo "code,config,wall_s_for_0.5_s,wall_s_per_sim_s"
 
 # talus: the settle10k case of `talus bench dem`
-t=$("$build/talus" bench dem --levels D400 --quiet | python3 -c \
-  'import json,sys; r=json.load(sys.stdin)["results"][-1]; print(r["wall_s"])')
-echo "talus,PoCL dt 4 ms 30 PGS sweeps,$t,$(python3 -c "print($t/0.5)")"
+read -r t config < <("$build/talus" bench dem --levels D400 --quiet | python3 -c \
+  'import json,sys; r=json.load(sys.stdin)["results"][-1]; print(r["wall_s"], "PoCL dt %g ms %d PGS sweeps max overlap %.2f %% of d" % (1e3 * r["dt_s"], r["iterations"], 100 * r["max_overlap_rel"]))')
+echo "talus,$config,$t,$(python3 -c "print($t/0.5)")"
 
 # liggghts: 25,000 steps of 2e-5 s, one rank and two ranks
 cp "$peers"/liggghts-settle10k*.in "$work"/
