@@ -86,11 +86,13 @@ nlohmann::json bench_settle10k(Device& dev, double dt, int iterations, unsigned 
   int steps = std::max(1, static_cast<int>(std::lround(sim_time / scene.settings.dt)));
   Progress progress("bench settle10k", sim_time, !quiet);
   std::vector<double> sweep_s, contacts;
+  int colouring_kept = 0;
   auto t0 = std::chrono::steady_clock::now();
   for (int i = 0; i < steps; ++i) {
     world.step();
     sweep_s.push_back(world.stats().sweep_seconds);
     contacts.push_back(world.stats().contacts);
+    colouring_kept += world.stats().colouring_kept ? 1 : 0;
     progress.update(world.time());
   }
   dev.finish();
@@ -108,6 +110,8 @@ nlohmann::json bench_settle10k(Device& dev, double dt, int iterations, unsigned 
           {"iterations", scene.settings.iterations},
           {"dt_s", scene.settings.dt},
           {"seed", seed},
+          {"steps", steps},
+          {"colouring_kept_steps", colouring_kept},
           {"sim_time_s", sim_time},
           {"wall_s", wall},
           {"wall_s_per_sim_s", wall / sim_time},

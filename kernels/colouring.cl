@@ -52,6 +52,17 @@ __kernel void colour_round(__global const TlContact* contacts, int n_contacts,
   colour_out[c] = k;
 }
 
+// whether this step's contacts pair other bodies than the last step's, index for index: the
+// adjacency and the colouring depend on nothing else, so where no pair differs (a bed at rest)
+// the last step's colouring is this step's, bit for bit (solvers/dem_world.cpp begin_step).
+// `differ` starts at 0; any work-item that finds a difference sets it
+__kernel void contact_pairs_differ(__global const TlContact* now, __global const TlContact* before,
+                                   int n_contacts, __global int* differ) {
+  int c = get_global_id(0);
+  if (c >= n_contacts) return;
+  if (now[c].a != before[c].a || now[c].b != before[c].b) atomic_or(differ, 1);
+}
+
 // stable partition by colour, step 1: per block of COLOUR_BLOCK contacts, count each colour
 #define COLOUR_BLOCK 256
 __kernel void colour_histogram(__global const int* colour, int n_contacts, int blocks,

@@ -32,6 +32,7 @@ DemBuffers::DemBuffers(Device& dev)
       colour_start_dev(dev, TL_MAX_COLOURS + 1),
       order(dev, 1),
       row_of_contact(dev, 1),
+      pairs_differ(dev, 1),
       rows(dev, 1),
       delta_lin(dev, 1),
       delta_ang(dev, 1),

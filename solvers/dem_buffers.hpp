@@ -49,6 +49,7 @@ struct DemBuffers {
                           colour_start_dev.bytes(),
                           order.bytes(),
                           row_of_contact.bytes(),
+                          pairs_differ.bytes(),
                           rows.bytes(),
                           delta_lin.bytes(),
                           delta_ang.bytes(),
@@ -84,6 +85,9 @@ struct DemBuffers {
   Buffer<int> order, row_of_contact;
   std::vector<int> colour_start;  // host copy: rows of colour k are [start[k], start[k+1])
   int colour_rounds = 0;
+  // set by kernels/colouring.cl contact_pairs_differ when this step's contacts pair other bodies
+  // than the last step's (DemWorld keeps the colouring otherwise)
+  Buffer<int> pairs_differ;
 
   // rows and the Jacobi impulse changes
   Buffer<TlRow> rows;

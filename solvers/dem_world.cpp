@@ -68,6 +68,7 @@ DemWorld::DemWorld(Device& dev, const Material& material, const DemSettings& set
   k_colour_scatter_ = dev.kernel(colour, "colour_scatter");
   k_colour_ranges_ = dev.kernel(colour, "colour_ranges");
   k_identity_ = dev.kernel(colour, "identity_order");
+  k_pairs_differ_ = dev.kernel(colour, "contact_pairs_differ");
   const cl::Program& solver = dev.program(kSolverProgram);
   k_prepare_ = dev.kernel(solver, "prepare_rows");
   k_gravity_ = dev.kernel(solver, "apply_gravity");
@@ -294,6 +295,8 @@ void DemWorld::restore_state(ByteReader& r, bool any_count) {
   time_ = time;
   b.current = 0;
   b.has_previous = has_previous;
+  // the saved contacts come without their colouring: the next step makes it
+  colouring_made_ = false;
   b.n_contacts = static_cast<int>(contacts.size());
   if (has_previous) {
     b.owner_offsets[1].upload(offsets);
@@ -371,6 +374,21 @@ void DemWorld::narrow_phase() {
            b.geom_column_start, b.geom_column_list, b.owner_offsets[cur], b.contacts[cur],
            b.owner_offsets[prev], b.contacts[prev], p, b.has_previous ? 1 : 0);
   launch(dev_, k_contact_write_, n, "contact_write");
+}
+
+bool DemWorld::colouring_still_holds() {
+  DemBuffers& b = buffers_;
+  // made for the last step's contacts, as many as now, of as many particles, for this sweep
+  if (!colouring_made_ || !b.has_previous || coloured_contacts_ != b.n_contacts ||
+      coloured_particles_ != particle_count_ || coloured_sweep_ != settings_.sweep)
+    return false;
+  if (b.n_contacts == 0) return true;
+  // the same pairs, index for index (one integer read back: a host wait, as the narrow phase's)
+  b.pairs_differ.fill(0);
+  set_args(k_pairs_differ_, b.contacts[b.current], b.contacts[1 - b.current], b.n_contacts,
+           b.pairs_differ);
+  launch(dev_, k_pairs_differ_, b.n_contacts, "contact_pairs_differ");
+  return b.pairs_differ.read_one(0) == 0;
 }
 
 void DemWorld::build_adjacency() {
@@ -552,9 +570,18 @@ void DemWorld::begin_step() {
     narrow_phase();
   }
   {
+    // a bed at rest pairs the same bodies step after step: their colouring is then kept, which
+    // gives the bits a fresh one would (it depends on the pairs alone)
     StageScope stage(dev_, "colouring");
-    build_adjacency();
-    colour_contacts();
+    stats_.colouring_kept = colouring_still_holds();
+    if (!stats_.colouring_kept) {
+      build_adjacency();
+      colour_contacts();
+      colouring_made_ = true;
+      coloured_contacts_ = buffers_.n_contacts;
+      coloured_particles_ = particle_count_;
+      coloured_sweep_ = settings_.sweep;
+    }
   }
   {
     StageScope stage(dev_, "row_preparation");
@@ -562,7 +589,7 @@ void DemWorld::begin_step() {
   }
   stats_.contacts = buffers_.n_contacts;
   stats_.colours = static_cast<int>(buffers_.colour_start.size()) - 1;
-  stats_.colour_rounds = buffers_.colour_rounds;
+  stats_.colour_rounds = stats_.colouring_kept ? 0 : buffers_.colour_rounds;
 }
 
 void DemWorld::end_step() {

@@ -24,6 +24,8 @@ struct StepStats {
   int contacts = 0;
   int colours = 0;
   int colour_rounds = 0;   // Jones-Plassmann rounds launched (whole batches: solvers/dem_world.cpp)
+  // the contacts paired the same bodies as the last step's, so their colouring was kept
+  bool colouring_kept = false;
   int iterations = 0;      // sweeps run (fewer than settings.iterations when tolerance stopped)
   double residual = -1.0;  // RMS row residual after the sweeps [m/s]; -1 when not computed
   double sweep_seconds = 0.0;  // wall time of the sweeps (queue drained before and after)
@@ -79,6 +81,9 @@ class DemWorld {
   void check_finite();
   void broad_phase();
   void narrow_phase();
+  // whether this step's contacts (narrow_phase) pair the same bodies, index for index, as the
+  // contacts the buffers' adjacency and colouring were made for: then those are this step's too
+  bool colouring_still_holds();
   void build_adjacency();
   void colour_contacts();  // PGS: graph colouring; Jacobi: one colour in contact order
   void prepare_rows();
@@ -122,11 +127,19 @@ class DemWorld {
   DemBuffers buffers_;
   DeviceScan scan_;
   std::unique_ptr<ContactSweep> sweep_;
+  // what the buffers' adjacency and colouring were made for: the last step's contacts (false
+  // before the first colouring and after a restored state, whose contacts came without them),
+  // their count, the particle count and the sweep kind
+  bool colouring_made_ = false;
+  int coloured_contacts_ = 0;
+  size_t coloured_particles_ = 0;
+  SweepKind coloured_sweep_ = SweepKind::Pgs;
   SweepKind sweep_kind_;
   cl::Kernel k_cell_count_, k_cell_fill_, k_cell_sort_;
   cl::Kernel k_contact_count_, k_contact_write_;
   cl::Kernel k_adj_count_, k_adj_fill_, k_adj_sort_;
-  cl::Kernel k_colour_round_, k_colour_hist_, k_colour_scatter_, k_colour_ranges_, k_identity_;
+  cl::Kernel k_colour_round_, k_colour_hist_, k_colour_scatter_, k_colour_ranges_, k_identity_,
+      k_pairs_differ_;
   cl::Kernel k_prepare_, k_gravity_, k_apply_impulses_, k_store_, k_integrate_, k_residual_,
       k_sum_blocks_;
   cl::Kernel k_first_non_finite_;

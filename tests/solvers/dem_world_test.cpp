@@ -2,10 +2,12 @@
 // and the convergence of PGS and Jacobi (printed as a table).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <limits>
+#include <random>
 #include <string>
 
 #include "solvers/dem_world.hpp"
@@ -111,6 +113,76 @@ TEST(DemWorld, TwoRunsAreBitIdentical) {
   auto b = run();
   ASSERT_EQ(a.size(), b.size());
   EXPECT_EQ(0, std::memcmp(a.data(), b.data(), a.size() * sizeof(a[0])));
+}
+
+// a bed that comes to rest pairs the same bodies step after step, and DemWorld keeps their
+// colouring then: a world that colours afresh every step (its stages called by hand) must end
+// with the same bytes, and the first world must have kept the colouring in most steps at rest
+TEST(DemWorld, AColouringKeptWhileThePairsHoldGivesTheBitsOfAFreshOne) {
+  Device dev;
+  Scene scene = small_bed();
+  scene.settings.dt = 5e-4;  // settle10k's step: a bed at rest within the run
+  DemWorld kept(dev, scene.material, scene.settings, scene.bounds, scene.geoms);
+  DemWorld fresh(dev, scene.material, scene.settings, scene.bounds, scene.geoms);
+  kept.set_particles(scene.particles);
+  fresh.set_particles(scene.particles);
+  const int steps = 600;
+  int kept_steps = 0;
+  for (int i = 0; i < steps; ++i) {
+    kept.step();
+    kept_steps += kept.stats().colouring_kept ? 1 : 0;
+    fresh.begin_step();
+    EXPECT_EQ(fresh.stats().colouring_kept, kept.stats().colouring_kept) << "step " << i;
+    fresh.build_adjacency();
+    fresh.colour_contacts();
+    fresh.prepare_rows();
+    fresh.apply_gravity();
+    fresh.warm_start();
+    fresh.sweep(scene.settings.iterations);
+    fresh.end_step();
+  }
+  std::printf("[ measured ] colouring kept in %d of %d steps\n", kept_steps, steps);
+  EXPECT_GT(kept_steps, steps / 4);
+  const size_t n = scene.particles.size();
+  for (auto buffer : {&DemBuffers::position, &DemBuffers::velocity, &DemBuffers::omega}) {
+    const auto a = (kept.buffers().*buffer).download(n);
+    const auto b = (fresh.buffers().*buffer).download(n);
+    EXPECT_EQ(0, std::memcmp(a.data(), b.data(), n * sizeof(a[0])));
+  }
+}
+
+// kernels/colouring.cl contact_pairs_differ against the host's comparison, on fresh random
+// contact lists: equal ones, and ones that differ in one body of one contact
+TEST(DemWorld, PairsDifferKernelMatchesTheHostComparison) {
+  const uint64_t seed = std::random_device{}();
+  SCOPED_TRACE("seed " + std::to_string(seed));
+  std::mt19937_64 rng(seed);
+  Device dev;
+  cl::Kernel kernel = dev.kernel(dev.program({"dem_common.cl", "colouring.cl"}), "contact_pairs_differ");
+  for (int trial = 0; trial < 20; ++trial) {
+    const int n = 1 + static_cast<int>(rng() % 5000);
+    std::vector<TlContact> before(n), now;
+    for (TlContact& c : before) {
+      c = TlContact{};
+      c.a = static_cast<int>(rng() % 1000);
+      c.b = static_cast<int>(rng() % 1000) - 6;  // static geometry too
+    }
+    now = before;
+    if (trial % 2 == 1) {
+      TlContact& c = now[rng() % n];
+      (rng() % 2 ? c.a : c.b) += 1;
+    }
+    const bool host_differ = !std::equal(before.begin(), before.end(), now.begin(),
+                                         [](const TlContact& x, const TlContact& y) { return x.a == y.a && x.b == y.b; });
+    Buffer<TlContact> a(dev, n), b(dev, n);
+    Buffer<int> differ(dev, 1);
+    a.upload(now);
+    b.upload(before);
+    differ.fill(0);
+    set_args(kernel, a, b, n, differ);
+    launch(dev, kernel, n, "contact_pairs_differ");
+    EXPECT_EQ(differ.read_one(0) != 0, host_differ) << "trial " << trial << ", " << n << " contacts";
+  }
 }
 
 // two identical worlds (runs are deterministic) settle; the last step of one has warm start off
