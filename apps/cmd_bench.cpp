@@ -326,7 +326,8 @@ void add_bench_command(CLI::App& app) {
                   "timestep of the 10k settling case [s] (default: the scene's, " +
                       (std::ostringstream() << settle10k_scene().settings.dt).str() + " s)")
       ->check(number_in(kMinTimestep, kMaxTimestep, "s"));
-  dem->add_option("--settle-iterations", opt->settle_iterations, "PGS sweeps of the 10k settling case (default: the scene's, " +
+  dem->add_option("--settle-iterations", opt->settle_iterations,
+                  "PGS sweeps of the 10k settling case (default: the scene's, " +
                       std::to_string(settle10k_scene().settings.iterations) + ")")
       ->check(CLI::Range(1, 100000));
   dem->add_option("--settle-seed", opt->settle_seed,
@@ -341,7 +342,9 @@ void add_bench_command(CLI::App& app) {
     Device dev;
     nlohmann::json results = nlohmann::json::array();
     for (auto* preset : presets) results.push_back(bench_level(dev, *preset, opt->steps, opt->quiet));
-    if (!opt->no_settle10k) results.push_back(bench_settle10k(dev, opt->settle_dt, opt->settle_iterations, opt->settle_seed, opt->quiet));
+    if (!opt->no_settle10k)
+      results.push_back(bench_settle10k(dev, opt->settle_dt, opt->settle_iterations,
+                                        opt->settle_seed, opt->quiet));
     nlohmann::json j = {{"device", dev.description()}, {"results", results}};
     if (!opt->json.empty()) write_json(opt->json, j);
     if (!opt->plot.empty()) {

@@ -79,7 +79,8 @@ void bucket_chunk_load(__global const TlRow* rows, int base, int count,
 void bucket_chunk_store_particles(int count, __global float4* velocity, __global float4* omega,
                                   __local const float4* chunk_velocity,
                                   __local const float4* chunk_omega,
-                                  __local const int* chunk_particle, __local const int* chunk_slot) {
+                                  __local const int* chunk_particle,
+                                  __local const int* chunk_slot) {
   int k = get_local_id(0);
   if (k < count && chunk_slot[k] == k) {
     velocity[chunk_particle[k]] = chunk_velocity[k];

@@ -293,8 +293,13 @@ void set_chunk_args(cl::Kernel& kernel, cl_uint first, size_t chunk) {
 }  // namespace
 
 BucketRowBlock::BucketRowBlock(Device& dev, size_t chunk)
-    : dev_(dev), rows_(dev, 1), body_(dev, 1), index_(dev, 1), gathered_position_(dev, 1),
-      gathered_velocity_(dev, 1), gathered_omega_(dev, 1),
+    : dev_(dev),
+      rows_(dev, 1),
+      body_(dev, 1),
+      index_(dev, 1),
+      gathered_position_(dev, 1),
+      gathered_velocity_(dev, 1),
+      gathered_omega_(dev, 1),
       chunk_(chunk > 0 ? chunk : (dev.is_gpu() ? kWorkGroupSize : 1)) {
   const cl::Program& program = dev.program({"contact_law.cl", "bucket.cl"});
   gather_kernel_ = dev.kernel(program, "bucket_gather");

@@ -125,10 +125,12 @@ TEST(DiggingRunTest, Hd27AtD400WritesTheRunContractSnapshotsAndFigures) {
 TEST(DiggingRunTest, ADampingTimeStudyChangesTheDigAloneAndIsRecorded) {
   const auto base = std::filesystem::temp_directory_path() / "talus_run_damping_default";
   const auto study = std::filesystem::temp_directory_path() / "talus_run_damping_study";
-  for (const auto& [dir, flag] : {std::pair{base, std::string()}, std::pair{study, std::string(" --damping-time 0.01")}}) {
+  for (const auto& [dir, flag] :
+       {std::pair{base, std::string()}, std::pair{study, std::string(" --damping-time 0.01")}}) {
     std::filesystem::remove_all(dir);
-    const std::string cmd = kTalus + " run --scenario hd27 --fidelity D400 --snapshot-interval 0 --quiet" + flag +
-                            " --out " + dir.string() + " 2>/dev/null";
+    const std::string cmd = kTalus +
+                            " run --scenario hd27 --fidelity D400 --snapshot-interval 0 --quiet" +
+                            flag + " --out " + dir.string() + " 2>/dev/null";
     ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
   }
   const auto a = nlohmann::json::parse(std::ifstream(base / "summary.json"));

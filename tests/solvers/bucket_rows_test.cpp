@@ -183,8 +183,8 @@ struct DeviceSweeps {
   TlBucketBody bucket;
 };
 
-DeviceSweeps device_sweeps(Device& dev, const RandomCase& c, const std::vector<TlRow>& rows, size_t chunk,
-                           int sweeps) {
+DeviceSweeps device_sweeps(Device& dev, const RandomCase& c, const std::vector<TlRow>& rows,
+                           size_t chunk, int sweeps) {
   std::vector<cl_float4> v, w;
   for (size_t i = 0; i < c.particles.size(); ++i) {
     v.push_back(to_float4(c.particles.velocity[i], c.particles.inv_mass[i]));
@@ -226,8 +226,8 @@ TEST(BucketRows, ChunksOfAnySizeGiveTheSerialWalkBitForBit) {
   }
   const auto match = match_bucket_contacts(c.contacts, previous);
   std::vector<TlRow> rows;
-  for (const auto& r : make_bucket_rows(c.contacts, c.particles, c.bucket, c.com, c.params, BucketMaterial{},
-                                        previous, match))
+  for (const auto& r : make_bucket_rows(c.contacts, c.particles, c.bucket, c.com, c.params,
+                                        BucketMaterial{}, previous, match))
     rows.push_back(to_device(r));
   std::shuffle(rows.begin(), rows.end(), rng);
   Device& dev = test::shared_device();

@@ -158,7 +158,8 @@ TEST(DemWorld, PairsDifferKernelMatchesTheHostComparison) {
   SCOPED_TRACE("seed " + std::to_string(seed));
   std::mt19937_64 rng(seed);
   Device dev;
-  cl::Kernel kernel = dev.kernel(dev.program({"dem_common.cl", "colouring.cl"}), "contact_pairs_differ");
+  cl::Kernel kernel =
+      dev.kernel(dev.program({"dem_common.cl", "colouring.cl"}), "contact_pairs_differ");
   for (int trial = 0; trial < 20; ++trial) {
     const int n = 1 + static_cast<int>(rng() % 5000);
     std::vector<TlContact> before(n), now;
@@ -172,8 +173,9 @@ TEST(DemWorld, PairsDifferKernelMatchesTheHostComparison) {
       TlContact& c = now[rng() % n];
       (rng() % 2 ? c.a : c.b) += 1;
     }
-    const bool host_differ = !std::equal(before.begin(), before.end(), now.begin(),
-                                         [](const TlContact& x, const TlContact& y) { return x.a == y.a && x.b == y.b; });
+    const bool host_differ = !std::equal(
+        before.begin(), before.end(), now.begin(),
+        [](const TlContact& x, const TlContact& y) { return x.a == y.a && x.b == y.b; });
     Buffer<TlContact> a(dev, n), b(dev, n);
     Buffer<int> differ(dev, 1);
     a.upload(now);
@@ -181,7 +183,8 @@ TEST(DemWorld, PairsDifferKernelMatchesTheHostComparison) {
     differ.fill(0);
     set_args(kernel, a, b, n, differ);
     launch(dev, kernel, n, "contact_pairs_differ");
-    EXPECT_EQ(differ.read_one(0) != 0, host_differ) << "trial " << trial << ", " << n << " contacts";
+    EXPECT_EQ(differ.read_one(0) != 0, host_differ)
+        << "trial " << trial << ", " << n << " contacts";
   }
 }
 

@@ -34,7 +34,8 @@ Settled settle(const Scene& scene) {
   for (int i = 1; i <= steps; ++i) {
     world.step();
     if (i % 50 == 0)
-      out.worst_during = std::max(out.worst_during, max_overlap(world.particles(), scene.geoms) / d);
+      out.worst_during =
+          std::max(out.worst_during, max_overlap(world.particles(), scene.geoms) / d);
   }
   const Particles p = world.particles();
   out.at_end = max_overlap(p, scene.geoms) / d;
@@ -47,8 +48,10 @@ Settled settle(const Scene& scene) {
 // luck (0.85-5.3 % over eight seeds)
 TEST(Scenes, Settle10kNeverTunnelsAndEndsWithOverlapUnderOnePercentOfD) {
   const Settled s = settle(settle10k_scene());
-  std::printf("settle10k: max overlap %.3f %% of d while falling and landing, %.3f %% at 0.5 s; "
-              "rms speed %.4f m/s\n", 100.0 * s.worst_during, 100.0 * s.at_end, s.rms_speed);
+  std::printf(
+      "settle10k: max overlap %.3f %% of d while falling and landing, %.3f %% at 0.5 s; "
+      "rms speed %.4f m/s\n",
+      100.0 * s.worst_during, 100.0 * s.at_end, s.rms_speed);
   // while falling: a tunnelling grain shows tens of percent (measured 0.73-0.93 %)
   EXPECT_LT(s.worst_during, 0.02);
   EXPECT_LT(s.at_end, 0.01);
@@ -68,9 +71,10 @@ TEST(Scenes, Settle10kSettingsHoldOnAFreshLattice) {
   column.box = column.nx * column.spacing;
   column.seed = seed;
   const Settled s = settle(lattice_box_scene(column, full.material, full.settings));
-  std::printf("column of 8 x 8 x %d, seed %u: max overlap %.3f %% of d while falling, %.3f %% at "
-              "0.5 s; rms speed %.4f m/s\n", column.nz, seed, 100.0 * s.worst_during,
-              100.0 * s.at_end, s.rms_speed);
+  std::printf(
+      "column of 8 x 8 x %d, seed %u: max overlap %.3f %% of d while falling, %.3f %% at "
+      "0.5 s; rms speed %.4f m/s\n",
+      column.nz, seed, 100.0 * s.worst_during, 100.0 * s.at_end, s.rms_speed);
   EXPECT_LT(s.worst_during, 0.02);
   EXPECT_LT(s.at_end, 0.01);
   EXPECT_LT(s.rms_speed, 0.05);
