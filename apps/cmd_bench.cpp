@@ -165,7 +165,9 @@ void add_bench_dig(CLI::App& bench) {
   dig->add_option("--scenario", opt->scenario,
                   "scenario with a pile (data/scenarios/NAME.json or a path)")
       ->capture_default_str();
-  dig->add_option("--level", opt->level, "fidelity level (D400, D200, D100, D50)")
+  dig->add_option("--level", opt->level,
+                  "fidelity level: particles D400, D200, D100, D50, or the multiscale terrain "
+                  "G400, G200, G100, G50")
       ->capture_default_str();
   // a dig from its start: the scenarios dig for 5-15 s, the soak for ten minutes
   dig->add_option("--seconds", opt->seconds, "simulated seconds measured from dig_start [s]")
@@ -189,7 +191,8 @@ void add_bench_dig(CLI::App& bench) {
     if (!scenario.pile)
       throw InputError(scenario.path + ": scenario '" + scenario.name +
                        "' has no pile; talus bench dig needs one (fb35, hd27, rd21)");
-    const FidelityPreset& preset = fidelity_preset(opt->level);
+    // a type-D pile, or a type-G terrain built from the pile's profile (issue 14)
+    const FidelityPreset& preset = level_preset(opt->level);
     check_dig_seconds(scenario, opt->seconds);
     if (!opt->json.empty()) check_writable(opt->json, "--json");
     Device dev;

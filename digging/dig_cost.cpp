@@ -58,7 +58,9 @@ DigCost measure_dig_cost(Device& dev, const vehicle::Scenario& scenario,
   DigCost cost;
   cost.scenario = scenario.name;
   cost.level = preset.name;
-  cost.particles = sim.dem().size();
+  // the particle world: type D's pile, or type G's zone (its particles come and go: a mean)
+  const bool type_g = sim.multiscale();
+  const DemWorld& dem = type_g ? sim.terrain().dem() : sim.dem();
   cost.dt = preset.dt;
   cost.iterations = preset.iterations;
   cost.sweep_tolerance = options.sweep_tolerance;
@@ -78,11 +80,18 @@ DigCost measure_dig_cost(Device& dev, const vehicle::Scenario& scenario,
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     (profile ? profiled_wall : plain_wall) += wall;
     ++(profile ? profiled : plain);
-    // the work this step did
-    cost.contacts += sim.dem().stats().contacts;
-    cost.bucket_contacts += sim.split().stats().bucket_contacts;
-    cost.passes += sim.split().stats().passes;
-    cost.sweeps += sim.split().stats().sweeps;
+    // the work this step did (type G: the zone's DEM with the bucket kinematic, one pass)
+    cost.particles += sim.particle_count();
+    cost.contacts += dem.stats().contacts;
+    if (type_g) {
+      // the zone's particles run the level's sweeps every step they exist (solvers/tool_world)
+      cost.passes += 1;
+      cost.sweeps += sim.particle_count() > 0 ? preset.iterations : 0;
+    } else {
+      cost.bucket_contacts += sim.split().stats().bucket_contacts;
+      cost.passes += sim.split().stats().passes;
+      cost.sweeps += sim.split().stats().sweeps;
+    }
     if (progress) progress->update(sim.time(), "measuring");
   }
 
@@ -94,6 +103,7 @@ DigCost measure_dig_cost(Device& dev, const vehicle::Scenario& scenario,
   cost.realtime_factor = preset.dt / (plain_wall / plain);
   for (const auto& [name, total] : times.totals())
     cost.stages.emplace_back(name, 1e3 * total / profiled);
+  cost.particles /= measured_steps;
   cost.contacts /= measured_steps;
   cost.bucket_contacts /= measured_steps;
   cost.passes /= measured_steps;

@@ -1,4 +1,4 @@
-// The cost of one coupled type-D step, stage by stage (issue 13: "measure first"). A scenario's
+// The cost of one coupled step, stage by stage (issue 13: "measure first"; type G, issue 14). A scenario's
 // pile is built and the dig replayed from t = 0; from the scenario's dig_start on, `seconds` of
 // digging are timed. Steps alternate: the even ones run unprofiled and give the wall time per
 // step and the real-time factor, the odd ones run with the device's stage clock on
@@ -15,7 +15,7 @@ namespace talus {
 
 struct DigCost {
   std::string scenario, level;
-  size_t particles = 0;
+  double particles = 0.0;  // type D: the pile's; type G: the zone's, a mean over the measured steps
   double dt = 0.0;                    // [s]
   int iterations = 0;                 // sweeps per step (the cap, with a sweep tolerance)
   double sweep_tolerance = 0.0;       // [m/s] DiggingOptions::sweep_tolerance (0: none)
@@ -29,7 +29,7 @@ struct DigCost {
   std::vector<std::pair<std::string, double>> stages;
   // the work measured: means over the measured steps
   double contacts = 0.0;         // particle-particle and particle-geometry contacts
-  double bucket_contacts = 0.0;  // particle-bucket rows
+  double bucket_contacts = 0.0;  // particle-bucket rows (type D; type G's bucket is kinematic)
   double passes = 0.0;           // outer coupling passes
   double sweeps = 0.0;           // particle sweeps, all passes (fewer with a sweep tolerance)
   double loaded_mass_kg = 0.0;   // in the bucket at the end (to tell an empty dig from a full one)

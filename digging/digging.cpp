@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include "host/error.hpp"
 #include "host/stage_times.hpp"
@@ -222,7 +223,9 @@ KinematicBucket kinematic_bucket(const vehicle::WheelLoader& loader) {
 
 void DiggingSimulation::multiscale_step() {
   const double h = preset_.dt;
-  // the aggregate from the terrain's last step, on the bucket where it stands
+  // the aggregate from the terrain's last step, on the bucket where it stands (a profiled run's
+  // stages: the aggregate, the machine's direct solve, then the terrain's own)
+  std::optional<StageScope> stage(std::in_place, dev_, "aggregate");
   aggregate_->update(*terrain_, loader_->bucket_mesh(), kinematic_bucket(*loader_), h);
   // the soil in the bucket and outside the zone weighs on the bucket (its weight, not its
   // inertia: docs/multiscale.md)
@@ -242,11 +245,14 @@ void DiggingSimulation::multiscale_step() {
   // its pose at the step's start with the twist the machine solved (the terrain moves its tool by
   // h times that twist, so both end the step where the machine's bucket is)
   const KinematicBucket start = kinematic_bucket(*loader_);
+  stage.emplace(dev_, "direct_solve");
   loader_->step(h);
+  stage.emplace(dev_, "aggregate");
   aggregate_->after_step(h);
   KinematicBucket moving = kinematic_bucket(*loader_);
   moving.position = start.position;
   moving.orientation = start.orientation;
+  stage.reset();
   terrain_->step(moving);
   // what the machine felt of the zone this step
   AggregateSample a;

@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "host/error.hpp"
+#include "host/stage_times.hpp"
 
 namespace talus {
 
@@ -189,12 +190,21 @@ void ToolWorld::step() {
   }
 
   // velocities: gravity, warm starts, then every sweep over the particle rows and each tool's
-  dem_.apply_gravity();
-  dem_.warm_start();
-  if (dem_.settings().warm_start)
-    for (auto& side : sides_) side->block.warm_start(dem_.buffers().velocity, dem_.buffers().omega);
+  // (each a stage of a profiled run, as in the coupled type-D step: solvers/split_solver)
+  Device& dev = dem_.device();
+  {
+    StageScope stage(dev, "warm_start");
+    dem_.apply_gravity();
+    dem_.warm_start();
+    if (dem_.settings().warm_start)
+      for (auto& side : sides_) side->block.warm_start(dem_.buffers().velocity, dem_.buffers().omega);
+  }
   for (int it = 0; it < dem_.settings().iterations; ++it) {
-    dem_.sweep_fixed(1);
+    {
+      StageScope stage(dev, "particle_sweeps");
+      dem_.sweep_fixed(1);
+    }
+    StageScope stage(dev, "bucket_rows");
     for (auto& side : sides_) side->block.sweep(dem_.buffers().velocity, dem_.buffers().omega);
   }
 

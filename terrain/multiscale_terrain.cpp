@@ -3,12 +3,14 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <locale>
 #include <sstream>
 #include <string>
 #include <unordered_map>
 
 #include "host/error.hpp"
+#include "host/stage_times.hpp"
 #include "solvers/tool_world.hpp"
 #include "terrain/bucket_fill.hpp"
 
@@ -156,9 +158,12 @@ MassBalance MultiscaleTerrain::mass_balance() const {
 void MultiscaleTerrain::step(const KinematicBucket& bucket) {
   last_ = MultiscaleStep{};
   const BucketPose pose = pose_of(bucket);
+  // each part is a stage of a profiled run (talus bench dig at a G level)
+  Device& dev = dem_->device();
   // 1. the zone on the soil's surface (the voxels, raised to the tops of the particles heaped on
   // them), and its solid soil into the pool
   Particles particles = state_;
+  std::optional<StageScope> stage(std::in_place, dev, "zone_excavation");
   last_.zone = zone_for(bucket, particles);
   std::vector<ExcavatedColumn> columns;
   const DynamicSoil dynamic = excavate(voxels_, last_.zone, options_.soil, &columns);
@@ -176,6 +181,7 @@ void MultiscaleTerrain::step(const KinematicBucket& bucket) {
   last_.excavated += pushed.left.mass;
 
   // 2. particles from the pool; 4. resting particles back (on the state the last step left)
+  stage.emplace(dev, "spawn_merge");
   last_.merged = merge(particles, bucket);
   last_.spawned = spawn(particles, columns, pose);
   if (last_.merged > 0 || last_.spawned > 0) {
@@ -190,18 +196,23 @@ void MultiscaleTerrain::step(const KinematicBucket& bucket) {
   tool.velocity = bucket.velocity;
   tool.omega = bucket.omega;
   if (!ledger_.empty()) {
+    stage.emplace(dev, "terrain_geometry");
     const std::vector<StaticGeom> geoms = geometry(particles);
     dem_->set_geoms(geoms);
+    // the DEM's own stages (contacts, colouring, sweeps) are charged to themselves
+    stage.emplace(dev, "zone_particles");
     tools_->step();
     last_.bucket_wrench = tools_->load(0).wrench;
   }
   // the particles as the step left them, downloaded once for everyone who reads them
+  stage.emplace(dev, "transfers");
   download_particles();
 
   // 5. the surface relaxes, but not into the columns the bucket stands on: the slopes into the
   // pit under the bucket would refill it every step, and the bucket would move the same soil
   // again (measured with the soil turned dynamic instead of pushed: 30 kg a step at G200, s =
   // 0.755, the bucket standing still against the rear wall)
+  stage.emplace(dev, "avalanche");
   const std::vector<char> closed = closed_columns(voxels_, underside);
   last_.avalanched = avalanche(voxels_, level_.dt, options_.avalanche, &closed).moved_mass;
   time_ += level_.dt;

@@ -111,6 +111,8 @@ class MultiscaleTerrain {
   const std::vector<double>& particle_masses() const { return ledger_; }
   MassBalance mass_balance() const;
   const MultiscaleStep& last_step() const { return last_; }
+  // the zone's particle world (its last step's statistics: contacts, sweeps)
+  const DemWorld& dem() const { return *dem_; }
   double time() const { return time_; }
   const FidelityPreset& level() const { return level_; }
 

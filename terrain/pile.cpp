@@ -139,8 +139,9 @@ const FidelityPreset& fidelity_preset(const std::string& name) {
     throw InputError(
         "fidelity level '" + name +
         "' is the multiscale (type G) terrain: it runs scenarios (talus run, sweep, synth, "
-        "diagnose) and the cutting test (talus cut), but has no particle pile, shear, collapse or "
-        "heap test, or DEM benchmark of its own (docs/multiscale.md). Here use a type-D level:" +
+        "diagnose), the cutting test (talus cut) and the dig's cost (talus bench dig), but has no "
+        "particle pile, shear, collapse or heap test, or DEM benchmark of its own "
+        "(docs/multiscale.md). Here use a type-D level:" +
         known);
   throw InputError("unknown fidelity level '" + name + "'; known:" + known);
 }

@@ -35,6 +35,29 @@ TEST(CmdBench, DigWritesTheCostBreakdown) {
               0.1 * j.at("profiled_ms_per_step").get<double>());
 }
 
+// at a type-G level (issue 14) the breakdown charges the terrain's own stages (the zone and its
+// excavation, spawning and merging, the avalanche) beside the zone's DEM and the machine's solve,
+// and counts the zone's particles
+TEST(CmdBench, DigAtATypeGLevelChargesTheTerrainsStages) {
+  const auto json = std::filesystem::temp_directory_path() / "talus_bench_dig_g400.json";
+  std::filesystem::remove(json);
+  const test::Outcome o = test::run_talus(
+      "", "bench dig --scenario hd27 --level G400 --seconds 2 --quiet --json " + json.string());
+  ASSERT_EQ(o.code, 0) << o.err;
+  std::ifstream in(json);
+  const nlohmann::json j = nlohmann::json::parse(in);
+  EXPECT_EQ(j.at("level"), "G400");
+  EXPECT_GT(j.at("particles").get<double>(), 0.0);
+  const auto& stages = j.at("stages");
+  for (const char* name : {"zone_excavation", "spawn_merge", "avalanche", "direct_solve",
+                           "particle_sweeps", "bucket_rows"})
+    EXPECT_TRUE(stages.contains(name)) << name;
+  double sum = 0.0;
+  for (const auto& [name, ms] : stages.items()) sum += ms.get<double>();
+  EXPECT_NEAR(sum, j.at("profiled_ms_per_step").get<double>(),
+              0.1 * j.at("profiled_ms_per_step").get<double>());
+}
+
 // talus bench dem --plot draws the levels' throughput against particle size
 TEST(CmdBench, DemPlotsThroughputAgainstParticleSize) {
   const auto png = std::filesystem::temp_directory_path() / "talus_bench_dem.png";
