@@ -1,7 +1,7 @@
-// The cost of one coupled step, stage by stage (issue 13: "measure first"; type G, issue 14). A scenario's
-// pile is built and the dig replayed from t = 0; from the scenario's dig_start on, `seconds` of
-// digging are timed. Steps alternate: the even ones run unprofiled and give the wall time per
-// step and the real-time factor, the odd ones run with the device's stage clock on
+// The cost of one coupled step, stage by stage (issue 13: "measure first"; type G, issue 14). A
+// scenario's pile is built and the dig replayed from t = 0; from the scenario's dig_start on,
+// `seconds` of digging are timed. Steps alternate: the even ones run unprofiled and give the wall
+// time per step and the real-time factor, the odd ones run with the device's stage clock on
 // (host/stage_times.hpp) and give the breakdown. Neighbouring steps dig the same soil, so the
 // two halves describe the same work, and profiling's queue drains never slow the headline number.
 #pragma once

@@ -197,7 +197,8 @@ void ToolWorld::step() {
     dem_.apply_gravity();
     dem_.warm_start();
     if (dem_.settings().warm_start)
-      for (auto& side : sides_) side->block.warm_start(dem_.buffers().velocity, dem_.buffers().omega);
+      for (auto& side : sides_)
+        side->block.warm_start(dem_.buffers().velocity, dem_.buffers().omega);
   }
   for (int it = 0; it < dem_.settings().iterations; ++it) {
     {

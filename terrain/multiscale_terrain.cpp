@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <optional>
 #include <locale>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <unordered_map>
