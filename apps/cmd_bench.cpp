@@ -327,11 +327,11 @@ void add_bench_command(CLI::App& app) {
   dem->add_flag("--no-settle10k", opt->no_settle10k, "skip the 10k settling case");
   dem->add_option("--settle-dt", opt->settle_dt,
                   "timestep of the 10k settling case [s] (default: the scene's, " +
-                      (std::ostringstream() << settle10k_scene().settings.dt).str() + " s)")
+                      (std::ostringstream() << kSettle10kDt).str() + " s)")
       ->check(number_in(kMinTimestep, kMaxTimestep, "s"));
   dem->add_option("--settle-iterations", opt->settle_iterations,
                   "PGS sweeps of the 10k settling case (default: the scene's, " +
-                      std::to_string(settle10k_scene().settings.iterations) + ")")
+                      std::to_string(kSettle10kSweeps) + ")")
       ->check(CLI::Range(1, 100000));
   dem->add_option("--settle-seed", opt->settle_seed,
                   "seed of the 10k settling case's lattice jitter (default: the peers' inputs')")

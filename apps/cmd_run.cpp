@@ -481,8 +481,9 @@ void add_run_command(CLI::App& app, const std::string& command_line) {
   cmd->add_option("--iterations", opts->iterations, "study: sweeps per step instead of the level's")
       ->check(CLI::Range(1, 100000));
   cmd->add_option("--damping-time", opts->damping_time,
-                  "study: SPOOK damping time of the dig's contacts instead of two of its steps, "
-                  "so that --dt changes the step alone (docs/validation.md) [s]")
+                  "study: SPOOK damping time of the dig's particle contacts instead of two of "
+                  "its steps, so that --dt changes the step alone (docs/validation.md; at a G "
+                  "level the zone's particles only, not the aggregate's interfaces) [s]")
       ->check(number_in(kMinDampingTime, kMaxDampingTime, "s"));
   cmd->add_option("--sweep-tolerance", opts->sweep_tolerance,
                   "end a step's sweeps once the particle rows' RMS residual is below this, the "

@@ -82,12 +82,16 @@ DigCost measure_dig_cost(Device& dev, const vehicle::Scenario& scenario,
     ++(profile ? profiled : plain);
     // the work this step did (type G: the zone's DEM with the bucket kinematic, one pass)
     cost.particles += sim.particle_count();
-    cost.contacts += dem.stats().contacts;
     if (type_g) {
-      // the zone's particles run the level's sweeps every step they exist (solvers/tool_world)
-      cost.passes += 1;
-      cost.sweeps += sim.particle_count() > 0 ? preset.iterations : 0;
+      // the zone's DEM steps only while it holds particles (its stats are the last step's
+      // otherwise), then with the level's sweeps (solvers/tool_world)
+      if (sim.particle_count() > 0) {
+        cost.contacts += dem.stats().contacts;
+        cost.passes += 1;
+        cost.sweeps += preset.iterations;
+      }
     } else {
+      cost.contacts += dem.stats().contacts;
       cost.bucket_contacts += sim.split().stats().bucket_contacts;
       cost.passes += sim.split().stats().passes;
       cost.sweeps += sim.split().stats().sweeps;

@@ -575,6 +575,8 @@ void DemWorld::begin_step() {
     StageScope stage(dev_, "colouring");
     stats_.colouring_kept = colouring_still_holds();
     if (!stats_.colouring_kept) {
+      // not kept from here on until made whole (a colouring that throws leaves none)
+      colouring_made_ = false;
       build_adjacency();
       colour_contacts();
       colouring_made_ = true;

@@ -50,8 +50,8 @@ Scene settle10k_scene(unsigned seed) {
   // 1 ms cost more, and 2 ms speculates so far that the colouring runs out of colours)
   const double top = (layout.nz - 0.5) * layout.spacing + layout.jitter;  // [m]
   s.max_speed = std::sqrt(2.0 * -s.gravity.z() * top);
-  s.dt = 5.0e-4;
-  s.iterations = 10;
+  s.dt = kSettle10kDt;
+  s.iterations = kSettle10kSweeps;
   return lattice_box_scene(layout, m, s);
 }
 

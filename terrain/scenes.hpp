@@ -34,5 +34,8 @@ Scene lattice_box_scene(const LatticeBox& layout, const Material& material, cons
 // 4 ms and 30 sweeps before let falling grains tunnel). `seed`: the lattice jitter's (the peers'
 // inputs are the default's)
 Scene settle10k_scene(unsigned seed = LatticeBox{}.seed);
+// its step [s] and sweeps per step (terrain/scenes.cpp says why)
+inline constexpr double kSettle10kDt = 5.0e-4;
+inline constexpr int kSettle10kSweeps = 10;
 
 }  // namespace talus

@@ -10,6 +10,7 @@
 #include <random>
 #include <string>
 
+#include "host/binary.hpp"
 #include "solvers/dem_world.hpp"
 #include "terrain/scenes.hpp"
 
@@ -149,6 +150,77 @@ TEST(DemWorld, AColouringKeptWhileThePairsHoldGivesTheBitsOfAFreshOne) {
     const auto b = (fresh.buffers().*buffer).download(n);
     EXPECT_EQ(0, std::memcmp(a.data(), b.data(), n * sizeof(a[0])));
   }
+}
+
+// the keep's guards: a world restored to an earlier state (its colouring buffers then belong to
+// later contacts) and a world whose sweep changes kind between steps must colour afresh, so both
+// end with the bytes of a world that colours afresh at every step
+TEST(DemWorld, AKeptColouringIsDroppedAfterARestoreAndASweepChange) {
+  Device dev;
+  Scene scene = small_bed();
+  scene.settings.dt = 5e-4;
+  DemWorld kept(dev, scene.material, scene.settings, scene.bounds, scene.geoms);
+  DemWorld fresh(dev, scene.material, scene.settings, scene.bounds, scene.geoms);
+  kept.set_particles(scene.particles);
+  fresh.set_particles(scene.particles);
+  auto fresh_step = [&] {
+    fresh.begin_step();
+    fresh.build_adjacency();
+    fresh.colour_contacts();
+    fresh.prepare_rows();
+    fresh.apply_gravity();
+    fresh.warm_start();
+    fresh.sweep(fresh.settings().iterations);
+    fresh.end_step();
+  };
+  const size_t n = scene.particles.size();
+  auto same = [&](const char* when) {
+    for (auto buffer : {&DemBuffers::position, &DemBuffers::velocity, &DemBuffers::omega}) {
+      const auto a = (kept.buffers().*buffer).download(n);
+      const auto b = (fresh.buffers().*buffer).download(n);
+      EXPECT_EQ(0, std::memcmp(a.data(), b.data(), n * sizeof(a[0]))) << when;
+    }
+  };
+  // a bed coming to rest, until a step that keeps its colouring: that step is then undone by a
+  // restore of the state before it and run again, and must colour afresh (the buffers hold the
+  // colouring the undone step kept, which a world that trusted them would keep again)
+  for (int i = 0; i < 300; ++i) {
+    kept.step();
+    fresh_step();
+  }
+  ByteWriter saved;
+  bool found = false;
+  for (int i = 0; i < 300 && !found; ++i) {
+    saved = ByteWriter();
+    kept.save_state(saved);
+    kept.step();
+    fresh_step();
+    found = kept.stats().colouring_kept;
+  }
+  ASSERT_TRUE(found) << "no step at rest kept its colouring";
+  ByteReader reader(saved.bytes(), saved.bytes().size(), "the test's saved state", "");
+  kept.restore_state(reader);
+  kept.step();
+  EXPECT_FALSE(kept.stats().colouring_kept) << "the first step after a restore";
+  for (int i = 0; i < 60; ++i) {
+    kept.step();
+    fresh_step();
+  }
+  same("after the restore");
+  // a change of sweep between steps, and back
+  kept.settings().sweep = fresh.settings().sweep = SweepKind::Jacobi;
+  for (int i = 0; i < 20; ++i) {
+    kept.step();
+    EXPECT_FALSE(i == 0 && kept.stats().colouring_kept) << "the first Jacobi step";
+    fresh_step();
+  }
+  kept.settings().sweep = fresh.settings().sweep = SweepKind::Pgs;
+  for (int i = 0; i < 20; ++i) {
+    kept.step();
+    EXPECT_FALSE(i == 0 && kept.stats().colouring_kept) << "the first PGS step again";
+    fresh_step();
+  }
+  same("after the sweep changes");
 }
 
 // kernels/colouring.cl contact_pairs_differ against the host's comparison, on fresh random
