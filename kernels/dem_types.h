@@ -18,6 +18,10 @@
 // a sphere has at most ~14 neighbours of similar size, so a contact has < 32 neighbours
 #define TL_MAX_COLOURS 64
 
+// the narrow phase's warm-start matching: last step's particle pairs, its static contacts
+#define TL_MATCH_PAIRS 1
+#define TL_MATCH_STATIC 2
+
 // a contact's "b" index below zero names static geometry number -1-b
 #define TL_STATIC_BODY(geom) (-1 - (geom))
 

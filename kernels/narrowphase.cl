@@ -35,7 +35,10 @@ void emit_contact(__global TlContact* out, int a, int b, float3 n, float gap, fl
   c.b = b;
   c.pad0 = 0;
   c.pad1 = 0;
-  if (has_prev) {
+  // which of last step's contacts may be matched: particle pairs, static ones (their geometry
+  // may have been renumbered: DemWorld::set_geoms), both or neither
+  int match = b >= 0 ? (has_prev & TL_MATCH_PAIRS) : (has_prev & TL_MATCH_STATIC);
+  if (match) {
     int k = find_previous(a, b, prev_offsets, prev);
     if (k >= 0) {
       c.impulse_t = prev[k].impulse_t;

@@ -75,6 +75,9 @@ struct DemBuffers {
   std::array<Buffer<TlContact>, 2> contacts;
   int current = 0;          // which of the pairs above is this step's
   bool has_previous = false;
+  // last step's static contacts may be matched too (false after DemWorld::set_geoms renumbered
+  // the geometry: its particle pairs still warm start)
+  bool static_previous = false;
   int n_contacts = 0;
 
   // body -> contact adjacency (CSR, each list in contact order)

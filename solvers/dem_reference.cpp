@@ -230,7 +230,8 @@ unsigned contact_priority(unsigned c) {
 }
 
 ContactSet find_contacts(const Particles& particles, const std::vector<StaticGeom>& geoms,
-                         const CellLists& cells, const StepParams& p, const ContactSet* previous) {
+                         const CellLists& cells, const StepParams& p, const ContactSet* previous,
+                         bool match_static) {
   ContactSet out;
   int n = static_cast<int>(particles.size());
   out.owner_offsets.push_back(0);
@@ -273,7 +274,7 @@ ContactSet find_contacts(const Particles& particles, const std::vector<StaticGeo
       if (gap >= contact_margin(ri, ri, p)) continue;
       out.contacts.push_back(make_contact(i, TL_STATIC_BODY(g), normal, gap,
                                           normal * (ri + 0.5 * gap), Vec3::Zero(), ri, p,
-                                          previous));
+                                          match_static ? previous : nullptr));
     }
     out.owner_offsets.push_back(static_cast<int>(out.contacts.size()));
   }

@@ -89,10 +89,11 @@ double sphere_geom(const Vec3& x, double r, const StaticGeom& g, Vec3* normal);
 unsigned contact_priority(unsigned c);
 
 // kernels/narrowphase.cl: every pair closer than the margin, in the kernel's enumeration
-// order, with last step's impulses carried over for pairs found in `previous`
+// order, with last step's impulses carried over for pairs found in `previous` (static contacts
+// only with `match_static`: TL_MATCH_STATIC, off after the geometry was renumbered)
 ContactSet find_contacts(const Particles& particles, const std::vector<StaticGeom>& geoms,
                          const CellLists& cells, const StepParams& p,
-                         const ContactSet* previous = nullptr);
+                         const ContactSet* previous = nullptr, bool match_static = true);
 
 // kernels/narrowphase.cl adjacency_*: each body's contacts in contact order
 Adjacency adjacency(const std::vector<Contact>& contacts, int particles);

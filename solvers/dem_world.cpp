@@ -87,13 +87,15 @@ void DemWorld::set_material(const Material& material) {
   update_params();
 }
 
-void DemWorld::set_geoms(std::vector<StaticGeom> geoms, bool same_layout) {
+void DemWorld::set_geoms(std::vector<StaticGeom> geoms, GeomChange change) {
   geoms_ = std::move(geoms);
   std::vector<TlGeom> g;
   for (auto& s : geoms_) g.push_back(to_device(s));
   if (g.empty()) g.push_back(TlGeom{});  // keep the buffer non-empty; params.geoms stays 0
   buffers_.geoms.upload(g);
-  if (!same_layout) buffers_.has_previous = false;  // static contacts match by geometry index
+  // static contacts match by geometry index
+  if (change == GeomChange::Replaced) buffers_.has_previous = false;
+  if (change != GeomChange::Moved) buffers_.static_previous = false;
   update_params();
 }
 
@@ -295,6 +297,7 @@ void DemWorld::restore_state(ByteReader& r, bool any_count) {
   time_ = time;
   b.current = 0;
   b.has_previous = has_previous;
+  b.static_previous = has_previous;
   // the saved contacts come without their colouring: the next step makes it
   colouring_made_ = false;
   b.n_contacts = static_cast<int>(contacts.size());
@@ -372,7 +375,8 @@ void DemWorld::narrow_phase() {
   b.contacts[cur].resize(std::max(b.n_contacts, 1));
   set_args(k_contact_write_, b.position, b.velocity, b.cell_start, b.cell_particles, b.geoms,
            b.geom_column_start, b.geom_column_list, b.owner_offsets[cur], b.contacts[cur],
-           b.owner_offsets[prev], b.contacts[prev], p, b.has_previous ? 1 : 0);
+           b.owner_offsets[prev], b.contacts[prev], p,
+           b.has_previous ? TL_MATCH_PAIRS | (b.static_previous ? TL_MATCH_STATIC : 0) : 0);
   launch(dev_, k_contact_write_, n, "contact_write");
 }
 
@@ -601,6 +605,7 @@ void DemWorld::end_step() {
     store_impulses();
     integrate();
     buffers_.has_previous = true;
+    buffers_.static_previous = true;
     buffers_.current = 1 - buffers_.current;
   }
   time_ += settings_.dt;

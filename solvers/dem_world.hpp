@@ -31,6 +31,12 @@ struct StepStats {
   double sweep_seconds = 0.0;  // wall time of the sweeps (queue drained before and after)
 };
 
+// how new static geometry relates to the old, for warm starting (contacts with static geometry
+// are matched by its index): Moved (the same list, moved: every contact keeps its impulses),
+// Renumbered (another list: particle pairs keep theirs, static contacts start from zero; the
+// type-G terrain's column boxes, remade each step), Replaced (every contact starts from zero)
+enum class GeomChange { Moved, Renumbered, Replaced };
+
 class DemWorld {
  public:
   DemWorld(Device& dev, const Material& material, const DemSettings& settings, const Bounds& bounds,
@@ -47,10 +53,9 @@ class DemWorld {
   // bit-identically to the saved one on the same device and work-group size
   void save_state(ByteWriter& w) const;
   void restore_state(ByteReader& r, bool any_count = false);
-  // replaces the static geometry (e.g. walls removed or moved). Contacts with static geometry
-  // are matched by its index, so warm starting goes on only when `same_layout` says the
-  // geometries kept their order (moved, not added or removed)
-  void set_geoms(std::vector<StaticGeom> geoms, bool same_layout = false);
+  // replaces the static geometry (walls removed or moved, the type-G terrain's boxes); `change`
+  // says which contacts keep last step's impulses
+  void set_geoms(std::vector<StaticGeom> geoms, GeomChange change = GeomChange::Replaced);
   // replaces the contact material (e.g. friction switched on after a dense fill)
   void set_material(const Material& material);
   const Material& material() const { return material_; }

@@ -155,7 +155,7 @@ HeapResult run_heap_test(Device& dev, const Material& material, const HeapOption
   if (o.wall_speed > 0.0) {
     int steps = static_cast<int>(std::lround(o.wall_travel / (o.wall_speed * o.dt)));
     for (int k = 1; k <= steps; ++k) {
-      world.set_geoms(ground_and_walls(half + k * o.wall_speed * o.dt), true);
+      world.set_geoms(ground_and_walls(half + k * o.wall_speed * o.dt), GeomChange::Moved);
       world.step();
       if (progress) progress->update(world.time(), "walls retreating");
     }

@@ -198,7 +198,9 @@ void MultiscaleTerrain::step(const KinematicBucket& bucket) {
   if (!ledger_.empty()) {
     stage.emplace(dev, "terrain_geometry");
     const std::vector<StaticGeom> geoms = geometry(particles);
-    dem_->set_geoms(geoms);
+    // boxes remade for this step's columns: the particle pairs keep their warm start (until
+    // 2026-11-27 every contact started from zero here, each step)
+    dem_->set_geoms(geoms, GeomChange::Renumbered);
     // the DEM's own stages (contacts, colouring, sweeps) are charged to themselves
     stage.emplace(dev, "zone_particles");
     tools_->step();

@@ -486,7 +486,7 @@ PileBuild build_pile(Device& dev, const PileProfile& profile, const FidelityPres
         f.centre.x() -= k * options.form_speed * settings.dt;
         moved.push_back(f);
       }
-      world.set_geoms(moved, true);
+      world.set_geoms(moved, GeomChange::Moved);
       world.step();
       if (progress) progress->update(world.time(), "formwork withdrawing");
     }

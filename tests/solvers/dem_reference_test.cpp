@@ -377,6 +377,50 @@ TEST(ReferenceNarrowPhase, WarmStartCarriesImpulsesToTheSamePairs) {
               got.size(), carried, fresh, unmatched);
 }
 
+// geometry renumbered between steps (DemWorld::set_geoms, GeomChange::Renumbered: the type-G
+// terrain's boxes): particle pairs carry last step's impulses, static contacts start from zero,
+// as the reference with match_static off
+TEST(ReferenceNarrowPhase, RenumberedGeometryKeepsOnlyThePairsWarmStart) {
+  uint64_t seed = test::fresh_seed();
+  SCOPED_TRACE(test::seed_note(seed));
+  std::mt19937_64 rng(seed);
+  Scene s = test::random_scene(rng);
+  auto world = make_world(s);
+  world->step();
+  const DemBuffers& b = world->buffers();
+  int prev = 1 - b.current;
+  ref::ContactSet previous;
+  previous.contacts = contacts_of(*world, prev);
+  previous.owner_offsets = b.owner_offsets[prev].download(world->size() + 1);
+  world->set_geoms(world->geoms(), GeomChange::Renumbered);
+  world->broad_phase();
+  world->narrow_phase();
+  std::vector<ref::Contact> got = current_contacts(*world);
+  ref::StepParams p = params_of(*world);
+  Particles particles = world->particles();
+  ref::ContactSet want = ref::find_contacts(particles, geoms_of(*world), ref::cell_lists(particles, p),
+                                            p, &previous, false);
+  std::map<std::pair<int, int>, const ref::Contact*> by_pair;
+  for (const ref::Contact& c : want.contacts) by_pair[{c.a, c.b}] = &c;
+  int pairs_carried = 0, static_contacts = 0;
+  for (size_t c = 0; c < got.size(); ++c) {
+    if (got[c].b < 0) {
+      ++static_contacts;
+      EXPECT_EQ(got[c].impulse_n, 0.0) << "static contact " << c << " kept an impulse";
+      EXPECT_EQ(got[c].impulse_t, Vec3::Zero()) << "static contact " << c;
+    }
+    auto it = by_pair.find({got[c].a, got[c].b});
+    if (it == by_pair.end()) continue;
+    EXPECT_EQ(got[c].impulse_n, it->second->impulse_n) << "contact " << c;
+    EXPECT_EQ(got[c].impulse_t, it->second->impulse_t) << "contact " << c;
+    if (got[c].b >= 0 && got[c].impulse_n != 0.0) ++pairs_carried;
+  }
+  EXPECT_GT(pairs_carried, 0);
+  EXPECT_GT(static_contacts, 0);
+  std::printf("[ measured ] %zu contacts: %d pairs carried their impulses, %d static started at zero\n",
+              got.size(), pairs_carried, static_contacts);
+}
+
 // ---------------------------------------------------------------------------------------------
 // adjacency and colouring
 
