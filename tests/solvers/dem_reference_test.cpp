@@ -398,8 +398,8 @@ TEST(ReferenceNarrowPhase, RenumberedGeometryKeepsOnlyThePairsWarmStart) {
   std::vector<ref::Contact> got = current_contacts(*world);
   ref::StepParams p = params_of(*world);
   Particles particles = world->particles();
-  ref::ContactSet want = ref::find_contacts(particles, geoms_of(*world), ref::cell_lists(particles, p),
-                                            p, &previous, false);
+  ref::ContactSet want = ref::find_contacts(particles, geoms_of(*world),
+                                            ref::cell_lists(particles, p), p, &previous, false);
   std::map<std::pair<int, int>, const ref::Contact*> by_pair;
   for (const ref::Contact& c : want.contacts) by_pair[{c.a, c.b}] = &c;
   int pairs_carried = 0, static_contacts = 0;
@@ -417,8 +417,9 @@ TEST(ReferenceNarrowPhase, RenumberedGeometryKeepsOnlyThePairsWarmStart) {
   }
   EXPECT_GT(pairs_carried, 0);
   EXPECT_GT(static_contacts, 0);
-  std::printf("[ measured ] %zu contacts: %d pairs carried their impulses, %d static started at zero\n",
-              got.size(), pairs_carried, static_contacts);
+  std::printf(
+      "[ measured ] %zu contacts: %d pairs carried their impulses, %d static started at zero\n",
+      got.size(), pairs_carried, static_contacts);
 }
 
 // ---------------------------------------------------------------------------------------------
