@@ -317,6 +317,17 @@ TEST(ReferenceNarrowPhase, ManyBoxesBinnedByColumnGiveEveryContact) {
       static_cast<double>(start.back()) / columns);
 }
 
+// last step's contacts as stored on the device after one step of `world` (impulses solved): the
+// warm-start source the next narrow phase matches against
+ref::ContactSet previous_contacts(DemWorld& world) {
+  const DemBuffers& b = world.buffers();
+  const int prev = 1 - b.current;
+  ref::ContactSet previous;
+  previous.contacts = contacts_of(world, prev);
+  previous.owner_offsets = b.owner_offsets[prev].download(world.size() + 1);
+  return previous;
+}
+
 TEST(ReferenceNarrowPhase, WarmStartCarriesImpulsesToTheSamePairs) {
   uint64_t seed = test::fresh_seed();
   SCOPED_TRACE(test::seed_note(seed));
@@ -325,12 +336,8 @@ TEST(ReferenceNarrowPhase, WarmStartCarriesImpulsesToTheSamePairs) {
   auto world = make_world(s);
   world->step();
 
-  // last step's contacts as stored on the device (impulses solved), then this step's detection
-  const DemBuffers& b = world->buffers();
-  int prev = 1 - b.current;
-  ref::ContactSet previous;
-  previous.contacts = contacts_of(*world, prev);
-  previous.owner_offsets = b.owner_offsets[prev].download(world->size() + 1);
+  // last step's contacts, then this step's detection
+  const ref::ContactSet previous = previous_contacts(*world);
   // positions moved: pairs may now sit anywhere near the margin, so the reference takes the
   // device's pair list and checks only the impulse matching (find_previous) on it
   world->broad_phase();
@@ -387,11 +394,7 @@ TEST(ReferenceNarrowPhase, RenumberedGeometryKeepsOnlyThePairsWarmStart) {
   Scene s = test::random_scene(rng);
   auto world = make_world(s);
   world->step();
-  const DemBuffers& b = world->buffers();
-  int prev = 1 - b.current;
-  ref::ContactSet previous;
-  previous.contacts = contacts_of(*world, prev);
-  previous.owner_offsets = b.owner_offsets[prev].download(world->size() + 1);
+  const ref::ContactSet previous = previous_contacts(*world);
   world->set_geoms(world->geoms(), GeomChange::Renumbered);
   world->broad_phase();
   world->narrow_phase();
