@@ -17,7 +17,8 @@ namespace {
 nlohmann::json bench_dig(const std::string& args, const std::string& file) {
   const auto json = std::filesystem::temp_directory_path() / file;
   std::filesystem::remove(json);
-  const test::Outcome o = test::run_talus("", "bench dig " + args + " --quiet --json " + json.string());
+  const test::Outcome o =
+      test::run_talus("", "bench dig " + args + " --quiet --json " + json.string());
   EXPECT_EQ(o.code, 0) << o.err;
   if (o.code != 0) return nullptr;
   std::ifstream in(json);
@@ -33,7 +34,8 @@ void expect_stages_add_up(const nlohmann::json& j) {
 }
 
 TEST(CmdBench, DigWritesTheCostBreakdown) {
-  const nlohmann::json j = bench_dig("--scenario hd27 --level D400 --seconds 0.2", "talus_bench_dig.json");
+  const nlohmann::json j =
+      bench_dig("--scenario hd27 --level D400 --seconds 0.2", "talus_bench_dig.json");
   ASSERT_FALSE(j.is_null());
   EXPECT_EQ(j.at("level"), "D400");
   EXPECT_EQ(j.at("scenario"), "HD27");
@@ -50,7 +52,8 @@ TEST(CmdBench, DigWritesTheCostBreakdown) {
 // excavation, spawning and merging, the avalanche) beside the zone's DEM and the machine's solve,
 // and counts the zone's particles
 TEST(CmdBench, DigAtATypeGLevelChargesTheTerrainsStages) {
-  const nlohmann::json j = bench_dig("--scenario hd27 --level G400 --seconds 2", "talus_bench_dig_g400.json");
+  const nlohmann::json j =
+      bench_dig("--scenario hd27 --level G400 --seconds 2", "talus_bench_dig_g400.json");
   ASSERT_FALSE(j.is_null());
   EXPECT_EQ(j.at("level"), "G400");
   EXPECT_GT(j.at("particles").get<double>(), 0.0);
