@@ -59,6 +59,7 @@ TEST(CliErrors, NonFiniteNumbersAreBadInputNamingTheFlag) {
       {"repose --wall-speed nan", "--wall-speed"},
       {"pile --level D400 --max-time nan", "--max-time"},
       {"run --scenario hd27 --fidelity D400 --snapshot-interval nan", "--snapshot-interval"},
+      {"run --scenario hd27 --fidelity D400 --damping-time nan", "--damping-time"},
       {"sweep --fidelity D400 --approach nan", "--approach"},
       {"sweep --fidelity D400 --max-time inf", "--max-time"},
       {"synth --scenario flat-lift --vary-inputs nan", "--vary-inputs"},
@@ -205,6 +206,9 @@ TEST(CliErrors, StepCountsAndLoadsOutsideTheirRangeAreRefused) {
       {"--l-norm", "compare --sim a --ref b --l-norm 1e-300"},
       {"--seconds", "bench dig --seconds 1e30"},
       {"--rolling", "run --scenario hd27 --rolling 1e30 --out /tmp/talus_unused_range"},
+      // a contact damped for longer than a grain takes to land never settles within a dig
+      {"--damping-time", "run --scenario hd27 --damping-time 1e30 --out /tmp/talus_unused_range"},
+      {"--damping-time", "run --scenario hd27 --damping-time 1e-30 --out /tmp/talus_unused_range"},
       {"--friction", "soil --test shear --friction 50 --out /tmp/talus_unused_range"},
       {"--form-speed", "run --scenario hd27 --form-speed 1e-4 --out /tmp/talus_unused_range"},
       {"--approach", "sweep --approach 1e30 --out /tmp/talus_unused_range"},
@@ -217,6 +221,12 @@ TEST(CliErrors, StepCountsAndLoadsOutsideTheirRangeAreRefused) {
     EXPECT_NE(o.err.find(c[0] + ": must be a finite number "), std::string::npos) << c[1] << "\n"
                                                                                   << o.err;
     EXPECT_NE(o.err.find(" to "), std::string::npos) << o.err;
+  }
+  // a seed: a whole number, refused (naming the flag) when it is not one
+  for (const char* seed : {"-3", "x", "1.5"}) {
+    const Outcome o = run("", std::string("bench dem --levels D400 --settle-seed ") + seed);
+    EXPECT_EQ(o.code, 2) << seed << ": " << o.err;
+    EXPECT_NE(o.err.find("--settle-seed"), std::string::npos) << seed << ": " << o.err;
   }
   // a count: CLI11's range, named by the flag
   const Outcome ensemble = run("", "diagnose --data /tmp --pile-ensemble 17");

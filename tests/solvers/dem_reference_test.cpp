@@ -4,6 +4,7 @@
 // prints its seed on failure (replay with TALUS_TEST_SEED) and its measured differences.
 #include <gtest/gtest.h>
 
+#include <functional>
 #include <map>
 #include <memory>
 #include <set>
@@ -317,52 +318,62 @@ TEST(ReferenceNarrowPhase, ManyBoxesBinnedByColumnGiveEveryContact) {
       static_cast<double>(start.back()) / columns);
 }
 
-// last step's contacts as stored on the device after one step of `world` (impulses solved): the
-// warm-start source the next narrow phase matches against
-ref::ContactSet previous_contacts(DemWorld& world) {
-  const DemBuffers& b = world.buffers();
-  const int prev = 1 - b.current;
+// a random world stepped once, its last step's contacts as stored on the device (impulses
+// solved: the warm-start source), this step's contacts found on the device after `between` (a
+// change of the world between the steps), and the reference's from the device's positions with
+// the same source (static contacts matched with `match_static`). Positions moved: pairs may now
+// sit anywhere near the margin, so callers compare the impulse matching on the pairs both found
+struct WarmStartCase {
+  std::string seed_note;  // the fresh seed, for the caller's SCOPED_TRACE
   ref::ContactSet previous;
-  previous.contacts = contacts_of(world, prev);
-  previous.owner_offsets = b.owner_offsets[prev].download(world.size() + 1);
-  return previous;
-}
+  std::vector<ref::Contact> got;
+  ref::ContactSet want;
+  std::map<std::pair<int, int>, const ref::Contact*> want_by_pair;  // into want.contacts
+};
 
-TEST(ReferenceNarrowPhase, WarmStartCarriesImpulsesToTheSamePairs) {
-  uint64_t seed = test::fresh_seed();
-  SCOPED_TRACE(test::seed_note(seed));
+WarmStartCase warm_start_case(const std::function<void(DemWorld&)>& between, bool match_static) {
+  const uint64_t seed = test::fresh_seed();
   std::mt19937_64 rng(seed);
   Scene s = test::random_scene(rng);
   auto world = make_world(s);
   world->step();
-
-  // last step's contacts, then this step's detection
-  const ref::ContactSet previous = previous_contacts(*world);
-  // positions moved: pairs may now sit anywhere near the margin, so the reference takes the
-  // device's pair list and checks only the impulse matching (find_previous) on it
+  WarmStartCase out;
+  out.seed_note = test::seed_note(seed);
+  const DemBuffers& b = world->buffers();
+  const int prev = 1 - b.current;
+  out.previous.contacts = contacts_of(*world, prev);
+  out.previous.owner_offsets = b.owner_offsets[prev].download(world->size() + 1);
+  between(*world);
   world->broad_phase();
   world->narrow_phase();
-  std::vector<ref::Contact> got = current_contacts(*world);
-  ref::StepParams p = params_of(*world);
-  Particles particles = world->particles();
-  ref::ContactSet want =
-      ref::find_contacts(particles, geoms_of(*world), ref::cell_lists(particles, p), p, &previous);
+  out.got = current_contacts(*world);
+  const ref::StepParams p = params_of(*world);
+  const Particles particles = world->particles();
+  out.want = ref::find_contacts(particles, geoms_of(*world), ref::cell_lists(particles, p), p,
+                                &out.previous, match_static);
+  for (const ref::Contact& c : out.want.contacts) out.want_by_pair[{c.a, c.b}] = &c;
+  return out;
+}
+
+TEST(ReferenceNarrowPhase, WarmStartCarriesImpulsesToTheSamePairs) {
+  const WarmStartCase w = warm_start_case([](DemWorld&) {}, true);
+  SCOPED_TRACE(w.seed_note);
+  const std::vector<ref::Contact>& got = w.got;
+  const ref::ContactSet& previous = w.previous;
 
   // compare on the pairs both found (float rounding may flip a pair at the margin now)
-  std::map<std::pair<int, int>, const ref::Contact*> by_pair;
-  for (const ref::Contact& c : want.contacts) by_pair[{c.a, c.b}] = &c;
   int carried = 0, fresh = 0, unmatched = 0;
   for (size_t c = 0; c < got.size(); ++c) {
-    auto it = by_pair.find({got[c].a, got[c].b});
-    if (it == by_pair.end()) {
+    auto it = w.want_by_pair.find({got[c].a, got[c].b});
+    if (it == w.want_by_pair.end()) {
       ++unmatched;
       continue;
     }
-    const ref::Contact& w = *it->second;
-    EXPECT_EQ(got[c].impulse_n, w.impulse_n) << "contact " << c;
-    EXPECT_EQ(got[c].impulse_t, w.impulse_t) << "contact " << c;
-    EXPECT_EQ(got[c].impulse_r, w.impulse_r) << "contact " << c;
-    (w.impulse_n != 0.0 || w.impulse_t != Vec3::Zero() ? carried : fresh)++;
+    const ref::Contact& want = *it->second;
+    EXPECT_EQ(got[c].impulse_n, want.impulse_n) << "contact " << c;
+    EXPECT_EQ(got[c].impulse_t, want.impulse_t) << "contact " << c;
+    EXPECT_EQ(got[c].impulse_r, want.impulse_r) << "contact " << c;
+    (want.impulse_n != 0.0 || want.impulse_t != Vec3::Zero() ? carried : fresh)++;
   }
   // every carried impulse is the one last step solved for this pair
   for (size_t c = 0; c < got.size(); ++c) {
@@ -388,23 +399,10 @@ TEST(ReferenceNarrowPhase, WarmStartCarriesImpulsesToTheSamePairs) {
 // terrain's boxes): particle pairs carry last step's impulses, static contacts start from zero,
 // as the reference with match_static off
 TEST(ReferenceNarrowPhase, RenumberedGeometryKeepsOnlyThePairsWarmStart) {
-  uint64_t seed = test::fresh_seed();
-  SCOPED_TRACE(test::seed_note(seed));
-  std::mt19937_64 rng(seed);
-  Scene s = test::random_scene(rng);
-  auto world = make_world(s);
-  world->step();
-  const ref::ContactSet previous = previous_contacts(*world);
-  world->set_geoms(world->geoms(), GeomChange::Renumbered);
-  world->broad_phase();
-  world->narrow_phase();
-  std::vector<ref::Contact> got = current_contacts(*world);
-  ref::StepParams p = params_of(*world);
-  Particles particles = world->particles();
-  ref::ContactSet want = ref::find_contacts(particles, geoms_of(*world),
-                                            ref::cell_lists(particles, p), p, &previous, false);
-  std::map<std::pair<int, int>, const ref::Contact*> by_pair;
-  for (const ref::Contact& c : want.contacts) by_pair[{c.a, c.b}] = &c;
+  const WarmStartCase w = warm_start_case(
+      [](DemWorld& world) { world.set_geoms(world.geoms(), GeomChange::Renumbered); }, false);
+  SCOPED_TRACE(w.seed_note);
+  const std::vector<ref::Contact>& got = w.got;
   int pairs_carried = 0, static_contacts = 0;
   for (size_t c = 0; c < got.size(); ++c) {
     if (got[c].b < 0) {
@@ -412,8 +410,8 @@ TEST(ReferenceNarrowPhase, RenumberedGeometryKeepsOnlyThePairsWarmStart) {
       EXPECT_EQ(got[c].impulse_n, 0.0) << "static contact " << c << " kept an impulse";
       EXPECT_EQ(got[c].impulse_t, Vec3::Zero()) << "static contact " << c;
     }
-    auto it = by_pair.find({got[c].a, got[c].b});
-    if (it == by_pair.end()) continue;
+    auto it = w.want_by_pair.find({got[c].a, got[c].b});
+    if (it == w.want_by_pair.end()) continue;
     EXPECT_EQ(got[c].impulse_n, it->second->impulse_n) << "contact " << c;
     EXPECT_EQ(got[c].impulse_t, it->second->impulse_t) << "contact " << c;
     if (got[c].b >= 0 && got[c].impulse_n != 0.0) ++pairs_carried;
