@@ -1,13 +1,56 @@
 // Graph colouring of contacts for parallel PGS: no dynamic body appears twice in a colour;
 // static geometry never blocks. Jones-Plassmann rounds with fixed pseudo-random priorities:
 // an uncoloured contact that outranks all its uncoloured neighbours takes the smallest colour
-// its neighbours do not use. The result depends only on the contact list (deterministic).
+// its neighbours do not use. The result depends only on the contact list and the colours carried
+// from last step's list (deterministic).
 //
 // A round reads the colours of earlier rounds (colour_in, -1 while uncoloured) and writes every
 // contact's colour after it (colour_out; the host swaps the two), so no work-item reads what
 // another writes in the same launch and the outcome does not depend on their order. Each round of
 // a batch counts into its own pair of status words, status[2 slot] (contacts still uncoloured)
 // and status[2 slot + 1] (contacts out of colours), which the host reads once per batch.
+
+// Carried colours (issue 13): most of a step's contacts are last step's, and a colouring of
+// last step's contacts, cut down to the pairs that persist, is still a colouring (the bodies are
+// the same). So the colouring starts from last step's colours (carry_colours), keeps those below
+// a cap that no neighbour of lower index shares (drop_colour_conflicts; the sharing is a guard,
+// since the narrow phase could in principle find one pair twice), and the rounds below colour
+// only the new contacts and those dropped.
+
+// each contact's colour of last step, through the narrow phase's `previous` (-1 when new)
+__kernel void carry_colours(__global const TlContact* contacts, int n_contacts,
+                            __global const int* previous_colour, __global int* carried) {
+  int c = get_global_id(0);
+  if (c >= n_contacts) return;
+  int k = contacts[c].previous;
+  carried[c] = k >= 0 ? previous_colour[k] : -1;
+}
+
+// a carried colour stays if it is below `cap` (the colours of the last fresh colouring: the
+// contacts above it are coloured again, which keeps the colours from spreading) and no neighbour
+// of lower index carries the same one (reads `carried`, writes `colour`: the outcome does not
+// depend on the work-items' order)
+__kernel void drop_colour_conflicts(__global const TlContact* contacts, int n_contacts,
+                                    __global const int* adj_offsets, __global const int* adjacency,
+                                    __global const int* carried, int cap, __global int* colour) {
+  int c = get_global_id(0);
+  if (c >= n_contacts) return;
+  int mine = carried[c] < cap ? carried[c] : -1;
+  int bodies[2] = {contacts[c].a, contacts[c].b};
+  for (int side = 0; side < 2 && mine >= 0; ++side) {
+    int body = bodies[side];
+    if (body < 0) continue;
+    int end = adj_offsets[body + 1];
+    for (int k = adj_offsets[body]; k < end; ++k) {
+      int d = adjacency[k];
+      if (d < c && carried[d] == mine) {
+        mine = -1;
+        break;
+      }
+    }
+  }
+  colour[c] = mine;
+}
 
 __kernel void colour_round(__global const TlContact* contacts, int n_contacts,
                            __global const int* adj_offsets, __global const int* adjacency,

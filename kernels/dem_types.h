@@ -71,7 +71,12 @@ typedef struct {
   tl_float4 impulse_t;  // xyz friction impulse on b over the step [N s]; w = normal impulse
   tl_float4 impulse_r;  // xyz rolling + twisting impulse (angular, on b) [N m s]; w unused
   tl_int a, b;          // particle indices; b < 0 is static geometry -1-b
-  tl_int pad0, pad1;
+  // index in last step's list of the contact with the same (a, b), -1 when new or when there is
+  // no last step of these particles: the colouring carries that contact's colour
+  // (kernels/colouring.cl carry_colours). Written whatever the matching flags say, since a
+  // colour depends on the bodies alone (a static b renumbered still names the same body a)
+  tl_int previous;
+  tl_int pad1;
 } TlContact;
 
 // one contact's constraint rows prepared for the sweeps (SPOOK, Hertz), laid out in colour

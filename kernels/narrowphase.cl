@@ -33,17 +33,16 @@ void emit_contact(__global TlContact* out, int a, int b, float3 n, float gap, fl
   c.impulse_r = (float4)(0.0f);
   c.a = a;
   c.b = b;
-  c.pad0 = 0;
   c.pad1 = 0;
-  // which of last step's contacts may be matched: particle pairs, static ones (their geometry
-  // may have been renumbered: DemWorld::set_geoms), both or neither
+  // the same pair in last step's list (any flag set: that list is of these particles)
+  int k = has_prev ? find_previous(a, b, prev_offsets, prev) : -1;
+  c.previous = k;
+  // which of last step's contacts give their impulses: particle pairs, static ones (their
+  // geometry may have been renumbered: DemWorld::set_geoms), both or neither
   int match = b >= 0 ? (has_prev & TL_MATCH_PAIRS) : (has_prev & TL_MATCH_STATIC);
-  if (match) {
-    int k = find_previous(a, b, prev_offsets, prev);
-    if (k >= 0) {
-      c.impulse_t = prev[k].impulse_t;
-      c.impulse_r = prev[k].impulse_r;
-    }
+  if (match && k >= 0) {
+    c.impulse_t = prev[k].impulse_t;
+    c.impulse_r = prev[k].impulse_r;
   }
   *out = c;
 }

@@ -196,11 +196,10 @@ void load_bodies(const TlRow* row, __global const float4* velocity, __global con
   *wb = row->b >= 0 ? omega[row->b] : (float4)(0.0f);
 }
 
-// projected Gauss-Seidel over one colour: rows [begin, end) share no dynamic body
-__kernel void pgs_colour(__global TlRow* rows, int begin, int end, __global float4* velocity,
-                         __global float4* omega) {
-  int k = begin + get_global_id(0);
-  if (k >= end) return;
+// one PGS row update: the row's contact solved against its bodies' velocities, which it writes
+// back with the row's impulses
+inline void pgs_row(__global TlRow* rows, int k, __global float4* velocity,
+                    __global float4* omega) {
   TlRow row = rows[k];
   int a = row.a;
   int b = row.b;
@@ -221,6 +220,34 @@ __kernel void pgs_colour(__global TlRow* rows, int begin, int end, __global floa
   if (b >= 0) {
     velocity[b] = (float4)(vb, vb4.w);
     omega[b] = (float4)(wb, wb4.w);
+  }
+}
+
+// projected Gauss-Seidel over one colour: rows [begin, end) share no dynamic body
+__kernel void pgs_colour(__global TlRow* rows, int begin, int end, __global float4* velocity,
+                         __global float4* omega) {
+  int k = begin + get_global_id(0);
+  if (k >= end) return;
+  pgs_row(rows, k, velocity, omega);
+}
+
+// `iterations` PGS sweeps over every colour in one work-group, a barrier between colours: for a
+// system whose colours are too small to fill the device, where a launch per colour costs more
+// than its rows (the type-G zone, D400; solvers/pgs_sweep.cpp). A colour's rows share no dynamic
+// body and each is solved by pgs_row, so the result is that of pgs_colour's launches bit for
+// bit, whichever work-item takes a row
+__kernel void pgs_sweeps_one_group(__global TlRow* rows, __global const int* colour_start,
+                                   int colours, int iterations, __global float4* velocity,
+                                   __global float4* omega) {
+  int lid = get_local_id(0);
+  int size = get_local_size(0);
+  for (int it = 0; it < iterations; ++it) {
+    for (int k = 0; k < colours; ++k) {
+      int end = colour_start[k + 1];
+      for (int r = colour_start[k] + lid; r < end; r += size) pgs_row(rows, r, velocity, omega);
+      // the colour's velocities seen by the whole group before the next colour reads them
+      barrier(CLK_GLOBAL_MEM_FENCE);
+    }
   }
 }
 

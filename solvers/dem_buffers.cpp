@@ -30,6 +30,7 @@ DemBuffers::DemBuffers(Device& dev)
       colour_histogram(dev, 1),
       colour_offsets(dev, 1),
       colour_start_dev(dev, TL_MAX_COLOURS + 1),
+      colour_previous(dev, 1),
       order(dev, 1),
       row_of_contact(dev, 1),
       pairs_differ(dev, 1),

@@ -43,6 +43,7 @@ struct DemBuffers {
                           adjacency.bytes(),
                           colour.bytes(),
                           colour_next.bytes(),
+                          colour_previous.bytes(),
                           colour_status.bytes(),
                           colour_histogram.bytes(),
                           colour_offsets.bytes(),
@@ -85,6 +86,9 @@ struct DemBuffers {
 
   // colouring: colour per contact (-1 uncoloured) and the next round's copy; partition into rows
   Buffer<int> colour, colour_next, colour_status, colour_histogram, colour_offsets, colour_start_dev;
+  // last step's colours, by its contact index: what this step's colouring carries (copied from
+  // `colour` when a step ends, so a colouring redone within a step carries the same colours)
+  Buffer<int> colour_previous;
   Buffer<int> order, row_of_contact;
   std::vector<int> colour_start;  // host copy: rows of colour k are [start[k], start[k+1])
   int colour_rounds = 0;

@@ -24,10 +24,11 @@ int find_previous(int a, int b, const ContactSet& previous) {
   return -1;
 }
 
-// a fresh contact, carrying over last step's impulses when the pair persists
+// a fresh contact, with the index of the same pair last step and, where `match`, that pair's
+// impulses
 Contact make_contact(int a, int b, const Vec3& normal, double gap, const Vec3& arm_a,
                      const Vec3& arm_b, double reduced_radius, const StepParams& p,
-                     const ContactSet* previous) {
+                     const ContactSet* previous, bool match) {
   Contact c;
   c.normal = normal;
   c.gap = gap;
@@ -39,7 +40,8 @@ Contact make_contact(int a, int b, const Vec3& normal, double gap, const Vec3& a
   c.b = b;
   if (previous != nullptr) {
     int k = find_previous(a, b, *previous);
-    if (k >= 0) {
+    c.previous = k;
+    if (match && k >= 0) {
       const Contact& old = previous->contacts[k];
       c.impulse_n = old.impulse_n;
       c.impulse_t = old.impulse_t;
@@ -145,6 +147,7 @@ Contact from_device(const TlContact& c) {
   out.impulse_r = xyz(c.impulse_r);
   out.a = c.a;
   out.b = c.b;
+  out.previous = c.previous;
   return out;
 }
 
@@ -262,7 +265,8 @@ ContactSet find_contacts(const Particles& particles, const std::vector<StaticGeo
             Vec3 normal = dist > 0.0 ? Vec3(d / dist) : Vec3(0.0, 0.0, 1.0);
             double reduced = ri * rj / (ri + rj);
             out.contacts.push_back(make_contact(i, j, normal, gap, normal * (ri + 0.5 * gap),
-                                                -normal * (rj + 0.5 * gap), reduced, p, previous));
+                                                -normal * (rj + 0.5 * gap), reduced, p, previous,
+                                                true));
           }
         }
       }
@@ -273,8 +277,8 @@ ContactSet find_contacts(const Particles& particles, const std::vector<StaticGeo
       double gap = sphere_geom(xi, ri, geoms[g], &normal);
       if (gap >= contact_margin(ri, ri, p)) continue;
       out.contacts.push_back(make_contact(i, TL_STATIC_BODY(g), normal, gap,
-                                          normal * (ri + 0.5 * gap), Vec3::Zero(), ri, p,
-                                          match_static ? previous : nullptr));
+                                          normal * (ri + 0.5 * gap), Vec3::Zero(), ri, p, previous,
+                                          match_static));
     }
     out.owner_offsets.push_back(static_cast<int>(out.contacts.size()));
   }
@@ -301,10 +305,33 @@ Adjacency adjacency(const std::vector<Contact>& contacts, int particles) {
 
 // ---- colouring ----
 
-std::vector<int> colour_contacts(const std::vector<Contact>& contacts, const Adjacency& adjacency,
-                                 int* rounds) {
+std::vector<int> carried_colours(const std::vector<Contact>& contacts, const Adjacency& adjacency,
+                                 const std::vector<int>& previous_colours, int cap) {
   int n = static_cast<int>(contacts.size());
-  std::vector<int> colour(n, -1);
+  // last step's colour of each persisting contact
+  std::vector<int> carried(n, -1);
+  for (int c = 0; c < n; ++c)
+    if (contacts[c].previous >= 0) carried[c] = previous_colours.at(contacts[c].previous);
+  // kept if below the cap, unless a neighbour of lower index carries the same colour
+  std::vector<int> colour = carried;
+  for (int& k : colour)
+    if (k >= cap) k = -1;
+  for (int c = 0; c < n; ++c) {
+    for (int body : {contacts[c].a, contacts[c].b}) {
+      if (body < 0 || colour[c] < 0) continue;
+      for (int k = adjacency.offsets[body]; k < adjacency.offsets[body + 1]; ++k) {
+        int d = adjacency.contacts[k];
+        if (d < c && carried[d] == carried[c]) colour[c] = -1;
+      }
+    }
+  }
+  return colour;
+}
+
+std::vector<int> colour_contacts(const std::vector<Contact>& contacts, const Adjacency& adjacency,
+                                 int* rounds, std::vector<int> start) {
+  int n = static_cast<int>(contacts.size());
+  std::vector<int> colour = start.empty() ? std::vector<int>(n, -1) : std::move(start);
   int round = 0;
   for (int remaining = n; remaining > 0; ++round) {
     // every round reads the colours as they were when it began
@@ -645,11 +672,20 @@ void step(ReferenceWorld& world) {
   const std::vector<Contact>& contacts = world.current.contacts;
   world.adjacency = adjacency(contacts, static_cast<int>(world.particles.size()));
   world.colour_rounds = 0;
-  if (s.sweep == SweepKind::Pgs)
-    world.partition = partition_by_colour(colour_contacts(contacts, world.adjacency,
-                                                          &world.colour_rounds));
-  else
+  std::vector<int> colours;
+  if (s.sweep == SweepKind::Pgs) {
+    // last step's colours carried to the contacts that persist, the new ones coloured by rounds
+    const bool carry = world.colours_carried && world.has_previous;
+    std::vector<int> start;
+    if (carry)
+      start =
+          carried_colours(contacts, world.adjacency, world.previous_colours, world.fresh_colours);
+    colours = colour_contacts(contacts, world.adjacency, &world.colour_rounds, std::move(start));
+    world.partition = partition_by_colour(colours);
+    if (!carry) world.fresh_colours = static_cast<int>(world.partition.colour_start.size()) - 1;
+  } else {
     world.partition = identity_partition(static_cast<int>(contacts.size()));
+  }
   world.rows = prepare_rows(contacts, world.partition.order, world.particles, p, s.warm_start);
   // velocities: external forces, warm start, then the sweeps (in chunks with a tolerance)
   apply_gravity(world.particles, p);
@@ -675,6 +711,11 @@ void step(ReferenceWorld& world) {
   integrate(world.particles, p);
   world.previous = world.current;
   world.has_previous = true;
+  world.colours_carried =
+      s.sweep == SweepKind::Pgs &&
+      carry_colours_after(static_cast<int>(world.partition.colour_start.size()) - 1,
+                          world.fresh_colours);
+  world.previous_colours = std::move(colours);
 }
 
 }  // namespace talus::reference

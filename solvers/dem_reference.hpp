@@ -38,6 +38,7 @@ struct Contact {
   Vec3 impulse_t = Vec3::Zero();  // friction impulse on b [N s]
   Vec3 impulse_r = Vec3::Zero();  // rolling + twisting impulse on b [N m s]
   int a = 0, b = 0;               // bodies; b < 0 is static geometry -1-b
+  int previous = -1;              // the same (a, b) in last step's list; -1 new or none
 };
 
 // contacts grouped by owner: those of particle i are [owner_offsets[i], owner_offsets[i+1])
@@ -89,8 +90,9 @@ double sphere_geom(const Vec3& x, double r, const StaticGeom& g, Vec3* normal);
 unsigned contact_priority(unsigned c);
 
 // kernels/narrowphase.cl: every pair closer than the margin, in the kernel's enumeration
-// order, with last step's impulses carried over for pairs found in `previous` (static contacts
-// only with `match_static`: TL_MATCH_STATIC, off after the geometry was renumbered)
+// order, each with the index of the same pair in `previous` (when given), and last step's
+// impulses carried over for those pairs (static contacts only with `match_static`:
+// TL_MATCH_STATIC, off after the geometry was renumbered)
 ContactSet find_contacts(const Particles& particles, const std::vector<StaticGeom>& geoms,
                          const CellLists& cells, const StepParams& p,
                          const ContactSet* previous = nullptr, bool match_static = true);
@@ -98,11 +100,18 @@ ContactSet find_contacts(const Particles& particles, const std::vector<StaticGeo
 // kernels/narrowphase.cl adjacency_*: each body's contacts in contact order
 Adjacency adjacency(const std::vector<Contact>& contacts, int particles);
 
-// kernels/colouring.cl colour_round: jones-plassmann rounds with the kernel's priorities;
-// returns each contact's colour (0..TL_MAX_COLOURS-1) and the number of rounds.
+// kernels/colouring.cl carry_colours + drop_colour_conflicts: each contact's colour of last
+// step through its `previous` (-1 when new), dropped where it is `cap` or more or a neighbour of
+// lower index carries the same one
+std::vector<int> carried_colours(const std::vector<Contact>& contacts, const Adjacency& adjacency,
+                                 const std::vector<int>& previous_colours, int cap);
+
+// kernels/colouring.cl colour_round: jones-plassmann rounds with the kernel's priorities over
+// the contacts `start` leaves uncoloured (-1; an empty `start`: all of them); returns each
+// contact's colour (0..TL_MAX_COLOURS-1) and the number of rounds.
 // Throws talus::Error when a contact would need more than TL_MAX_COLOURS colours.
 std::vector<int> colour_contacts(const std::vector<Contact>& contacts, const Adjacency& adjacency,
-                                 int* rounds = nullptr);
+                                 int* rounds = nullptr, std::vector<int> start = {});
 
 // kernels/colouring.cl histogram/scatter/ranges: stable partition of contacts by colour,
 // colour_start trimmed to the colours in use as DemWorld::colour_contacts does
@@ -150,6 +159,10 @@ struct ReferenceWorld {
   DemSettings settings;
   ContactSet previous;        // last step's contacts with their solved impulses
   bool has_previous = false;  // false on the first step (no warm start source)
+  // last step's PGS colours, which this step's colouring carries (DemWorld's colour_previous)
+  std::vector<int> previous_colours;
+  bool colours_carried = false;
+  int fresh_colours = 0;  // colours of the last colouring that carried none
 
   // by-products of the last step, for inspection
   CellLists cells;

@@ -18,6 +18,17 @@ SweepKind parse_sweep(const std::string& text, const std::string& field);
 // passes (solvers/split_solver)
 inline constexpr int kToleranceCheckInterval = 10;
 
+// A carried colouring grows: a persisting contact keeps its colour and a new one takes the
+// smallest its neighbours leave, which over many steps spreads a bed's colours towards the
+// contact graph's degree (settle10k: 10 colours fresh, 19 after 300 carried steps), and each
+// colour is one more launch per sweep. A step whose colouring has more than this many times the
+// colours of the last fresh one makes the next step colour afresh (DemWorld::colour_contacts,
+// its reference twin; the factor measured in bench/RESULTS.md, 2026-11-27)
+inline constexpr double kCarriedColourGrowth = 1.5;
+inline bool carry_colours_after(int colours, int fresh_colours) {
+  return colours <= kCarriedColourGrowth * fresh_colours;
+}
+
 struct DemSettings {
   double dt = 1.0e-3;       // timestep h [s]
   int iterations = 50;      // sweeps per step (upper bound when tolerance > 0)

@@ -69,6 +69,8 @@ DemWorld::DemWorld(Device& dev, const Material& material, const DemSettings& set
   k_colour_ranges_ = dev.kernel(colour, "colour_ranges");
   k_identity_ = dev.kernel(colour, "identity_order");
   k_pairs_differ_ = dev.kernel(colour, "contact_pairs_differ");
+  k_carry_colours_ = dev.kernel(colour, "carry_colours");
+  k_drop_conflicts_ = dev.kernel(colour, "drop_colour_conflicts");
   const cl::Program& solver = dev.program(kSolverProgram);
   k_prepare_ = dev.kernel(solver, "prepare_rows");
   k_gravity_ = dev.kernel(solver, "apply_gravity");
@@ -204,6 +206,7 @@ void DemWorld::set_particles(const Particles& in) {
   buffers_.rotation.upload(q);
   buffers_.has_previous = false;
   buffers_.n_contacts = 0;
+  colours_carried_ = false;
   sweep_.reset();
   update_params();
 }
@@ -245,6 +248,13 @@ void DemWorld::save_state(ByteWriter& w) const {
   write_words(w, b.owner_offsets[prev].download(n + 1));
   write_words(
       w, b.n_contacts > 0 ? b.contacts[prev].download(b.n_contacts) : std::vector<TlContact>());
+  // their colours, which the next colouring carries (without them a restored run would colour
+  // afresh and part from the saved one)
+  w.u8(colours_carried_ ? 1 : 0);
+  w.u32(static_cast<std::uint32_t>(fresh_colours_));
+  if (colours_carried_)
+    write_words(w,
+                b.n_contacts > 0 ? b.colour_previous.download(b.n_contacts) : std::vector<int>());
 }
 
 void DemWorld::restore_state(ByteReader& r, bool any_count) {
@@ -268,6 +278,9 @@ void DemWorld::restore_state(ByteReader& r, bool any_count) {
   const bool has_previous = r.u8("particle contacts") != 0;
   std::vector<int> offsets;
   std::vector<TlContact> contacts;
+  bool carried = false;
+  int fresh_colours = 0;
+  std::vector<int> colours;
   if (has_previous) {
     offsets = read_words<int>(r, "particle contact offsets");
     contacts = read_words<TlContact>(r, "particle contacts");
@@ -278,6 +291,21 @@ void DemWorld::restore_state(ByteReader& r, bool any_count) {
     for (size_t i = 0; ordered && i < n; ++i) ordered = offsets[i] <= offsets[i + 1];
     if (!ordered)
       throw InputError(r.where() + ": the saved contacts do not match their offsets (corrupt)");
+    // one colour per contact, each a colour the kernels can index
+    carried = r.u8("particle contact colours") != 0;
+    fresh_colours = static_cast<int>(r.u32("particle contact colours"));
+    if (fresh_colours > TL_MAX_COLOURS)
+      throw InputError(r.where() + ": the saved colour count " + std::to_string(fresh_colours) +
+                       " is more than the colouring can make (corrupt)");
+    if (carried) {
+      colours = read_words<int>(r, "particle contact colours");
+      bool fits = colours.size() == contacts.size();
+      for (size_t c = 0; fits && c < colours.size(); ++c)
+        fits = colours[c] >= 0 && colours[c] < TL_MAX_COLOURS;
+      if (!fits)
+        throw InputError(r.where() +
+                         ": the saved contact colours do not fit the contacts (corrupt)");
+    }
   }
   // the largest radius sizes the broad phase's cells: finite, and at least every particle's
   float largest = 0.0f;
@@ -298,8 +326,13 @@ void DemWorld::restore_state(ByteReader& r, bool any_count) {
   b.current = 0;
   b.has_previous = has_previous;
   b.static_previous = has_previous;
-  // the saved contacts come without their colouring: the next step makes it
+  // the saved contacts come with their colours but not their partition: the next step makes it,
+  // carrying the colours as the saved run would have
   colouring_made_ = false;
+  colours_made_ = false;
+  colours_carried_ = carried;
+  fresh_colours_ = fresh_colours;
+  if (carried && !colours.empty()) b.colour_previous.upload(colours);
   b.n_contacts = static_cast<int>(contacts.size());
   if (has_previous) {
     b.owner_offsets[1].upload(offsets);
@@ -424,13 +457,25 @@ void DemWorld::colour_contacts() {
     launch(dev_, k_identity_, nc, "identity_order");
     b.colour_start = {0, nc};
     b.colour_rounds = 0;
+    colours_made_ = false;
     return;
   }
-  // jones-plassmann rounds until every contact has a colour
+  colours_made_ = false;  // until the colouring below is whole (it may throw)
   const Buffer<TlContact>& contacts = b.contacts[b.current];
   b.colour.resize(std::max(nc, 1));
-  b.colour.fill(-1);
   b.colour_next.resize(std::max(nc, 1));
+  const bool carry = colours_carried_ && b.has_previous;
+  if (carry) {
+    // last step's colours for the contacts that persist, then the guard against a shared one
+    set_args(k_carry_colours_, contacts, nc, b.colour_previous, b.colour_next);
+    launch(dev_, k_carry_colours_, nc, "carry_colours");
+    set_args(k_drop_conflicts_, contacts, nc, b.adjacency_offsets, b.adjacency, b.colour_next,
+             fresh_colours_, b.colour);
+    launch(dev_, k_drop_conflicts_, nc, "drop_colour_conflicts");
+  } else {
+    b.colour.fill(-1);
+  }
+  // jones-plassmann rounds until every contact has a colour
   int round = 0;
   for (int remaining = nc; remaining > 0;) {
     // a batch of rounds, each counting into its own status words, then one look at them all (one
@@ -471,6 +516,8 @@ void DemWorld::colour_contacts() {
   b.colour_start = b.colour_start_dev.download(TL_MAX_COLOURS + 1);
   while (b.colour_start.size() > 2 && b.colour_start[b.colour_start.size() - 2] == nc)
     b.colour_start.pop_back();
+  if (!carry) fresh_colours_ = static_cast<int>(b.colour_start.size()) - 1;
+  colours_made_ = true;
 }
 
 void DemWorld::prepare_rows() {
@@ -604,6 +651,11 @@ void DemWorld::end_step() {
     StageScope stage(dev_, "integration");
     store_impulses();
     integrate();
+    // this step's colours are what the next step's colouring carries, unless they have grown
+    colours_carried_ =
+        colours_made_ &&
+        carry_colours_after(static_cast<int>(buffers_.colour_start.size()) - 1, fresh_colours_);
+    if (colours_made_) buffers_.colour_previous.copy_from(buffers_.colour);
     buffers_.has_previous = true;
     buffers_.static_previous = true;
     buffers_.current = 1 - buffers_.current;

@@ -77,6 +77,9 @@ class DemWorld {
   const DemSettings& settings() const { return settings_; }
   DemSettings& settings() { return settings_; }
   const TlStepParams& params() const { return params_; }
+  // whether the next colouring carries last step's colours (DemBuffers::colour_previous)
+  bool carries_colours() const { return colours_carried_; }
+  int fresh_colours() const { return fresh_colours_; }
   const std::vector<StaticGeom>& geoms() const { return geoms_; }
 
   // the stages of step(), in order
@@ -90,7 +93,9 @@ class DemWorld {
   // contacts the buffers' adjacency and colouring were made for: then those are this step's too
   bool colouring_still_holds();
   void build_adjacency();
-  void colour_contacts();  // PGS: graph colouring; Jacobi: one colour in contact order
+  // PGS: graph colouring, carrying last step's colours to the contacts that persist (the same
+  // result however often it runs within a step); Jacobi: one colour in contact order
+  void colour_contacts();
   void prepare_rows();
   void apply_gravity();
   void warm_start();       // applies the rows' initial impulses to the bodies
@@ -136,6 +141,13 @@ class DemWorld {
   // before the first colouring and after a restored state, whose contacts came without them),
   // their count, the particle count and the sweep kind
   bool colouring_made_ = false;
+  // `colour` holds this step's PGS colours (false after a Jacobi colouring), and
+  // `colour_previous` last step's, which the next colouring carries (false until a PGS step has
+  // ended, after new particles, and after a restored state that saved none)
+  bool colours_made_ = false;
+  bool colours_carried_ = false;
+  // colours of the last colouring that carried none (carry_colours_after)
+  int fresh_colours_ = 0;
   int coloured_contacts_ = 0;
   size_t coloured_particles_ = 0;
   SweepKind coloured_sweep_ = SweepKind::Pgs;
@@ -144,7 +156,7 @@ class DemWorld {
   cl::Kernel k_contact_count_, k_contact_write_;
   cl::Kernel k_adj_count_, k_adj_fill_, k_adj_sort_;
   cl::Kernel k_colour_round_, k_colour_hist_, k_colour_scatter_, k_colour_ranges_, k_identity_,
-      k_pairs_differ_;
+      k_pairs_differ_, k_carry_colours_, k_drop_conflicts_;
   cl::Kernel k_prepare_, k_gravity_, k_apply_impulses_, k_store_, k_integrate_, k_residual_,
       k_sum_blocks_;
   cl::Kernel k_first_non_finite_;

@@ -1,22 +1,41 @@
 // Graph-coloured projected Gauss-Seidel: the colours are solved one after another, the rows of
 // one colour in parallel (they share no dynamic body, so the updates never race). Within a
 // contact the normal row goes first, then friction, then rolling (kernels/solver.cl).
+#include <algorithm>
+
 #include "solvers/contact_sweep.hpp"
 
 namespace talus {
 
 namespace {
 
+// the work-group of pgs_sweeps_one_group: as many work-items as the kernel allows on the
+// device, at most this many (a colour of a small system has tens to hundreds of rows)
+constexpr size_t kOneGroupSize = 256;
+
 class PgsSweep : public ContactSweep {
  public:
-  explicit PgsSweep(Device& dev) : dev_(dev) {
-    kernel_ = dev.kernel(dev.program(kSolverProgram), "pgs_colour");
+  PgsSweep(Device& dev, int one_group_rows) : dev_(dev), one_group_rows_(one_group_rows) {
+    const cl::Program& program = dev.program(kSolverProgram);
+    kernel_ = dev.kernel(program, "pgs_colour");
+    one_group_ = dev.kernel(program, "pgs_sweeps_one_group");
+    group_size_ =
+        std::min(kOneGroupSize, cl_checked("querying the sweep's work-group size", [&] {
+                   return one_group_.getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(dev.device());
+                 }));
   }
   const char* name() const override { return "pgs"; }
 
   void iterate(DemBuffers& b, int iterations) override {
-    // one launch per colour and sweep, all on the in-order queue without host waits
     int colours = static_cast<int>(b.colour_start.size()) - 1;
+    if (colours <= 0 || iterations <= 0) return;
+    // a small system: every sweep's colours in one launch, one work-group (the same bits)
+    if (b.colour_start.back() <= one_group_rows_) {
+      set_args(one_group_, b.rows, b.colour_start_dev, colours, iterations, b.velocity, b.omega);
+      launch_group(dev_, one_group_, group_size_, "pgs_sweeps_one_group");
+      return;
+    }
+    // one launch per colour and sweep, all on the in-order queue without host waits
     for (int it = 0; it < iterations; ++it) {
       for (int k = 0; k < colours; ++k) {
         int begin = b.colour_start[k];
@@ -30,12 +49,16 @@ class PgsSweep : public ContactSweep {
 
  private:
   Device& dev_;
-  cl::Kernel kernel_;
+  int one_group_rows_;
+  cl::Kernel kernel_, one_group_;
+  size_t group_size_ = 1;
 };
 
 }  // namespace
 
-std::unique_ptr<ContactSweep> make_pgs_sweep(Device& dev) { return std::make_unique<PgsSweep>(dev); }
+std::unique_ptr<ContactSweep> make_pgs_sweep(Device& dev, int one_group_rows) {
+  return std::make_unique<PgsSweep>(dev, one_group_rows);
+}
 
 std::unique_ptr<ContactSweep> make_sweep(SweepKind kind, Device& dev, int particles) {
   if (kind == SweepKind::Pgs) return make_pgs_sweep(dev);

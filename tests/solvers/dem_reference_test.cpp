@@ -373,14 +373,20 @@ TEST(ReferenceNarrowPhase, WarmStartCarriesImpulsesToTheSamePairs) {
     EXPECT_EQ(got[c].impulse_n, want.impulse_n) << "contact " << c;
     EXPECT_EQ(got[c].impulse_t, want.impulse_t) << "contact " << c;
     EXPECT_EQ(got[c].impulse_r, want.impulse_r) << "contact " << c;
+    EXPECT_EQ(got[c].previous, want.previous) << "contact " << c;
     (want.impulse_n != 0.0 || want.impulse_t != Vec3::Zero() ? carried : fresh)++;
   }
-  // every carried impulse is the one last step solved for this pair
+  // every carried impulse is the one last step solved for this pair, which `previous` names
   for (size_t c = 0; c < got.size(); ++c) {
     int a = got[c].a, bb = got[c].b;
     const ref::Contact* old = nullptr;
+    int old_index = -1;
     for (int k = previous.owner_offsets[a]; k < previous.owner_offsets[a + 1]; ++k)
-      if (previous.contacts[k].b == bb) old = &previous.contacts[k];
+      if (previous.contacts[k].b == bb) {
+        old = &previous.contacts[k];
+        old_index = k;
+      }
+    EXPECT_EQ(got[c].previous, old_index) << "contact " << c;
     if (old == nullptr) {
       EXPECT_EQ(got[c].impulse_n, 0.0) << "new contact " << c << " has an impulse";
     } else {
@@ -397,16 +403,18 @@ TEST(ReferenceNarrowPhase, WarmStartCarriesImpulsesToTheSamePairs) {
 
 // geometry renumbered between steps (DemWorld::set_geoms, GeomChange::Renumbered: the type-G
 // terrain's boxes): particle pairs carry last step's impulses, static contacts start from zero,
-// as the reference with match_static off
+// as the reference with match_static off; both still name the same pair of last step
+// (`previous`, what the colouring carries: a colour depends on the bodies alone)
 TEST(ReferenceNarrowPhase, RenumberedGeometryKeepsOnlyThePairsWarmStart) {
   const WarmStartCase w = warm_start_case(
       [](DemWorld& world) { world.set_geoms(world.geoms(), GeomChange::Renumbered); }, false);
   SCOPED_TRACE(w.seed_note);
   const std::vector<ref::Contact>& got = w.got;
-  int pairs_carried = 0, static_contacts = 0;
+  int pairs_carried = 0, static_contacts = 0, static_named = 0;
   for (size_t c = 0; c < got.size(); ++c) {
     if (got[c].b < 0) {
       ++static_contacts;
+      static_named += got[c].previous >= 0 ? 1 : 0;
       EXPECT_EQ(got[c].impulse_n, 0.0) << "static contact " << c << " kept an impulse";
       EXPECT_EQ(got[c].impulse_t, Vec3::Zero()) << "static contact " << c;
     }
@@ -414,10 +422,12 @@ TEST(ReferenceNarrowPhase, RenumberedGeometryKeepsOnlyThePairsWarmStart) {
     if (it == w.want_by_pair.end()) continue;
     EXPECT_EQ(got[c].impulse_n, it->second->impulse_n) << "contact " << c;
     EXPECT_EQ(got[c].impulse_t, it->second->impulse_t) << "contact " << c;
+    EXPECT_EQ(got[c].previous, it->second->previous) << "contact " << c;
     if (got[c].b >= 0 && got[c].impulse_n != 0.0) ++pairs_carried;
   }
   EXPECT_GT(pairs_carried, 0);
   EXPECT_GT(static_contacts, 0);
+  EXPECT_GT(static_named, 0) << "no static contact named its pair of last step";
   std::printf(
       "[ measured ] %zu contacts: %d pairs carried their impulses, %d static started at zero\n",
       got.size(), pairs_carried, static_contacts);
@@ -472,6 +482,73 @@ TEST(ReferenceColouring, MatchesExactlyAndIsValid) {
   expect_valid_colouring(contacts, want.order, want.row_of_contact, want.colour_start);
   std::printf("[ measured ] %d contacts: %zu colours in %d rounds\n", nc,
               want.colour_start.size() - 1, rounds);
+}
+
+// a world stepped twice carries its last step's colours to the contacts that persist; the
+// device's carried and final colours, rounds and partition must match the reference's exactly.
+// Last step's colours are also overwritten with random ones from a few colours, so that many
+// persisting neighbours carry the same colour and the guard against it (drop_colour_conflicts)
+// must act: it still ends in a valid colouring, equal to the reference's
+TEST(ReferenceColouring, CarriedColoursMatchExactlyAndAreValid) {
+  uint64_t seed = test::fresh_seed();
+  SCOPED_TRACE(test::seed_note(seed));
+  std::mt19937_64 rng(seed);
+  Scene s = test::random_scene(rng);
+  auto world = make_world(s);
+  world->step();
+  world->step();
+  ASSERT_TRUE(world->carries_colours());
+  DemBuffers& b = world->buffers();
+  const int previous_count = b.n_contacts;
+  for (bool scrambled : {false, true}) {
+    SCOPED_TRACE(scrambled ? "random colours carried" : "last step's colours carried");
+    std::vector<int> previous_colours = b.colour_previous.download(previous_count);
+    if (scrambled) {
+      for (int& k : previous_colours) k = static_cast<int>(rng() % 4);
+      b.colour_previous.upload(previous_colours);
+    }
+    world->broad_phase();
+    world->narrow_phase();
+    world->build_adjacency();
+    world->colour_contacts();
+    std::vector<ref::Contact> contacts = current_contacts(*world);
+    const int nc = static_cast<int>(contacts.size());
+    ASSERT_GT(nc, 0);
+    ref::Adjacency adjacency = ref::adjacency(contacts, static_cast<int>(world->size()));
+    std::vector<int> start =
+        ref::carried_colours(contacts, adjacency, previous_colours, world->fresh_colours());
+    int carried = 0, persisting = 0, below_cap = 0;
+    for (int c = 0; c < nc; ++c) {
+      persisting += contacts[c].previous >= 0 ? 1 : 0;
+      below_cap += contacts[c].previous >= 0 &&
+                           previous_colours[contacts[c].previous] < world->fresh_colours()
+                       ? 1
+                       : 0;
+      carried += start[c] >= 0 ? 1 : 0;
+    }
+    int rounds = 0;
+    std::vector<int> colours = ref::colour_contacts(contacts, adjacency, &rounds, start);
+    ref::Partition want = ref::partition_by_colour(colours);
+    EXPECT_EQ(b.colour.download(nc), colours);
+    EXPECT_EQ(b.colour_rounds, rounds);
+    EXPECT_EQ(b.order.download(nc), want.order);
+    EXPECT_EQ(b.row_of_contact.download(nc), want.row_of_contact);
+    EXPECT_EQ(b.colour_start, want.colour_start);
+    expect_valid_colouring(contacts, want.order, want.row_of_contact, want.colour_start);
+    // most contacts persist from one step to the next and keep a colour below the cap; the
+    // guard drops colours only when the carried ones clash (four colours on a particle's eight
+    // or more contacts must)
+    EXPECT_GT(persisting, nc / 2);
+    if (scrambled)
+      EXPECT_LT(carried, below_cap) << "no carried colour was dropped";
+    else
+      EXPECT_EQ(carried, below_cap) << "a valid colouring lost a colour in the carry";
+    std::printf(
+        "[ measured ] %d contacts, %d persist, %d below the cap of %d colours, %d keep "
+        "their colour; %zu colours in %d rounds\n",
+        nc, persisting, below_cap, world->fresh_colours(), carried, want.colour_start.size() - 1,
+        rounds);
+  }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -783,6 +860,10 @@ void five_steps(SweepKind sweep) {
         synced.previous.contacts = contacts_of(*world, 1 - b.current);
         synced.previous.owner_offsets = b.owner_offsets[1 - b.current].download(world->size() + 1);
       }
+      synced.colours_carried = world->carries_colours();
+      synced.fresh_colours = world->fresh_colours();
+      if (synced.colours_carried)
+        synced.previous_colours = b.colour_previous.download(b.n_contacts);
       world->step();
       ref::step(synced);
       ref::step(free);

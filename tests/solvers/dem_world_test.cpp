@@ -117,8 +117,10 @@ TEST(DemWorld, TwoRunsAreBitIdentical) {
 }
 
 // a bed that comes to rest pairs the same bodies step after step, and DemWorld keeps their
-// colouring then: a world that colours afresh every step (its stages called by hand) must end
-// with the same bytes, and the first world must have kept the colouring in most steps at rest
+// colouring then: a world that colours afresh every step (its stages called by hand; a colouring
+// redone within a step carries the same colours) must end with the same bytes, and the first
+// world must have kept the colouring in many steps, so that the keep is what was compared (148
+// of 600 with the carried colours, 2026-11-27: pairs at the margin flicker)
 TEST(DemWorld, AColouringKeptWhileThePairsHoldGivesTheBitsOfAFreshOne) {
   Device dev;
   Scene scene = small_bed();
@@ -143,7 +145,7 @@ TEST(DemWorld, AColouringKeptWhileThePairsHoldGivesTheBitsOfAFreshOne) {
     fresh.end_step();
   }
   std::printf("[ measured ] colouring kept in %d of %d steps\n", kept_steps, steps);
-  EXPECT_GT(kept_steps, steps / 4);
+  EXPECT_GT(kept_steps, steps / 10);
   const size_t n = scene.particles.size();
   for (auto buffer : {&DemBuffers::position, &DemBuffers::velocity, &DemBuffers::omega}) {
     const auto a = (kept.buffers().*buffer).download(n);
@@ -221,6 +223,57 @@ TEST(DemWorld, AKeptColouringIsDroppedAfterARestoreAndASweepChange) {
     fresh_step();
   }
   same("after the sweep changes");
+}
+
+// a state saved between two steps holds last step's contact colours, which the next colouring
+// carries: a world restored from it steps on with the bytes of the world that saved it (without
+// the colours it colours afresh and parts from it within a step). A colour no kernel can index
+// is refused as corrupt, and the world that refused it is left as it was
+TEST(DemWorld, ARestoredWorldCarriesTheSavedColoursAndStepsOnBitForBit) {
+  Device dev;
+  Scene scene = small_bed();
+  scene.settings.dt = 5e-4;
+  DemWorld saver(dev, scene.material, scene.settings, scene.bounds, scene.geoms);
+  DemWorld restored(dev, scene.material, scene.settings, scene.bounds, scene.geoms);
+  saver.set_particles(scene.particles);
+  restored.set_particles(scene.particles);
+  // the bed falling and loading (pairs come and go: colours are carried and new ones made)
+  for (int i = 0; i < 150; ++i) saver.step();
+  ASSERT_TRUE(saver.carries_colours());
+  ByteWriter saved;
+  saver.save_state(saved);
+  ByteReader reader(saved.bytes(), saved.bytes().size(), "the test's saved state", "");
+  restored.restore_state(reader);
+  EXPECT_TRUE(restored.carries_colours());
+  const size_t n = scene.particles.size();
+  int kept = 0;
+  for (int i = 0; i < 100; ++i) {
+    saver.step();
+    restored.step();
+    kept += saver.stats().colouring_kept ? 1 : 0;
+    ASSERT_EQ(saver.stats().colours, restored.stats().colours) << "step " << i;
+  }
+  std::printf("[ measured ] the saving world kept its colouring in %d of 100 steps\n", kept);
+  EXPECT_LT(kept, 100) << "every step kept: nothing was carried";
+  for (auto buffer : {&DemBuffers::position, &DemBuffers::velocity, &DemBuffers::omega}) {
+    const auto a = (saver.buffers().*buffer).download(n);
+    const auto b = (restored.buffers().*buffer).download(n);
+    EXPECT_EQ(0, std::memcmp(a.data(), b.data(), n * sizeof(a[0])));
+  }
+  // the last colour written is the state's last word: one the kernels cannot index
+  std::string bad = saved.bytes();
+  const std::int32_t colour = TL_MAX_COLOURS;
+  std::memcpy(&bad[bad.size() - sizeof(colour)], &colour, sizeof(colour));
+  const auto before = restored.buffers().position.download(n);
+  ByteReader corrupt(bad, bad.size(), "the test's corrupt state", "");
+  try {
+    restored.restore_state(corrupt);
+    FAIL() << "expected an InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("colours do not fit"), std::string::npos) << e.what();
+  }
+  const auto after = restored.buffers().position.download(n);
+  EXPECT_EQ(0, std::memcmp(before.data(), after.data(), n * sizeof(before[0])));
 }
 
 // kernels/colouring.cl contact_pairs_differ against the host's comparison, on fresh random
