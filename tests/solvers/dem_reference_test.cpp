@@ -32,6 +32,20 @@ std::unique_ptr<DemWorld> make_world(const Scene& s) {
   return world;
 }
 
+// a device world of a random scene from a fresh seed (the caller traces `seed_note`), and the
+// generator for whatever else the test draws
+struct RandomWorld {
+  std::string seed_note;
+  std::mt19937_64 rng;
+  std::unique_ptr<DemWorld> world;
+};
+RandomWorld random_world() {
+  const uint64_t seed = test::fresh_seed();
+  RandomWorld out{test::seed_note(seed), std::mt19937_64(seed), nullptr};
+  out.world = make_world(test::random_scene(out.rng));
+  return out;
+}
+
 // the device's inputs, read back (float values, so the reference sees exactly the same)
 ref::StepParams params_of(const DemWorld& w) { return ref::from_device(w.params()); }
 
@@ -437,11 +451,9 @@ TEST(ReferenceNarrowPhase, RenumberedGeometryKeepsOnlyThePairsWarmStart) {
 // adjacency and colouring
 
 TEST(ReferenceAdjacency, MatchesExactly) {
-  uint64_t seed = test::fresh_seed();
-  SCOPED_TRACE(test::seed_note(seed));
-  std::mt19937_64 rng(seed);
-  Scene s = test::random_scene(rng);
-  auto world = make_world(s);
+  RandomWorld r = random_world();
+  SCOPED_TRACE(r.seed_note);
+  auto& world = r.world;
   world->broad_phase();
   world->narrow_phase();
   world->build_adjacency();
@@ -453,11 +465,9 @@ TEST(ReferenceAdjacency, MatchesExactly) {
 }
 
 TEST(ReferenceColouring, MatchesExactlyAndIsValid) {
-  uint64_t seed = test::fresh_seed();
-  SCOPED_TRACE(test::seed_note(seed));
-  std::mt19937_64 rng(seed);
-  Scene s = test::random_scene(rng);
-  auto world = make_world(s);
+  RandomWorld r = random_world();
+  SCOPED_TRACE(r.seed_note);
+  auto& world = r.world;
   world->broad_phase();
   world->narrow_phase();
   world->build_adjacency();
@@ -490,11 +500,9 @@ TEST(ReferenceColouring, MatchesExactlyAndIsValid) {
 // persisting neighbours carry the same colour and the guard against it (drop_colour_conflicts)
 // must act: it still ends in a valid colouring, equal to the reference's
 TEST(ReferenceColouring, CarriedColoursMatchExactlyAndAreValid) {
-  uint64_t seed = test::fresh_seed();
-  SCOPED_TRACE(test::seed_note(seed));
-  std::mt19937_64 rng(seed);
-  Scene s = test::random_scene(rng);
-  auto world = make_world(s);
+  RandomWorld r = random_world();
+  SCOPED_TRACE(r.seed_note);
+  auto& world = r.world;
   world->step();
   world->step();
   ASSERT_TRUE(world->carries_colours());
@@ -504,7 +512,7 @@ TEST(ReferenceColouring, CarriedColoursMatchExactlyAndAreValid) {
     SCOPED_TRACE(scrambled ? "random colours carried" : "last step's colours carried");
     std::vector<int> previous_colours = b.colour_previous.download(previous_count);
     if (scrambled) {
-      for (int& k : previous_colours) k = static_cast<int>(rng() % 4);
+      for (int& k : previous_colours) k = static_cast<int>(r.rng() % 4);
       b.colour_previous.upload(previous_colours);
     }
     world->broad_phase();
