@@ -211,6 +211,71 @@ void DemWorld::set_particles(const Particles& in) {
   update_params();
 }
 
+void DemWorld::renumber_particles(const Particles& in, const std::vector<int>& new_index_of_old) {
+  DemBuffers& b = buffers_;
+  const size_t old_count = particle_count_;
+  // survivors numbered 0, 1, 2, ... in their old order (so each contact's owner stays its lower
+  // index and the lists stay grouped as the narrow phase groups them), within the new particles
+  int next = 0;
+  for (int k : new_index_of_old) {
+    if (k < 0) continue;
+    if (k != next)
+      throw Error(
+          "DemWorld::renumber_particles: the surviving particles must keep their order and "
+          "come first (old particle renumbered " +
+          std::to_string(k) + ", expected " + std::to_string(next) + ")");
+    ++next;
+  }
+  if (new_index_of_old.size() != old_count || static_cast<size_t>(next) > in.size())
+    throw Error("DemWorld::renumber_particles: the numbering covers " +
+                std::to_string(new_index_of_old.size()) + " particles with " +
+                std::to_string(next) + " survivors, the world holds " + std::to_string(old_count) +
+                " and is given " + std::to_string(in.size()));
+  // last step's contacts, their owners' offsets and their colours, read before the replacement
+  const bool had_previous = b.has_previous && old_count > 0;
+  const bool carried = colours_carried_;
+  const int fresh = fresh_colours_;
+  const int prev = 1 - b.current;
+  std::vector<int> offsets;
+  std::vector<TlContact> contacts;
+  std::vector<int> colours;
+  if (had_previous) {
+    offsets = b.owner_offsets[prev].download(old_count + 1);
+    if (b.n_contacts > 0) contacts = b.contacts[prev].download(b.n_contacts);
+    if (carried && b.n_contacts > 0) colours = b.colour_previous.download(b.n_contacts);
+  }
+  set_particles(in);
+  if (!had_previous) return;
+  // the contacts between survivors, renumbered, in the same order; new particles own none
+  std::vector<int> kept_offsets(in.size() + 1, 0);
+  std::vector<TlContact> kept;
+  std::vector<int> kept_colours;
+  for (size_t a = 0; a < old_count; ++a) {
+    const int owner = new_index_of_old[a];
+    if (owner < 0) continue;
+    for (int k = offsets[a]; k < offsets[a + 1]; ++k) {
+      TlContact c = contacts[k];
+      if (c.b >= 0 && new_index_of_old[c.b] < 0) continue;
+      if (c.b >= 0) c.b = new_index_of_old[c.b];
+      c.a = owner;
+      kept.push_back(c);
+      if (carried) kept_colours.push_back(colours[k]);
+    }
+    kept_offsets[owner + 1] = static_cast<int>(kept.size());
+  }
+  for (size_t i = static_cast<size_t>(next) + 1; i < kept_offsets.size(); ++i)
+    kept_offsets[i] = static_cast<int>(kept.size());
+  b.owner_offsets[prev].upload(kept_offsets);
+  if (!kept.empty()) b.contacts[prev].upload(kept);
+  if (carried && !kept_colours.empty()) b.colour_previous.upload(kept_colours);
+  b.n_contacts = static_cast<int>(kept.size());
+  b.has_previous = true;
+  colours_carried_ = carried;
+  fresh_colours_ = fresh;
+  // the partition of last step's rows belongs to the old numbering: the next step makes its own
+  colouring_made_ = false;
+}
+
 Particles DemWorld::particles() const {
   Particles out;
   auto x = buffers_.position.download(particle_count_);

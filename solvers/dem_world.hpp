@@ -44,6 +44,12 @@ class DemWorld {
 
   // replaces the particles (contacts start fresh: no warm start on the next step)
   void set_particles(const Particles& particles);
+  // replaces the particles with some of them renumbered, the rest removed and new ones added:
+  // new_index_of_old[k] is old particle k's index in `particles`, -1 if it is gone. The survivors
+  // must keep their order and come first (new particles after them), as the type-G terrain's merge
+  // and spawn leave them. Last step's contacts between survivors keep their impulses and colours
+  // for the next step's warm start and colouring; Error if the numbering is not such a one
+  void renumber_particles(const Particles& particles, const std::vector<int>& new_index_of_old);
   // the state between two steps, for a saved state (digging/saved_state): the particles as the
   // device holds them (float bit for bit), last step's contacts with their impulses (the next
   // warm start), the largest radius and the clock. restore_state reads it into a world made with

@@ -182,10 +182,13 @@ void MultiscaleTerrain::step(const KinematicBucket& bucket) {
 
   // 2. particles from the pool; 4. resting particles back (on the state the last step left)
   stage.emplace(dev, "spawn_merge");
-  last_.merged = merge(particles, bucket);
+  std::vector<int> new_index_of_old;
+  last_.merged = merge(particles, bucket, &new_index_of_old);
   last_.spawned = spawn(particles, columns, pose);
   if (last_.merged > 0 || last_.spawned > 0) {
-    dem_->set_particles(particles);
+    // the pairs of the particles that stay keep their warm start and colours (until 2026-11-27
+    // every contact started from zero at a step that merged or spawned any particle)
+    dem_->renumber_particles(particles, new_index_of_old);
     tools_->forget_contacts();
   }
 
@@ -220,7 +223,9 @@ void MultiscaleTerrain::step(const KinematicBucket& bucket) {
   time_ += level_.dt;
 }
 
-int MultiscaleTerrain::merge(Particles& particles, const KinematicBucket& bucket) {
+int MultiscaleTerrain::merge(Particles& particles, const KinematicBucket& bucket,
+                             std::vector<int>* new_index_of_old) {
+  new_index_of_old->assign(particles.size(), -1);
   // the bucket's box, grown by the margin in which nothing merges
   Aabb keep = bucket_scene_.world_bounds(pose_of(bucket));
   keep.lo -= Vec3::Constant(options_.no_merge_margin);
@@ -250,6 +255,7 @@ int MultiscaleTerrain::merge(Particles& particles, const KinematicBucket& bucket
       ++merged;
       continue;
     }
+    (*new_index_of_old)[k] = static_cast<int>(kept.size());
     kept.push_back(k);
     kept_mass.push_back(ledger_[k]);
   }

@@ -132,8 +132,11 @@ class MultiscaleTerrain {
   // step 2: particles from the pool in the excavated cells; returns how many
   int spawn(Particles& particles, const std::vector<ExcavatedColumn>& columns,
             const BucketPose& pose);
-  // step 4: resting particles back into the voxels; returns how many
-  int merge(Particles& particles, const KinematicBucket& bucket);
+  // step 4: resting particles back into the voxels; returns how many, and each old particle's
+  // new index (-1 merged) in `new_index_of_old` (the survivors keep their order, as
+  // DemWorld::renumber_particles needs; spawn then appends)
+  int merge(Particles& particles, const KinematicBucket& bucket,
+            std::vector<int>* new_index_of_old);
   // step 1's zone: predicted from the bucket's edges on the soil's surface under `particles`
   ActiveZone zone_for(const KinematicBucket& bucket, const Particles& particles) const;
   // the host copy of the device's particles that every reader uses (empty without particles)

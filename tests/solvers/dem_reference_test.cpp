@@ -559,6 +559,83 @@ TEST(ReferenceColouring, CarriedColoursMatchExactlyAndAreValid) {
   }
 }
 
+// particles removed and added between two steps (DemWorld::renumber_particles: the type-G
+// terrain's merge and spawn): a pair of two survivors keeps last step's impulses under its new
+// numbers, a new particle's contacts start from zero, and the colouring carries the survivors'
+// colours, exactly as the reference does from the renumbered lists
+TEST(ReferenceColouring, RenumberedParticlesKeepTheirPairsWarmStartAndColours) {
+  RandomWorld r = random_world();
+  SCOPED_TRACE(r.seed_note);
+  DemWorld& world = *r.world;
+  world.step();
+  world.step();
+  ASSERT_TRUE(world.carries_colours());
+  const DemBuffers& b = world.buffers();
+  // last step's pairs and their impulses, by the old numbers
+  std::map<std::pair<int, int>, ref::Contact> before;
+  for (const ref::Contact& c : contacts_of(world, 1 - b.current)) before[{c.a, c.b}] = c;
+  // every fifth particle merged away; two of them come back as new particles at the end
+  Particles old = world.particles();
+  std::vector<int> new_index_of_old(old.size(), -1);
+  std::vector<size_t> kept, gone;
+  for (size_t k = 0; k < old.size(); ++k) (k % 5 == 2 ? gone : kept).push_back(k);
+  for (size_t j = 0; j < kept.size(); ++j) new_index_of_old[kept[j]] = static_cast<int>(j);
+  Particles now = old.permuted(kept);
+  std::vector<int> old_of_new(kept.begin(), kept.end());
+  for (size_t k : {gone[0], gone[1]}) {
+    now.add(old.position[k], old.radius[k],
+            1.0 / (old.inv_mass[k] * 4.0 / 3.0 * M_PI * std::pow(old.radius[k], 3)));
+    old_of_new.push_back(-1);
+  }
+  world.renumber_particles(now, new_index_of_old);
+  ASSERT_TRUE(world.carries_colours());
+  world.broad_phase();
+  world.narrow_phase();
+  // impulses: a survivors' pair of last step carries its own; any other contact starts at zero
+  const std::vector<ref::Contact> got = current_contacts(world);
+  int carried = 0, fresh = 0;
+  for (size_t c = 0; c < got.size(); ++c) {
+    const int a = old_of_new[got[c].a];
+    const int bb = got[c].b >= 0 ? old_of_new[got[c].b] : got[c].b;
+    const auto it = a >= 0 && (got[c].b < 0 || bb >= 0) ? before.find({a, bb}) : before.end();
+    if (it == before.end()) {
+      EXPECT_EQ(got[c].impulse_n, 0.0) << "contact " << c << " is new";
+      EXPECT_EQ(got[c].previous, -1) << "contact " << c << " is new";
+      ++fresh;
+    } else {
+      EXPECT_EQ(got[c].impulse_n, it->second.impulse_n) << "contact " << c;
+      EXPECT_EQ(got[c].impulse_t, it->second.impulse_t) << "contact " << c;
+      EXPECT_GE(got[c].previous, 0) << "contact " << c;
+      ++carried;
+    }
+  }
+  EXPECT_GT(carried, static_cast<int>(got.size()) / 3);
+  EXPECT_GT(fresh, 0);
+  // colours: the device's against the reference's from the renumbered colours
+  world.build_adjacency();
+  world.colour_contacts();
+  const int nc = static_cast<int>(got.size());
+  const std::vector<int> previous_colours = b.colour_previous.download(b.n_contacts);
+  ref::Adjacency adjacency = ref::adjacency(got, static_cast<int>(world.size()));
+  int rounds = 0;
+  const std::vector<int> colours = ref::colour_contacts(
+      got, adjacency, &rounds,
+      ref::carried_colours(got, adjacency, previous_colours, world.fresh_colours()));
+  const ref::Partition want = ref::partition_by_colour(colours);
+  EXPECT_EQ(b.colour.download(nc), colours);
+  EXPECT_EQ(b.order.download(nc), want.order);
+  expect_valid_colouring(got, want.order, want.row_of_contact, want.colour_start);
+  std::printf(
+      "[ measured ] %zu particles (%zu merged, 2 new): %d contacts kept their impulses, %d "
+      "started at zero; %zu colours in %d rounds\n",
+      now.size(), gone.size(), carried, fresh, want.colour_start.size() - 1, rounds);
+  // a numbering whose survivors change order is refused
+  std::vector<int> swapped(now.size(), -1);
+  for (size_t k = 0; k < swapped.size(); ++k) swapped[k] = static_cast<int>(k);
+  std::swap(swapped[0], swapped[1]);
+  EXPECT_THROW(world.renumber_particles(now, swapped), Error);
+}
+
 // ---------------------------------------------------------------------------------------------
 // rows, gravity and warm start
 
