@@ -62,8 +62,21 @@ ToolWorld::ToolWorld(Device& dev, DemWorld& dem, std::vector<Tool> tools, const 
 
 ToolWorld::~ToolWorld() = default;
 
-void ToolWorld::forget_contacts() {
-  for (auto& side : sides_) side->previous.clear();
+void ToolWorld::renumber_particles(const std::vector<int>& new_index_of_old) {
+  // a monotone numbering keeps each list sorted by particle, as the matching needs
+  for (auto& side : sides_) {
+    std::vector<BucketImpulse> kept;
+    for (BucketImpulse impulse : side->previous) {
+      const int index =
+          impulse.particle >= 0 && static_cast<size_t>(impulse.particle) < new_index_of_old.size()
+              ? new_index_of_old[impulse.particle]
+              : -1;
+      if (index < 0) continue;
+      impulse.particle = index;
+      kept.push_back(impulse);
+    }
+    side->previous = std::move(kept);
+  }
 }
 
 void ToolWorld::save_state(ByteWriter& w) const {

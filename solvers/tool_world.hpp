@@ -68,9 +68,10 @@ class ToolWorld {
   // one particle step with the tools' rows solved inside every sweep, then both sides move
   void step();
 
-  // drops the tools' memory of last step's contact impulses: after DemWorld::set_particles has
-  // renumbered the particles, a warm start by particle index would hand impulses to strangers
-  void forget_contacts();
+  // the tools' memory of last step's contact impulses follows the particles' renumbering
+  // (DemWorld::renumber_particles: new_index_of_old[k] is particle k's new index, -1 if gone, the
+  // survivors in their order), so the survivors' tool contacts keep their warm start
+  void renumber_particles(const std::vector<int>& new_index_of_old);
 
   // the state a step carries to the next (digging/saved_state): per tool its pose and twist (a
   // loaded tool moves itself), last step's contact impulses (the warm start) and load.

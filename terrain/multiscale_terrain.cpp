@@ -186,10 +186,11 @@ void MultiscaleTerrain::step(const KinematicBucket& bucket) {
   last_.merged = merge(particles, bucket, &new_index_of_old);
   last_.spawned = spawn(particles, columns, pose);
   if (last_.merged > 0 || last_.spawned > 0) {
-    // the pairs of the particles that stay keep their warm start and colours (until 2026-11-27
-    // every contact started from zero at a step that merged or spawned any particle)
+    // the pairs of the particles that stay, and their contacts with the bucket, keep their warm
+    // start (and colours) (until 2026-11-27 every contact started from zero at a step that merged
+    // or spawned any particle)
     dem_->renumber_particles(particles, new_index_of_old);
-    tools_->forget_contacts();
+    tools_->renumber_particles(new_index_of_old);
   }
 
   // 3. one DEM step with the bucket kinematic, on the voxel surface near the particles
