@@ -358,10 +358,11 @@ void DemWorld::restore_state(ByteReader& r, bool any_count) {
       throw InputError(r.where() + ": the saved contacts do not match their offsets (corrupt)");
     // one colour per contact, each a colour the kernels can index
     carried = r.u8("particle contact colours") != 0;
-    fresh_colours = static_cast<int>(r.u32("particle contact colours"));
-    if (fresh_colours > TL_MAX_COLOURS)
-      throw InputError(r.where() + ": the saved colour count " + std::to_string(fresh_colours) +
+    const std::uint32_t fresh_count = r.u32("particle contact colours");
+    if (fresh_count > TL_MAX_COLOURS)
+      throw InputError(r.where() + ": the saved colour count " + std::to_string(fresh_count) +
                        " is more than the colouring can make (corrupt)");
+    fresh_colours = static_cast<int>(fresh_count);
     if (carried) {
       colours = read_words<int>(r, "particle contact colours");
       bool fits = colours.size() == contacts.size();
