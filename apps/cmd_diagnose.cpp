@@ -32,6 +32,7 @@ constexpr const char* kDiagnosisFile = "diagnosis.json";
 struct DiagnoseArgs {
   std::vector<std::string> data;
   std::vector<std::string> plugins;
+  std::vector<std::string> candidates;
   std::string fidelity = "D400";
   std::string json, out;
   int max_effects = 2;
@@ -55,6 +56,7 @@ void diagnose_command(const DiagnoseArgs& a) {
   options.max_effects = a.max_effects;
   options.validation_runs = a.validation;
   options.plugins = vehicle::load_effect_plugins(a.plugins);
+  options.candidates = a.candidates;
   options.discover = a.discover;
   options.threads = a.threads;
   check_output_file(a.json, "--json");
@@ -125,6 +127,11 @@ void add_diagnose_command(CLI::App& app) {
       ->check(non_negative_number());
   cmd->add_option("--effect-plugin", a->plugins, "a shared library whose effects join the candidates (repeatable)")
       ->expected(1)->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  cmd->add_option("--candidates", a->candidates,
+                  "search only these candidate effects, by label (comma-separated: "
+                  "engine_power_sharing,sensor_bias[f_lift]; docs/sim2real.md); default: all")
+      ->delimiter(',')
+      ->expected(1, -1);
   cmd->add_option("--pile-seed", a->pile_seed, "random seed of the simulated pile's particles")->capture_default_str();
   cmd->add_option(
          "--pile-ensemble", a->pile_ensemble,

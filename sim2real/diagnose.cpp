@@ -232,6 +232,21 @@ std::vector<Candidate> candidate_set(const vehicle::EffectPlugins& plugins) {
   return out;
 }
 
+std::vector<Candidate> chosen_candidates(const std::vector<Candidate>& all, const std::vector<std::string>& labels) {
+  if (labels.empty()) return all;
+  for (const auto& label : labels) {
+    if (std::none_of(all.begin(), all.end(), [&](const Candidate& c) { return c.label() == label; })) {
+      std::string known;
+      for (const auto& c : all) known += (known.empty() ? "" : ", ") + c.label();
+      throw InputError("--candidates: no candidate effect is labelled '" + label + "'; fix: name one of " + known);
+    }
+  }
+  std::vector<Candidate> out;
+  for (const auto& c : all)
+    if (std::find(labels.begin(), labels.end(), c.label()) != labels.end()) out.push_back(c);
+  return out;
+}
+
 int SensitivityJudgement::simulations() const {
   int sum = curvature_simulations;
   for (const auto& r : runs) sum += r.simulations;
@@ -1208,12 +1223,13 @@ class Search {
 Diagnosis diagnose(const std::vector<MeasuredRun>& runs, const DiagnoseOptions& options, Device* device,
                    const std::function<void(const std::string&)>& note) {
   if (runs.empty()) throw InputError("diagnose: no measured runs; give one or more run folders with --data");
+  // the candidates checked before anything is simulated
+  const std::vector<Candidate> candidates = chosen_candidates(candidate_set(options.plugins), options.candidates);
   const auto start = std::chrono::steady_clock::now();
   // the replays and the baseline
   Search search(runs, options, device, note);
   search.baseline();
   // rounds: one effect more each, while some run keeps an excess beyond noise
-  const std::vector<Candidate> candidates = candidate_set(options.plugins);
   for (int round = 0; round < options.max_effects && search.worst_run() >= kSignificantExcess; ++round) {
     if (!search.round(round + 1, candidates)) break;
     // what is left judged against the simulation's sensitivity to what was fitted
@@ -1225,6 +1241,7 @@ Diagnosis diagnose(const std::vector<MeasuredRun>& runs, const DiagnoseOptions& 
   }
   // the model with what was found, against the data
   Diagnosis d = search.finish();
+  for (const auto& c : candidates) d.candidates.push_back(c.label());
   d.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return d;
 }
@@ -1377,6 +1394,7 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
   for (const auto& c : d.discovery_tried) tried.push_back(correction_json(c));
   return {
       {"effects_found", found},
+      {"candidates", d.candidates},
       {"discovered", discovered},
       {"discovery", {{"ran", d.discovery_ran}, {"tried", tried}}},
       {"error_before", table_json(d.error_before)},

@@ -104,6 +104,9 @@ struct Candidate {
 
 // the built-in effects, channel-bound ones once per channel, then every effect of the plug-ins
 std::vector<Candidate> candidate_set(const vehicle::EffectPlugins& plugins);
+// those of `all` whose labels `labels` names, in `all`'s order (all of them for no labels);
+// InputError naming --candidates and the labels there are for one that names none
+std::vector<Candidate> chosen_candidates(const std::vector<Candidate>& all, const std::vector<std::string>& labels);
 
 // the coarse scan's points of a candidate in its box normalised to [0, 1] per parameter (step 2
 // above): what a parameter's normalised value means is make_candidate's mapping, linear, or
@@ -118,6 +121,10 @@ struct DiagnoseOptions {
   // when there are two or more runs; with one run the fit is validated on the run it was fitted to
   int validation_runs = -1;
   vehicle::EffectPlugins plugins;  // their effects join the candidates
+  // the candidates to search, by label ("engine_power_sharing", "sensor_bias[f_lift]"); empty:
+  // every built-in and plug-in effect. For a recovery where the effect's form is known or
+  // suspected, and for a loop that would otherwise cost hours of pile digs
+  std::vector<std::string> candidates;
   // run the discovery even when the candidates leave nothing beyond noise
   bool discover = false;
   // simulations of the machine alone run at once (0: the host's hardware threads); runs on a pile
@@ -208,6 +215,7 @@ struct Diagnosis {
   std::vector<Run> simulated_before, simulated_after;
   std::vector<TableRow> error_before, error_after;            // per run (paper's seven metrics)
   std::vector<DiagnosisRound> rounds;
+  std::vector<std::string> candidates;    // the labels searched (DiagnoseOptions::candidates)
   std::vector<FittedEffect> found;        // the effects added, in order
   double excess_before = 0.0, excess_after = 0.0;  // mean per run, all runs
   bool unexplained = false;               // some run keeps an excess beyond noise

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "host/error.hpp"
 #include "tests/sim2real/synthetic_runs.hpp"
 
 namespace talus::sim2real {
@@ -32,6 +33,28 @@ TEST(Diagnose, CandidatesExpandChannelOptionsAndCarrySignatures) {
   ASSERT_NE(find("soil_cohesion"), candidates.end());
   EXPECT_TRUE(find("soil_cohesion")->needs_particles);  // screened out of runs without a pile
   EXPECT_FALSE(find("hydraulic_lag")->needs_particles);
+}
+
+TEST(Diagnose, ChosenCandidatesKeepTheSetsOrderAndRefuseUnknownLabels) {
+  const auto all = candidate_set({});
+  EXPECT_EQ(chosen_candidates(all, {}).size(), all.size());  // none named: every candidate
+  // named out of order: kept in the set's order, channel-bound ones by their full label
+  const auto chosen = chosen_candidates(all, {"soil_cohesion", "sensor_bias[f_lift]", "engine_power_sharing"});
+  ASSERT_EQ(chosen.size(), 3u);
+  EXPECT_EQ(chosen[0].label(), "engine_power_sharing");
+  EXPECT_EQ(chosen[1].label(), "sensor_bias[f_lift]");
+  EXPECT_EQ(chosen[2].label(), "soil_cohesion");
+  EXPECT_FALSE(chosen[1].signature.empty());  // the candidate itself, not a copy without its signature
+  // a label that names nothing: one error naming the option, the label and the labels there are
+  try {
+    chosen_candidates(all, {"engine_power_sharing", "sensor_bias"});
+    FAIL() << "an unknown label was accepted";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("--candidates"), std::string::npos) << what;
+    EXPECT_NE(what.find("'sensor_bias'"), std::string::npos) << what;
+    EXPECT_NE(what.find("sensor_bias[f_lift]"), std::string::npos) << what;
+  }
 }
 
 TEST(Diagnose, ScanReachesNearZeroOnRangesFromZero) {
@@ -112,8 +135,10 @@ TEST(Diagnose, JsonHasTheIssuesFields) {
   f.candidate = {"hydraulic_lag", "", {}};
   f.effect = {{"name", "hydraulic_lag"}, {"params", {{"time_constant", 0.3}}}};
   d.found.push_back(f);
+  d.candidates = {"hydraulic_lag", "soil_cohesion"};
   const auto j = diagnosis_json(d);
   ASSERT_EQ(j["effects_found"].size(), 1u);
+  EXPECT_EQ(j["candidates"], nlohmann::json({"hydraulic_lag", "soil_cohesion"}));
   EXPECT_EQ(j["effects_found"][0]["name"], "hydraulic_lag");
   EXPECT_DOUBLE_EQ(j["effects_found"][0]["params"]["time_constant"].get<double>(), 0.3);
   for (const char* key : {"E_x", "E_v", "E_tr", "E_l", "E_t", "E_M", "E_W", "mean"}) {
