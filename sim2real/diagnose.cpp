@@ -8,6 +8,7 @@
 #include <bitset>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <cstdio>
 #include <exception>
 #include <memory>
@@ -256,16 +257,30 @@ int SensitivityJudgement::simulations() const {
 TableRow mean_row(const std::vector<TableRow>& rows, const std::string& name) {
   TableRow m;
   m.name = name;
+  // each column's mean over the runs where it is defined (an empty measured bucket leaves E_M
+  // undefined: sim2real/metrics.hpp loaded_mass_error)
   std::array<double, 7> sum{};
+  std::array<int, 7> defined{};
   for (const auto& r : rows) {
     const auto a = r.e.as_array();
-    for (std::size_t i = 0; i < 7; ++i) sum[i] += std::abs(a[i]);
+    for (std::size_t i = 0; i < 7; ++i) {
+      if (std::isnan(a[i])) continue;
+      sum[i] += std::abs(a[i]);
+      ++defined[i];
+    }
   }
-  const double n = rows.empty() ? 1.0 : double(rows.size());
-  m.e = {sum[0] / n, sum[1] / n, sum[2] / n, sum[3] / n, sum[4] / n, sum[5] / n, sum[6] / n};
+  std::array<double, 7> mean{};
+  for (std::size_t i = 0; i < 7; ++i)
+    mean[i] = defined[i] > 0 ? sum[i] / defined[i] : std::numeric_limits<double>::quiet_NaN();
+  m.e = {mean[0], mean[1], mean[2], mean[3], mean[4], mean[5], mean[6]};
   double means = 0.0;
-  for (const auto& r : rows) means += r.mean;
-  m.mean = means / n;
+  int runs = 0;
+  for (const auto& r : rows) {
+    if (std::isnan(r.mean)) continue;
+    means += r.mean;
+    ++runs;
+  }
+  m.mean = runs > 0 ? means / runs : std::numeric_limits<double>::quiet_NaN();
   return m;
 }
 

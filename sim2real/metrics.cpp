@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include "host/error.hpp"
@@ -99,10 +100,23 @@ double relative_error(double value, double reference) {
   return (value - reference) / reference;
 }
 
+double loaded_mass_error(double simulated_kg, double measured_kg) {
+  for (const double m : {simulated_kg, measured_kg})
+    if (!(m >= 0.0) || !std::isfinite(m))
+      throw InputError("loaded mass error: a loaded mass must be finite and not negative, got " + std::to_string(m) + " kg");
+  if (measured_kg == 0.0) return simulated_kg == 0.0 ? 0.0 : std::numeric_limits<double>::quiet_NaN();
+  return relative_error(simulated_kg, measured_kg);
+}
+
 double paper_mean(const std::array<double, 7>& columns) {
   double sum = 0.0;
-  for (double v : columns) sum += std::abs(v);
-  return sum / static_cast<double>(columns.size());
+  int defined = 0;
+  for (double v : columns) {
+    if (std::isnan(v)) continue;
+    sum += std::abs(v);
+    ++defined;
+  }
+  return defined > 0 ? sum / defined : std::numeric_limits<double>::quiet_NaN();
 }
 
 double paper_mean(const ErrorColumns& e) { return paper_mean(e.as_array()); }

@@ -45,6 +45,13 @@ double trajectory_extent(const Trajectory& reference);
 // relative error (q − q̂)/q̂ of a scalar such as loaded mass or work; q̂ must be non-zero
 double relative_error(double value, double reference);
 
+// E_M, the loaded mass's relative error. A measured cycle may bring the bucket back empty (a dig
+// that fails to penetrate: real field data has them); its relative error is then undefined, NaN,
+// unless the simulated bucket is empty too (0: they agree). Tables print an undefined column as
+// n/a and the means skip it (paper_mean, sim2real::mean_row); a negative or non-finite mass is
+// refused (InputError)
+double loaded_mass_error(double simulated_kg, double measured_kg);
+
 // the paper's seven table columns in their order
 struct ErrorColumns {
   double e_x = 0.0;   // bucket-tip trajectory, normalised DTW
@@ -58,7 +65,8 @@ struct ErrorColumns {
   std::array<double, 7> as_array() const { return {e_x, e_v, e_tr, e_l, e_t, e_m, e_w}; }
 };
 
-// the paper's "mean" column: the mean of the absolute values of the seven columns
+// the paper's "mean" column: the mean of the absolute values of the seven columns (of those
+// defined: an undefined E_M, NaN, is skipped; NaN when none is defined)
 double paper_mean(const ErrorColumns& e);
 double paper_mean(const std::array<double, 7>& columns);
 

@@ -25,6 +25,7 @@ constexpr const char* kMarkdownHeader = "| simulation | E_x | E_v | E_tr | E_l |
 constexpr int kRoundTripDigits = 17;
 
 std::string format_fixed(double v, int decimals) {
+  if (std::isnan(v)) return "n/a";  // an undefined column (sim2real/metrics.hpp loaded_mass_error)
   std::ostringstream out;
   out.setf(std::ios::fixed);
   out.precision(decimals);
@@ -140,7 +141,7 @@ Comparison compare_runs(const Run& simulated, const Run& reference, const Compar
   c.e_x_mee = normalised_mee(bucket_tip(sim), x_ref, c.l_norm_m);
 
   // scalars of the whole cycle
-  c.e.e_m = relative_error(simulated.summary.loaded_mass_kg, reference.summary.loaded_mass_kg);
+  c.e.e_m = loaded_mass_error(simulated.summary.loaded_mass_kg, reference.summary.loaded_mass_kg);
   c.e.e_w = relative_error(simulated.summary.work_J, reference.summary.work_J);
   c.mean = paper_mean(c.e);
   return c;

@@ -120,6 +120,15 @@ TEST(Diagnose, MeanRowAveragesAbsoluteValues) {
   EXPECT_DOUBLE_EQ(m.e.e_m, 0.2);  // |−0.2| and |0.2|
   EXPECT_DOUBLE_EQ(m.e.e_w, 0.2);
   EXPECT_DOUBLE_EQ(m.mean, 0.2);
+  // a run whose measured bucket came back empty (E_M undefined) leaves E_M's mean to the others
+  TableRow empty{"empty", {0.5, 0.5, 0.5, 0.5, 0.5, std::nan(""), 0.5}, 0.5};
+  const TableRow with_empty = mean_row({a, b, empty}, "mean");
+  EXPECT_DOUBLE_EQ(with_empty.e.e_m, 0.2);
+  EXPECT_DOUBLE_EQ(with_empty.e.e_x, 0.3);
+  EXPECT_NEAR(with_empty.mean, 0.3, 1e-15);
+  EXPECT_TRUE(std::isnan(mean_row({empty}, "only").e.e_m));  // no run defines it
+  EXPECT_EQ(table_markdown({empty}, 3).find("nan"), std::string::npos);  // printed as n/a
+  EXPECT_NE(table_markdown({empty}, 3).find("| n/a |"), std::string::npos);
 }
 
 TEST(Diagnose, JsonHasTheIssuesFields) {

@@ -78,6 +78,19 @@ TEST(MetricsTest, RelativeErrorAndPaperMean) {
   EXPECT_NEAR(paper_mean(e), 2.8 / 7.0, kTight);
 }
 
+TEST(MetricsTest, AnEmptyMeasuredBucketLeavesTheMassErrorUndefinedNotTheTable) {
+  EXPECT_NEAR(loaded_mass_error(900.0, 1000.0), -0.1, kTight);
+  EXPECT_EQ(loaded_mass_error(0.0, 0.0), 0.0);              // both empty: they agree
+  EXPECT_TRUE(std::isnan(loaded_mass_error(250.0, 0.0)));  // undefined, not an abort
+  EXPECT_THROW(loaded_mass_error(-1.0, 100.0), InputError);
+  EXPECT_THROW(loaded_mass_error(100.0, std::nan("")), InputError);
+  // the row's mean skips the undefined column: six columns left
+  ErrorColumns e{0.1, 0.2, 0.3, 0.4, 0.5, std::nan(""), -0.7};
+  EXPECT_NEAR(paper_mean(e), 2.2 / 6.0, kTight);
+  const double nan = std::nan("");
+  EXPECT_TRUE(std::isnan(paper_mean(std::array<double, 7>{nan, nan, nan, nan, nan, nan, nan})));
+}
+
 TEST(DtwTest, HandComputedCumulativeMatrix) {
   // 1-D: a = [0,1,2], b = [0,2]; c = [[0,2],[1,1],[2,0]];
   // d = [[0,2],[1,1],[3,1]] -> distance 1
