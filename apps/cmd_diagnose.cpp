@@ -33,6 +33,7 @@ struct DiagnoseArgs {
   std::vector<std::string> data;
   std::vector<std::string> plugins;
   std::vector<std::string> candidates;
+  bool candidates_given = false;
   std::string fidelity = "D400";
   std::string json, out;
   int max_effects = 2;
@@ -56,6 +57,10 @@ void diagnose_command(const DiagnoseArgs& a) {
   options.max_effects = a.max_effects;
   options.validation_runs = a.validation;
   options.plugins = vehicle::load_effect_plugins(a.plugins);
+  // the candidates named are checked before the --out folder is touched
+  if (a.candidates_given && a.candidates.empty())
+    throw InputError("--candidates: no label given; fix: name one or more candidates (engine_power_sharing,...) or drop the option");
+  chosen_candidates(candidate_set(options.plugins), a.candidates);
   options.candidates = a.candidates;
   options.discover = a.discover;
   options.threads = a.threads;
@@ -127,11 +132,12 @@ void add_diagnose_command(CLI::App& app) {
       ->check(non_negative_number());
   cmd->add_option("--effect-plugin", a->plugins, "a shared library whose effects join the candidates (repeatable)")
       ->expected(1)->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
-  cmd->add_option("--candidates", a->candidates,
-                  "search only these candidate effects, by label (comma-separated: "
-                  "engine_power_sharing,sensor_bias[f_lift]; docs/sim2real.md); default: all")
-      ->delimiter(',')
-      ->expected(1, -1);
+  auto* candidates = cmd->add_option("--candidates", a->candidates,
+                                     "search only these candidate effects, by label (comma-separated, "
+                                     "quoted for the shell: 'engine_power_sharing,sensor_bias[f_lift]'; "
+                                     "docs/sim2real.md); default: all")
+                         ->delimiter(',')
+                         ->expected(1, -1);
   cmd->add_option("--pile-seed", a->pile_seed, "random seed of the simulated pile's particles")->capture_default_str();
   cmd->add_option(
          "--pile-ensemble", a->pile_ensemble,
@@ -153,7 +159,10 @@ void add_diagnose_command(CLI::App& app) {
       // a bound far above any host's hardware threads, that catches a typo before threads start
       ->check(CLI::Range(0, 1024));
   cmd->add_flag("--quiet", a->quiet, "no progress on stderr");
-  cmd->callback([a] { diagnose_command(*a); });
+  cmd->callback([a, candidates] {
+    a->candidates_given = candidates->count() > 0;
+    diagnose_command(*a);
+  });
 }
 
 }  // namespace talus::app

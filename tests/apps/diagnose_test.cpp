@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 #include <random>
 #include <set>
@@ -135,6 +136,22 @@ TEST(DiagnoseTest, AddsNothingToEffectFreeDataWithNoise) {
   for (const char* file : {"report.md", "diagnosis.json", "errors-before.csv", "errors-after.csv",
                            "0-load-carry-field-channels.png", "1-load-carry-field-channels.png"})
     EXPECT_GT(fs::file_size(base / "out" / file), 100u) << file;
+  // --candidates: an unknown label (or none) is bad input, refused before the folder is touched:
+  // exit 2, the finished diagnosis kept
+  const std::string data = " --data " + (base / "run0").string() + " " + (base / "run1").string();
+  for (const char* bad : {"hydraulic_lag,sensor_bias", ","}) {
+    const std::string cmd = kTalus + " diagnose --quiet" + data + " --candidates '" + bad + "' --out " +
+                            (base / "out").string() + " > /dev/null 2> " + (base / "err.txt").string();
+    EXPECT_EQ(exit_code(cmd), 2) << cmd;
+    EXPECT_TRUE(fs::exists(base / "out" / "diagnosis.json")) << bad;
+    std::ifstream err(base / "err.txt");
+    const std::string text((std::istreambuf_iterator<char>(err)), std::istreambuf_iterator<char>());
+    EXPECT_NE(text.find("--candidates"), std::string::npos) << text;
+  }
+  // a named few are what the JSON says was searched
+  const auto some = diagnose(base, " --candidates 'hydraulic_lag,sensor_bias[f_lift]'");
+  EXPECT_EQ(some["candidates"], nlohmann::json({"hydraulic_lag", "sensor_bias[f_lift]"}));
+  EXPECT_TRUE(some["effects_found"].empty());
   fs::remove_all(base);
 }
 

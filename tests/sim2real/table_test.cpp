@@ -121,11 +121,26 @@ TEST(TableTest, CsvRoundTripAndMarkdown) {
   const fs::path dir = test::fresh_temp_dir("table");
   const std::vector<TableRow> rows = {
       {"FB35-D50", {0.1, 0.2, 0.3, 0.4, 0.5, -0.6, -0.7}, 0.4},
-      {"HD27-G200", {0.011, 0.0, 1.0 / 3.0, 0.0, 0.0, 0.0, 0.0}, 0.0492}};
+      {"HD27-G200", {0.011, 0.0, 1.0 / 3.0, 0.0, 0.0, 0.0, 0.0}, 0.0492},
+      // a run whose measured bucket came back empty: E_M undefined (sim2real/metrics.hpp)
+      {"HD27-empty", {0.1, 0.1, 0.1, 0.1, 0.1, std::nan(""), 0.1}, 0.1}};
   write_table_csv(dir / "t.csv", rows);
   write_table_markdown(dir / "t.md", rows);
   const auto back = read_table_csv(dir / "t.csv");
-  ASSERT_EQ(back.size(), 2u);
+  ASSERT_EQ(back.size(), 3u);
+  EXPECT_TRUE(std::isnan(back[2].e.e_m));  // read back as written
+  EXPECT_EQ(back[2].e.e_w, 0.1);
+  // nan anywhere else is refused, naming the field
+  {
+    std::ofstream bad(dir / "bad.csv");
+    bad << "name,RMA-traj,RMA-V,RMA-TR,RMA-L,RMA-T,load_mass,work,E-score\nHD27,0.1,nan,0.1,0.1,0.1,0.1,0.1,0.1\n";
+  }
+  try {
+    read_table_csv(dir / "bad.csv");
+    ADD_FAILURE() << "nan accepted as a drive-speed error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("field 'RMA-V'"), std::string::npos) << e.what();
+  }
   EXPECT_EQ(back[1].name, "HD27-G200");
   EXPECT_EQ(back[1].e.e_tr, 1.0 / 3.0);  // 17 significant digits round-trip exactly
   EXPECT_EQ(back[0].e.e_w, -0.7);
