@@ -144,7 +144,8 @@ void add_diagnose_command(CLI::App& app) {
          "dig N piles per simulation (seeds pile-seed, pile-seed + 1, ...) and compare their "
          "mean: a smoother objective where the grains' arrangement scatters the dig; with 2 or "
          "more, residuals are judged against the piles' own spread as well as the sensor noise "
-         "(docs/sim2real.md); N times the cost")
+         "(docs/sim2real.md); N times the cost. Three piles rank candidates, but their spread is "
+         "too rough to call what is left unexplained: use more for the verdict (eight were enough on effect-free G400 data, docs/sim2real.md)")
       ->capture_default_str()
       ->check(CLI::Range(1, sim2real::kMaxPileEnsemble));
   cmd->add_flag(
