@@ -59,7 +59,9 @@ void diagnose_command(const DiagnoseArgs& a) {
   options.plugins = vehicle::load_effect_plugins(a.plugins);
   // the candidates named are checked before the --out folder is touched
   if (a.candidates_given && a.candidates.empty())
-    throw InputError("--candidates: no label given; fix: name one or more candidates (engine_power_sharing,...) or drop the option");
+    throw InputError(
+        "--candidates: no label given; fix: name one or more candidates (engine_power_sharing,...) "
+        "or drop the option");
   chosen_candidates(candidate_set(options.plugins), a.candidates);
   options.candidates = a.candidates;
   options.discover = a.discover;
@@ -132,12 +134,13 @@ void add_diagnose_command(CLI::App& app) {
       ->check(non_negative_number());
   cmd->add_option("--effect-plugin", a->plugins, "a shared library whose effects join the candidates (repeatable)")
       ->expected(1)->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
-  auto* candidates = cmd->add_option("--candidates", a->candidates,
-                                     "search only these candidate effects, by label (comma-separated, "
-                                     "quoted for the shell: 'engine_power_sharing,sensor_bias[f_lift]'; "
-                                     "docs/sim2real.md); default: all")
-                         ->delimiter(',')
-                         ->expected(1, -1);
+  auto* candidates =
+      cmd->add_option("--candidates", a->candidates,
+                      "search only these candidate effects, by label (comma-separated, "
+                      "quoted for the shell: 'engine_power_sharing,sensor_bias[f_lift]'; "
+                      "docs/sim2real.md); default: all")
+          ->delimiter(',')
+          ->expected(1, -1);
   cmd->add_option("--pile-seed", a->pile_seed, "random seed of the simulated pile's particles")->capture_default_str();
   cmd->add_option(
          "--pile-ensemble", a->pile_ensemble,
@@ -145,7 +148,8 @@ void add_diagnose_command(CLI::App& app) {
          "mean: a smoother objective where the grains' arrangement scatters the dig; with 2 or "
          "more, residuals are judged against the piles' own spread as well as the sensor noise "
          "(docs/sim2real.md); N times the cost. Three piles rank candidates, but their spread is "
-         "too rough to call what is left unexplained: use more for the verdict (eight were enough on effect-free G400 data, docs/sim2real.md)")
+         "too rough to call what is left unexplained: use more for the verdict (eight were enough "
+         "on effect-free G400 data, docs/sim2real.md)")
       ->capture_default_str()
       ->check(CLI::Range(1, sim2real::kMaxPileEnsemble));
   cmd->add_flag(

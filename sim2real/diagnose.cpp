@@ -8,9 +8,9 @@
 #include <bitset>
 #include <chrono>
 #include <cmath>
-#include <limits>
 #include <cstdio>
 #include <exception>
+#include <limits>
 #include <memory>
 #include <sstream>
 
@@ -233,13 +233,16 @@ std::vector<Candidate> candidate_set(const vehicle::EffectPlugins& plugins) {
   return out;
 }
 
-std::vector<Candidate> chosen_candidates(const std::vector<Candidate>& all, const std::vector<std::string>& labels) {
+std::vector<Candidate> chosen_candidates(const std::vector<Candidate>& all,
+                                         const std::vector<std::string>& labels) {
   if (labels.empty()) return all;
   for (const auto& label : labels) {
-    if (std::none_of(all.begin(), all.end(), [&](const Candidate& c) { return c.label() == label; })) {
+    if (std::none_of(all.begin(), all.end(),
+                     [&](const Candidate& c) { return c.label() == label; })) {
       std::string known;
       for (const auto& c : all) known += (known.empty() ? "" : ", ") + c.label();
-      throw InputError("--candidates: no candidate effect is labelled '" + label + "'; fix: name one of " + known);
+      throw InputError("--candidates: no candidate effect is labelled '" + label +
+                       "'; fix: name one of " + known);
     }
   }
   std::vector<Candidate> out;
@@ -1239,7 +1242,8 @@ Diagnosis diagnose(const std::vector<MeasuredRun>& runs, const DiagnoseOptions& 
                    const std::function<void(const std::string&)>& note) {
   if (runs.empty()) throw InputError("diagnose: no measured runs; give one or more run folders with --data");
   // the candidates checked before anything is simulated
-  const std::vector<Candidate> candidates = chosen_candidates(candidate_set(options.plugins), options.candidates);
+  const std::vector<Candidate> candidates =
+      chosen_candidates(candidate_set(options.plugins), options.candidates);
   const auto start = std::chrono::steady_clock::now();
   // the replays and the baseline
   Search search(runs, options, device, note);

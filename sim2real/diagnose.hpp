@@ -106,7 +106,8 @@ struct Candidate {
 std::vector<Candidate> candidate_set(const vehicle::EffectPlugins& plugins);
 // those of `all` whose labels `labels` names, in `all`'s order (all of them for no labels);
 // InputError naming --candidates and the labels there are for one that names none
-std::vector<Candidate> chosen_candidates(const std::vector<Candidate>& all, const std::vector<std::string>& labels);
+std::vector<Candidate> chosen_candidates(const std::vector<Candidate>& all,
+                                         const std::vector<std::string>& labels);
 
 // the coarse scan's points of a candidate in its box normalised to [0, 1] per parameter (step 2
 // above): what a parameter's normalised value means is make_candidate's mapping, linear, or

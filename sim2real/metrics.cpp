@@ -103,8 +103,10 @@ double relative_error(double value, double reference) {
 double loaded_mass_error(double simulated_kg, double measured_kg) {
   for (const double m : {simulated_kg, measured_kg})
     if (!(m >= 0.0) || !std::isfinite(m))
-      throw InputError("loaded mass error: a loaded mass must be finite and not negative, got " + std::to_string(m) + " kg");
-  if (measured_kg == 0.0) return simulated_kg == 0.0 ? 0.0 : std::numeric_limits<double>::quiet_NaN();
+      throw InputError("loaded mass error: a loaded mass must be finite and not negative, got " +
+                       std::to_string(m) + " kg");
+  if (measured_kg == 0.0)
+    return simulated_kg == 0.0 ? 0.0 : std::numeric_limits<double>::quiet_NaN();
   return relative_error(simulated_kg, measured_kg);
 }
 

@@ -210,7 +210,8 @@ std::vector<TableRow> read_table_csv(const fs::path& file) {
       // the loaded mass's error may be undefined, nan, where the measured bucket came back empty
       // (sim2real/metrics.hpp loaded_mass_error), as table_csv writes it; nothing else may
       const bool undefined_mass = k == 5 && std::isnan(v[k]);
-      if (cell.empty() || end != cell.c_str() + cell.size() || (!std::isfinite(v[k]) && !undefined_mass)) {
+      if (cell.empty() || end != cell.c_str() + cell.size() ||
+          (!std::isfinite(v[k]) && !undefined_mass)) {
         throw InputError(file.string() + ":" + std::to_string(line_no) + ": field '" + names[k] +
                          "': '" + cell + "' is not a finite number" +
                          (k == 5 ? " (or nan, an undefined loaded-mass error)" : ""));

@@ -140,8 +140,9 @@ TEST(DiagnoseTest, AddsNothingToEffectFreeDataWithNoise) {
   // exit 2, the finished diagnosis kept
   const std::string data = " --data " + (base / "run0").string() + " " + (base / "run1").string();
   for (const char* bad : {"hydraulic_lag,sensor_bias", ","}) {
-    const std::string cmd = kTalus + " diagnose --quiet" + data + " --candidates '" + bad + "' --out " +
-                            (base / "out").string() + " > /dev/null 2> " + (base / "err.txt").string();
+    const std::string cmd = kTalus + " diagnose --quiet" + data + " --candidates '" + bad +
+                            "' --out " + (base / "out").string() + " > /dev/null 2> " +
+                            (base / "err.txt").string();
     EXPECT_EQ(exit_code(cmd), 2) << cmd;
     EXPECT_TRUE(fs::exists(base / "out" / "diagnosis.json")) << bad;
     std::ifstream err(base / "err.txt");

@@ -39,12 +39,14 @@ TEST(Diagnose, ChosenCandidatesKeepTheSetsOrderAndRefuseUnknownLabels) {
   const auto all = candidate_set({});
   EXPECT_EQ(chosen_candidates(all, {}).size(), all.size());  // none named: every candidate
   // named out of order: kept in the set's order, channel-bound ones by their full label
-  const auto chosen = chosen_candidates(all, {"soil_cohesion", "sensor_bias[f_lift]", "engine_power_sharing"});
+  const auto chosen =
+      chosen_candidates(all, {"soil_cohesion", "sensor_bias[f_lift]", "engine_power_sharing"});
   ASSERT_EQ(chosen.size(), 3u);
   EXPECT_EQ(chosen[0].label(), "engine_power_sharing");
   EXPECT_EQ(chosen[1].label(), "sensor_bias[f_lift]");
   EXPECT_EQ(chosen[2].label(), "soil_cohesion");
-  EXPECT_FALSE(chosen[1].signature.empty());  // the candidate itself, not a copy without its signature
+  EXPECT_FALSE(
+      chosen[1].signature.empty());  // the candidate itself, not a copy without its signature
   // a label that names nothing: one error naming the option, the label and the labels there are
   try {
     chosen_candidates(all, {"engine_power_sharing", "sensor_bias"});
@@ -126,7 +128,7 @@ TEST(Diagnose, MeanRowAveragesAbsoluteValues) {
   EXPECT_DOUBLE_EQ(with_empty.e.e_m, 0.2);
   EXPECT_DOUBLE_EQ(with_empty.e.e_x, 0.3);
   EXPECT_NEAR(with_empty.mean, 0.3, 1e-15);
-  EXPECT_TRUE(std::isnan(mean_row({empty}, "only").e.e_m));  // no run defines it
+  EXPECT_TRUE(std::isnan(mean_row({empty}, "only").e.e_m));              // no run defines it
   EXPECT_EQ(table_markdown({empty}, 3).find("nan"), std::string::npos);  // printed as n/a
   EXPECT_NE(table_markdown({empty}, 3).find("| n/a |"), std::string::npos);
 }

@@ -80,7 +80,7 @@ TEST(MetricsTest, RelativeErrorAndPaperMean) {
 
 TEST(MetricsTest, AnEmptyMeasuredBucketLeavesTheMassErrorUndefinedNotTheTable) {
   EXPECT_NEAR(loaded_mass_error(900.0, 1000.0), -0.1, kTight);
-  EXPECT_EQ(loaded_mass_error(0.0, 0.0), 0.0);              // both empty: they agree
+  EXPECT_EQ(loaded_mass_error(0.0, 0.0), 0.0);             // both empty: they agree
   EXPECT_TRUE(std::isnan(loaded_mass_error(250.0, 0.0)));  // undefined, not an abort
   EXPECT_THROW(loaded_mass_error(-1.0, 100.0), InputError);
   EXPECT_THROW(loaded_mass_error(100.0, std::nan("")), InputError);

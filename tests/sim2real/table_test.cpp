@@ -133,7 +133,8 @@ TEST(TableTest, CsvRoundTripAndMarkdown) {
   // nan anywhere else is refused, naming the field
   {
     std::ofstream bad(dir / "bad.csv");
-    bad << "name,RMA-traj,RMA-V,RMA-TR,RMA-L,RMA-T,load_mass,work,E-score\nHD27,0.1,nan,0.1,0.1,0.1,0.1,0.1,0.1\n";
+    bad << "name,RMA-traj,RMA-V,RMA-TR,RMA-L,RMA-T,load_mass,work,E-score\n"
+        << "HD27,0.1,nan,0.1,0.1,0.1,0.1,0.1,0.1\n";
   }
   try {
     read_table_csv(dir / "bad.csv");
