@@ -309,6 +309,20 @@ struct Failure {
   std::string what;
 };
 
+// the negative log-likelihood of a run's residuals, Σ over its cells (n_eff / 2) log_ratio, each
+// cell counted with the effective samples it has in `at_fit` (the same run at the fitted
+// parameters; cells matched by channel and phase, a cell the fit lacks counted as none)
+double effective_nll(const Residuals& r, const Residuals& at_fit) {
+  double sum = 0.0;
+  for (const ResidualCell& cell : r.cells) {
+    const auto fit = std::find_if(
+        at_fit.cells.begin(), at_fit.cells.end(),
+        [&](const ResidualCell& f) { return f.channel == cell.channel && f.phase == cell.phase; });
+    if (fit != at_fit.cells.end()) sum += 0.5 * fit->effective_samples * cell.log_ratio;
+  }
+  return sum;
+}
+
 // task(0) .. task(n - 1) on the threads (host/parallel); a task that throws is recorded by index
 // and the others run on (a candidate whose simulation fails is reported and skipped, not the whole
 // diagnosis). An interrupt stops the loop and is rethrown
@@ -460,24 +474,33 @@ class Search {
         both_minus[k][l] = point(y);
       }
     }
+    // each cell counted with the effective samples its residual has at the fit (a correlated
+    // residual carries the information of fewer samples than it has: sim2real/residuals.hpp)
     const std::size_t ncal = d_.calibration.size();
-    std::vector<double> log_ratio(points.size() * ncal, 0.0);
+    std::vector<double> run_nll(points.size() * ncal, 0.0);
     const std::vector<Failure> curvature_failures =
         run_tasks(points.size() * ncal, threads_, [&](std::size_t t) {
           const std::size_t i = d_.calibration[t % ncal];
           const Run r = simulate_found_at(i, points[t / ncal]);
-          log_ratio[t] = compute_residuals(r, runs_[i].run, sigma_[i]).log_ratio;
+          run_nll[t] =
+              effective_nll(compute_residuals(r, runs_[i].run, sigma_[i]), current_residuals_[i]);
         });
     j.curvature_simulations = static_cast<int>(points.size() * ncal);
     for (const Failure& f : curvature_failures)
       if (f.failed) return skip("a simulation for the curvature failed (" + f.what + ")");
+    double effective = 0.0, samples = 0.0;
+    for (const std::size_t i : d_.calibration)
+      for (const ResidualCell& cell : current_residuals_[i].cells) {
+        effective += cell.effective_samples;
+        samples += cell.samples;
+      }
+    j.effective_sample_share = samples > 0.0 ? effective / samples : 1.0;
     const auto nll = [&](std::size_t pt) {
       double sum = 0.0;
       for (std::size_t q = 0; q < ncal; ++q) {
         const std::size_t i = d_.calibration[q];
-        const double li =
-            pt == points.size() ? current_residuals_[i].log_ratio : log_ratio[pt * ncal + q];
-        sum += 0.5 * static_cast<double>(runs_[i].run.series.size()) * li;
+        sum += pt == points.size() ? effective_nll(current_residuals_[i], current_residuals_[i])
+                                   : run_nll[pt * ncal + q];
       }
       return sum;
     };
@@ -1287,7 +1310,8 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
                      {"rms", c.rms},
                      {"mean", c.mean},
                      {"sigma", c.sigma},
-                     {"excess", c.excess}};
+                     {"excess", c.excess},
+                     {"effective_samples", c.effective_samples}};
         // the simulation's own spread the cell was judged with (ensemble and sensitivity), when
         // there was one
         if (res.judged_with_spread()) {
@@ -1376,6 +1400,7 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
                   {"step_box", j.step},
                   {"curvature_in_range", j.curvature_in_range},
                   {"curvature_simulations", j.curvature_simulations},
+                  {"effective_sample_share", j.effective_sample_share},
                   {"design_points", j.design_points},
                   {"simulations", j.simulations()},
                   {"runs", per_run}};

@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "host/error.hpp"
+#include "sim2real/residuals.hpp"
 #include "vehicle/scenario.hpp"
 
 namespace talus::sim2real {
@@ -23,8 +24,6 @@ constexpr double kZ95 = 1.959964;
 constexpr double kRidge = 1e-10;
 // a held-out error below this share of the residual's own mean square is an exact fit
 constexpr double kExactFit = 1e-12;
-// the residual's lag-one autocorrelation is capped here, so n_eff stays positive
-constexpr double kMaxAutocorrelation = 0.99;
 
 std::size_t channel_column(const std::string& name) {
   for (std::size_t c = 1; c < kChannelCount; ++c)
@@ -310,10 +309,10 @@ DiscoveredCorrection fit_correction(const DiscoveryTarget& target, const Regress
       var += r[i] * r[i];
       if (i > 0 && data.run[i] == data.run[i - 1]) lag += r[i] * r[i - 1];
     }
-    const double rho = var > 0.0 ? std::clamp(lag / var, 0.0, kMaxAutocorrelation) : 0.0;
+    const double inflation = autocorrelation_inflation(var > 0.0 ? lag / var : 0.0);
     const double dof =
         std::max<double>(1.0, static_cast<double>(r.size()) - static_cast<double>(support.size()));
-    const double sigma2 = var / dof * (1.0 + rho) / (1.0 - rho);
+    const double sigma2 = var / dof * inflation;
     const Eigen::MatrixXd cov = sigma2 * (a.transpose() * a).inverse();
     half = kZ95 * cov.diagonal().cwiseMax(0.0).cwiseSqrt();
     Eigen::Index weakest = 0;

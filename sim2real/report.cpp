@@ -61,7 +61,9 @@ std::string sensitivity_note(const Diagnosis& d) {
       << ", " << p.high << "] " << p.unit;
   }
   s << "; " << j.design_points << " simulations per run judged, " << j.curvature_simulations
-    << " for the curvature); excess";
+    << " for the curvature, whose likelihood counted the calibration runs' samples as "
+    << std::setprecision(2) << j.effective_sample_share
+    << " of their number for the residual's correlation in time); excess";
   for (std::size_t i = 0; i < j.runs.size(); ++i)
     if (j.runs[i].used)
       s << " run " << i << " " << std::setprecision(3) << j.runs[i].excess_without << " -> "

@@ -197,8 +197,13 @@ Residuals compute_residuals(const Run& simulated, const Run& measured, const std
       cell.phase = p;
       cell.sigma = sigma[c];
       double sum = 0.0, sum2 = 0.0, sum2w = 0.0, sum_log_w = 0.0, sum_model = 0.0, sum_share = 0.0;
+      // the standardised residual's lag-one products, between consecutive samples of the cell
+      double lag_w = 0.0;
+      std::size_t previous = tm.size();
       for (size_t i = 0; i < tm.size(); ++i) {
         if (tm[i] < ph.t0 || tm[i] > ph.t1 || (!last && tm[i] >= ph.t1)) continue;
+        if (previous + 1 == i) lag_w += r[i] * r[previous] / std::sqrt(w[i] * w[previous]);
+        previous = i;
         sum += r[i];
         sum2 += r[i] * r[i];
         sum2w += r[i] * r[i] / w[i];
@@ -222,13 +227,20 @@ Residuals compute_residuals(const Run& simulated, const Run& measured, const std
       // spread); the smallest ratio counted: a residual a thousandth of the noise is as good as
       // none
       constexpr double kSmallestRatio = 1e-6;
-      out.log_ratio += double(cell.samples) / double(tm.size()) *
-                       (std::log(std::max(mse_w / (sigma[c] * sigma[c]), kSmallestRatio)) +
-                        sum_log_w / cell.samples);
+      cell.log_ratio = std::log(std::max(mse_w / (sigma[c] * sigma[c]), kSmallestRatio)) +
+                       sum_log_w / cell.samples;
+      out.log_ratio += double(cell.samples) / double(tm.size()) * cell.log_ratio;
+      const double rho = sum2w > 0.0 ? lag_w / sum2w : 0.0;
+      cell.effective_samples = cell.samples / autocorrelation_inflation(rho);
       out.cells.push_back(cell);
     }
   }
   return out;
+}
+
+double autocorrelation_inflation(double rho) {
+  const double r = std::isfinite(rho) ? std::clamp(rho, 0.0, kMaxAutocorrelation) : 0.0;
+  return (1.0 + r) / (1.0 - r);
 }
 
 double Residuals::excess_of(const std::vector<std::size_t>& channels) const {

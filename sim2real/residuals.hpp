@@ -41,6 +41,15 @@
 // parameter, the two realisations' difference a − â are what s estimates, so it adds as it is:
 // each sample is judged against σ² + (1 + 1/N) v + s, through the same w and the same formulas
 // (N = 0, no ensemble: σ² + s).
+//
+// Correlated residuals (issue 17): the log-ratio counts every sample as independent, but a dig's
+// residual is correlated in time (two pile arrangements' forces over about 0.1 s, a misfit over a
+// whole phase), so n samples carry the information of fewer. Each cell records its effective
+// samples n_eff = n (1 − ρ) / (1 + ρ), ρ the lag-one autocorrelation of the standardised residual
+// r/√w in the cell: the variance of a mean of AR(1) samples is (1 + ρ)/(1 − ρ) times that of
+// independent ones (the discovery's regression inflates its intervals by the same law,
+// sim2real/discovery.hpp). The diagnosis weighs each cell's log-ratio by n_eff where it measures
+// the fit's uncertainty (sim2real/diagnose.cpp, the sensitivity's curvature).
 #pragma once
 #include <cstddef>
 #include <string>
@@ -54,6 +63,14 @@ namespace talus::sim2real {
 // the ±10 % error of σ estimated from about a thousand samples and for the interpolation of a
 // simulation logged at 100 Hz from 20 ms steps (docs/sim2real.md)
 inline constexpr double kNoiseAllowance = 1.5;
+
+// the lag-one autocorrelation is capped here, so the effective samples stay positive: a residual
+// that is one offset over a cell counts as n/199 samples, not none
+inline constexpr double kMaxAutocorrelation = 0.99;
+// the variance of a mean of samples with lag-one autocorrelation ρ (an AR(1) process) relative to
+// that of independent ones, (1 + ρ) / (1 − ρ), with ρ clamped to [0, kMaxAutocorrelation] (a
+// negative ρ, which would shrink the variance, is taken as none)
+double autocorrelation_inflation(double rho);
 
 // the noise standard deviation of a uniformly sampled signal (at least 3 samples), never below
 // 1e-6 of its largest magnitude (noise-free data would otherwise make any residual infinite)
@@ -82,6 +99,11 @@ struct ResidualCell {
   // judged against, m / (σ² + m), in [0, 1)
   double spread = 0.0;
   double spread_share = 0.0;
+  // the cell's term of the log-likelihood: ln max(MSE_w / σ², 1e-6) + the mean of ln w
+  double log_ratio = 0.0;
+  // samples / autocorrelation_inflation(ρ), ρ the lag-one autocorrelation of r/√w over the cell's
+  // consecutive samples (about zero mean not removed: an offset is part of what is correlated)
+  double effective_samples = 0.0;
 };
 
 struct Residuals {

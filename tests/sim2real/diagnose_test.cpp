@@ -195,6 +195,8 @@ TEST(Diagnose, JsonReportsTheModelSpreadItUsed) {
   EXPECT_EQ(cell["channel"], "f_lift");
   EXPECT_NEAR(cell["spread"].get<double>(), std::sqrt(4.0 / 3.0 * 4e6), 1e-6);
   EXPECT_NEAR(cell["spread_share"].get<double>(), 16.0 / 19.0, 1e-12);
+  EXPECT_EQ(cell["effective_samples"].get<double>(),
+            d.residuals_before[0].cells[0].effective_samples);
 }
 
 // diagnosis.json says per run whether the sensitivity spread judged it, its simulations and the
@@ -221,6 +223,7 @@ TEST(Diagnose, JsonReportsTheSensitivityJudgements) {
   used.parameters = {{"hydraulic_lag", "time_constant", "s", 0.3, 0.002, 0.299, 0.301}};
   used.curvature_in_range = true;
   used.curvature_simulations = 2;
+  used.effective_sample_share = 0.04;
   used.design_points = 2;
   used.runs = {{false, "within noise without it", 0, 0.1, 0.1}, {true, "", 2, 1.7, 0.05}};
   d.sensitivity = {skipped, used};
@@ -234,6 +237,7 @@ TEST(Diagnose, JsonReportsTheSensitivityJudgements) {
   EXPECT_EQ(p["parameter"], "time_constant");
   EXPECT_DOUBLE_EQ(p["low"].get<double>(), 0.299);
   EXPECT_EQ(j["sensitivity"][1]["design_points"].get<int>(), 2);
+  EXPECT_DOUBLE_EQ(j["sensitivity"][1]["effective_sample_share"].get<double>(), 0.04);
   // per run: the verdict's judgement
   const auto& a = j["runs"][0]["sensitivity_spread"];
   EXPECT_FALSE(a["used"].get<bool>());

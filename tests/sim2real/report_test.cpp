@@ -85,13 +85,15 @@ TEST(Report, SaysInALineWhetherTheSensitivitySpreadJudgedTheVerdict) {
   j.used = true;
   j.parameters = {{"soil_cohesion", "cohesion", "Pa", 5012.0, 0.004, 4950.0, 5070.0}};
   j.curvature_simulations = 4;
+  j.effective_sample_share = 0.031;
   j.design_points = 2;
   j.runs = {{true, "", 2, 2.5, 0.12}, {false, "within noise without it", 0, 0.3, 0.3}};
   d.sensitivity = {j};
   const std::string used = sensitivity_note(d);
   for (const char* part :
        {"Sensitivity spread (round 1)", "soil_cohesion cohesion 5012 [4950, 5070] Pa",
-        "2 simulations per run judged, 4 for the curvature", "run 0 2.5 -> 0.12"})
+        "2 simulations per run judged, 4 for the curvature",
+        "counted the calibration runs' samples as 0.031 of their number", "run 0 2.5 -> 0.12"})
     EXPECT_NE(used.find(part), std::string::npos) << part << "\n" << used;
   EXPECT_EQ(used.find("run 1"), std::string::npos) << used;  // not judged: within noise
   j.used = false;
