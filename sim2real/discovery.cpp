@@ -304,15 +304,12 @@ DiscoveredCorrection fit_correction(const DiscoveryTarget& target, const Regress
     const Eigen::MatrixXd a = x(Eigen::all, support);
     c = solve_on(x, y, support)(support);
     const Eigen::VectorXd r = y - a * c;
-    double lag = 0.0, var = 0.0;
-    for (Eigen::Index i = 0; i < r.size(); ++i) {
-      var += r[i] * r[i];
-      if (i > 0 && data.run[i] == data.run[i - 1]) lag += r[i] * r[i - 1];
-    }
-    const double inflation = autocorrelation_inflation(var > 0.0 ? lag / var : 0.0);
+    const double var = r.squaredNorm();
     const double dof =
         std::max<double>(1.0, static_cast<double>(r.size()) - static_cast<double>(support.size()));
-    const double sigma2 = var / dof * inflation;
+    const double sigma2 = var / dof *
+                          integrated_autocorrelation_time(
+                              std::vector<double>(r.data(), r.data() + r.size()), data.run);
     const Eigen::MatrixXd cov = sigma2 * (a.transpose() * a).inverse();
     half = kZ95 * cov.diagonal().cwiseMax(0.0).cwiseSqrt();
     Eigen::Index weakest = 0;

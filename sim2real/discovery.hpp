@@ -21,8 +21,8 @@
 //     block predicted by the path fitted on the others; the fewest terms whose held-out error is
 //     within kOneSeRule of the least, at most kMaxTerms
 //  4. the coefficients' 95 % intervals from ordinary least squares on the support, the variance
-//     inflated for the residual's autocorrelation (n_eff = n (1 − ρ) / (1 + ρ),
-//     autocorrelation_inflation in sim2real/residuals.hpp)
+//     inflated for the residual's autocorrelation (by its integrated autocorrelation time τ,
+//     n_eff = n / τ: integrated_autocorrelation_time in sim2real/residuals.hpp)
 // diagnose() then simulates the calibration and held-out runs with each target's correction and
 // keeps the best only if it removes at least half of the excess left on the held-out runs.
 #pragma once

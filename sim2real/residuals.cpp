@@ -197,13 +197,10 @@ Residuals compute_residuals(const Run& simulated, const Run& measured, const std
       cell.phase = p;
       cell.sigma = sigma[c];
       double sum = 0.0, sum2 = 0.0, sum2w = 0.0, sum_log_w = 0.0, sum_model = 0.0, sum_share = 0.0;
-      // the standardised residual's lag-one products, between consecutive samples of the cell
-      double lag_w = 0.0;
-      std::size_t previous = tm.size();
+      std::vector<double> z;  // the standardised residual r/√w over the cell
       for (size_t i = 0; i < tm.size(); ++i) {
         if (tm[i] < ph.t0 || tm[i] > ph.t1 || (!last && tm[i] >= ph.t1)) continue;
-        if (previous + 1 == i) lag_w += r[i] * r[previous] / std::sqrt(w[i] * w[previous]);
-        previous = i;
+        z.push_back(r[i] / std::sqrt(w[i]));
         sum += r[i];
         sum2 += r[i] * r[i];
         sum2w += r[i] * r[i] / w[i];
@@ -230,17 +227,39 @@ Residuals compute_residuals(const Run& simulated, const Run& measured, const std
       cell.log_ratio = std::log(std::max(mse_w / (sigma[c] * sigma[c]), kSmallestRatio)) +
                        sum_log_w / cell.samples;
       out.log_ratio += double(cell.samples) / double(tm.size()) * cell.log_ratio;
-      const double rho = sum2w > 0.0 ? lag_w / sum2w : 0.0;
-      cell.effective_samples = cell.samples / autocorrelation_inflation(rho);
+      cell.effective_samples = cell.samples / integrated_autocorrelation_time(z);
       out.cells.push_back(cell);
     }
   }
   return out;
 }
 
-double autocorrelation_inflation(double rho) {
-  const double r = std::isfinite(rho) ? std::clamp(rho, 0.0, kMaxAutocorrelation) : 0.0;
-  return (1.0 + r) / (1.0 - r);
+double integrated_autocorrelation_time(const std::vector<double>& z,
+                                       const std::vector<int>& segment) {
+  const std::size_t n = z.size();
+  if (!segment.empty() && segment.size() != n)
+    throw Error("integrated_autocorrelation_time: " + std::to_string(segment.size()) +
+                " segment labels for " + std::to_string(n) + " samples");
+  double square = 0.0;
+  for (const double v : z) square += v * v;
+  if (n < 2 || !(square > 0.0)) return 1.0;
+  // ρ_k, the uncentred autocorrelation at lag k over pairs within one segment
+  const auto rho = [&](std::size_t k) {
+    if (k == 0) return 1.0;
+    double lag = 0.0;
+    for (std::size_t i = 0; i + k < n; ++i)
+      if (segment.empty() || segment[i] == segment[i + k]) lag += z[i] * z[i + k];
+    return lag / square;
+  };
+  // τ = −1 + 2 Σ Γ_m, Γ_m = ρ_2m + ρ_2m+1, over the initial positive and non-increasing run
+  double tau = -1.0, previous = HUGE_VAL;
+  for (std::size_t m = 0; 2 * m + 1 < n; ++m) {
+    const double pair = std::min(rho(2 * m) + rho(2 * m + 1), previous);
+    if (!(pair > 0.0)) break;
+    tau += 2.0 * pair;
+    previous = pair;
+  }
+  return std::clamp(tau, 1.0, static_cast<double>(n));
 }
 
 double Residuals::excess_of(const std::vector<std::size_t>& channels) const {

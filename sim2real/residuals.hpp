@@ -45,11 +45,11 @@
 // Correlated residuals (issue 17): the log-ratio counts every sample as independent, but a dig's
 // residual is correlated in time (two pile arrangements' forces over about 0.1 s, a misfit over a
 // whole phase), so n samples carry the information of fewer. Each cell records its effective
-// samples n_eff = n (1 − ρ) / (1 + ρ), ρ the lag-one autocorrelation of the standardised residual
-// r/√w in the cell: the variance of a mean of AR(1) samples is (1 + ρ)/(1 − ρ) times that of
-// independent ones (the discovery's regression inflates its intervals by the same law,
-// sim2real/discovery.hpp). The diagnosis weighs each cell's log-ratio by n_eff where it measures
-// the fit's uncertainty (sim2real/diagnose.cpp, the sensitivity's curvature).
+// samples n_eff = n / τ, τ the integrated autocorrelation time of the standardised residual r/√w
+// in the cell: the variance of a mean of correlated samples is τ times that of independent ones
+// (the discovery's regression inflates its intervals by the same law, sim2real/discovery.hpp).
+// The diagnosis weighs each cell's log-ratio by n_eff where it measures the fit's uncertainty
+// (sim2real/diagnose.cpp, the sensitivity's curvature).
 #pragma once
 #include <cstddef>
 #include <string>
@@ -64,13 +64,17 @@ namespace talus::sim2real {
 // simulation logged at 100 Hz from 20 ms steps (docs/sim2real.md)
 inline constexpr double kNoiseAllowance = 1.5;
 
-// the lag-one autocorrelation is capped here, so the effective samples stay positive: a residual
-// that is one offset over a cell counts as n/199 samples, not none
-inline constexpr double kMaxAutocorrelation = 0.99;
-// the variance of a mean of samples with lag-one autocorrelation ρ (an AR(1) process) relative to
-// that of independent ones, (1 + ρ) / (1 − ρ), with ρ clamped to [0, kMaxAutocorrelation] (a
-// negative ρ, which would shrink the variance, is taken as none)
-double autocorrelation_inflation(double rho);
+// the integrated autocorrelation time τ = 1 + 2 Σ_{k≥1} ρ_k of a series, in samples: ρ_k its
+// uncentred autocorrelation at lag k (Σ z_i z_{i+k} / Σ z_i², pairs within one segment only;
+// `segment` labels each sample's run, empty: one), summed by Geyer's initial monotone sequence
+// (the pair sums Γ_m = ρ_2m + ρ_2m+1 while they stay positive, each held to the one before: C. J.
+// Geyer, "Practical Markov chain Monte Carlo", Statistical Science 7, 1992, section 3.3), which
+// stops where the long lags' estimates turn to noise (a fixed window runs away on a few hundred
+// samples of white noise: τ up to 5 was seen); held to [1, n]. The variance of a mean of the
+// samples is τ times that of as many independent ones, so they count as n/τ (at least one).
+// Uncentred: an offset over the whole series is correlation, and counts as one sample
+double integrated_autocorrelation_time(const std::vector<double>& z,
+                                       const std::vector<int>& segment = {});
 
 // the noise standard deviation of a uniformly sampled signal (at least 3 samples), never below
 // 1e-6 of its largest magnitude (noise-free data would otherwise make any residual infinite)
@@ -101,8 +105,8 @@ struct ResidualCell {
   double spread_share = 0.0;
   // the cell's term of the log-likelihood: ln max(MSE_w / σ², 1e-6) + the mean of ln w
   double log_ratio = 0.0;
-  // samples / autocorrelation_inflation(ρ), ρ the lag-one autocorrelation of r/√w over the cell's
-  // consecutive samples (about zero mean not removed: an offset is part of what is correlated)
+  // samples / τ, τ the integrated autocorrelation time of r/√w over the cell's samples
+  // (integrated_autocorrelation_time: uncentred, an offset is part of what is correlated)
   double effective_samples = 0.0;
 };
 
