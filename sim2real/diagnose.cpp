@@ -442,9 +442,9 @@ class Search {
                                      "likelihood fitted");
     const std::size_t p = x0.size();
     const double h = kSensitivityStep;
-    // 1. the curvature of the calibration runs' negative log-likelihood, Σ (n_i / 2) log_ratio_i
-    // (sim2real/residuals.hpp), by central differences around the fit (the stencil moved inside
-    // the box when the fit lies within a step of a bound)
+    // 1. the curvature of the calibration runs' negative log-likelihood, Σ over their cells of
+    // (n_eff / 2) log_ratio (sim2real/residuals.hpp), by central differences around the fit (the
+    // stencil moved inside the box when the fit lies within a step of a bound)
     std::vector<double> c = x0;
     for (double& v : c) v = std::clamp(v, h, 1.0 - h);
     std::vector<std::vector<double>> points;
@@ -1400,7 +1400,8 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
                   {"step_box", j.step},
                   {"curvature_in_range", j.curvature_in_range},
                   {"curvature_simulations", j.curvature_simulations},
-                  {"effective_sample_share", j.effective_sample_share},
+                  {"effective_sample_share",
+                   j.curvature_simulations > 0 ? json(j.effective_sample_share) : json(nullptr)},
                   {"design_points", j.design_points},
                   {"simulations", j.simulations()},
                   {"runs", per_run}};

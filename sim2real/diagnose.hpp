@@ -204,7 +204,8 @@ struct SensitivityJudgement {
   int curvature_simulations = 0;     // of the calibration runs, for the Hessian
   // the calibration runs' effective samples over their samples at the fit (Σ n_eff / Σ n over
   // their cells, ResidualCell::effective_samples): the share of the likelihood's samples the
-  // curvature counted, 1 where the residual is white
+  // curvature counted, 1 where the residual is white; null in the JSON where no curvature was
+  // measured (the judgement skipped)
   double effective_sample_share = 1.0;
   int design_points = 0;             // simulations per run judged
   std::vector<SensitivityRun> runs;  // per run (all of them)

@@ -232,6 +232,7 @@ TEST(Diagnose, JsonReportsTheSensitivityJudgements) {
   EXPECT_EQ(j["sensitivity_simulations"].get<int>(), 4);  // 2 for the curvature, 2 for run b
   ASSERT_EQ(j["sensitivity"].size(), 2u);
   EXPECT_EQ(j["sensitivity"][0]["reason"], "every run is within noise without it");
+  EXPECT_TRUE(j["sensitivity"][0]["effective_sample_share"].is_null());  // no curvature measured
   EXPECT_FALSE(j["sensitivity"][1].contains("reason"));
   const auto& p = j["sensitivity"][1]["parameters"][0];
   EXPECT_EQ(p["parameter"], "time_constant");

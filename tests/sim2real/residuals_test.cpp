@@ -85,7 +85,7 @@ TEST(Residuals, APerfectModelLeavesNoExcessAndABiasDoes) {
 TEST(Residuals, TheIntegratedAutocorrelationTimeOfKnownProcesses) {
   auto rng = fresh_rng();
   std::normal_distribution<double> unit(0.0, 1.0);
-  // long enough that the windowed estimate's scatter, τ √(2 (2M + 1) / n), is a few % of τ
+  // long enough that the estimate's scatter, about τ √(4τ / n), is a few % of τ
   constexpr int kN = 200000;
   // x_{i+1} = ρ x_i + √(1 − ρ²) e: unit variance, autocorrelation ρ^k
   const auto ar1 = [&](double rho) {
@@ -114,6 +114,10 @@ TEST(Residuals, TheIntegratedAutocorrelationTimeOfKnownProcesses) {
   }
   EXPECT_NEAR(1000.0 / integrated_autocorrelation_time(offset, halves), 2.0, 0.01);
   EXPECT_NEAR(integrated_autocorrelation_time(std::vector<double>(1000, 3.0)), 1000.0, 1e-9);
+  // by hand: ρ_1..ρ_7 of this series are (−6, 9, 5, −2, 9, −4, 4)/19, so the pair sums are
+  // Γ = (13, 14, 7, 0)/19; the monotone sequence holds Γ_1 to Γ_0: τ = −1 + 2 (13 + 13 + 7)/19
+  // (the plain initial positive sequence would give 49/19)
+  EXPECT_NEAR(integrated_autocorrelation_time({-2, 1, -2, -1, 0, -2, 1, -2}), 47.0 / 19.0, 1e-12);
   // degenerate series count as independent samples; mismatched segment labels are an error
   EXPECT_EQ(integrated_autocorrelation_time({}), 1.0);
   EXPECT_EQ(integrated_autocorrelation_time({5.0}), 1.0);
