@@ -628,7 +628,10 @@ class Search {
     }
     std::sort(dr.fitted.begin(), dr.fitted.end(), [](const auto& a, const auto& b) { return a.score < b.score; });
     // 5. add the winner only when it explains enough of what is left; else the best pair, if it
-    // does
+    // does; 6. then, if an earlier round's effect carries fitted parameters, all of them refitted
+    // together
+    const bool earlier_fitted = std::any_of(d_.found.begin(), d_.found.end(),
+                                            [](const FittedEffect& f) { return !f.x.empty(); });
     if (!dr.fitted.empty() && dr.fitted[0].explained >= kMinExplained) {
       dr.added = true;
       add(dr.fitted[0]);
@@ -646,8 +649,81 @@ class Search {
       say("round " + std::to_string(number) + ": no candidate or pair explains " +
           message_number(100.0 * kMinExplained) + " % of the excess left; nothing added");
     }
+    if (dr.added && earlier_fitted) dr.refit = refit_found(number);
     d_.rounds.push_back(dr);
     return dr.added;
+  }
+
+  // 6. every found effect's fitted parameters refitted together on the calibration runs (the
+  // likelihood, as a pair's fit, from the values the rounds left), a learned correction at its
+  // coefficients; the refit replaces them only if the calibration runs' log-ratio falls and the
+  // held-out runs' excess does not rise (a joint fit that buys the calibration runs at the held-out
+  // runs' cost is an overfit, not an explanation)
+  JointRefit refit_found(int number) {
+    JointRefit r;
+    std::vector<double> x;
+    for (const FittedEffect& f : d_.found) {
+      r.before.push_back(f.spec);
+      x.insert(x.end(), f.x.begin(), f.x.end());
+    }
+    const auto score_found = [&](const std::vector<std::size_t>& which,
+                                 const std::vector<double>& y) {
+      std::vector<double> e, l;
+      for (std::size_t i : which) {
+        const Residuals res = compute_residuals(simulate_found_at(i, y), runs_[i].run, sigma_[i]);
+        e.push_back(res.excess);
+        l.push_back(res.log_ratio);
+        ++r.simulations;
+      }
+      return Score{mean_of(e), mean_of(l)};
+    };
+    std::vector<double> ratio;
+    for (std::size_t i : d_.calibration) ratio.push_back(current_residuals_[i].log_ratio);
+    r.log_ratio_before = mean_of(ratio);
+    r.excess_calibration_before = current_cal_;
+    r.excess_validation_before = current_val_;
+    minimise([&](const std::vector<double>& y) { return score_found(d_.calibration, y).log_ratio; },
+             x, 0.5 / kScanPointsPerAxis2,
+             kFitEvaluationsPerParameter * static_cast<int>(x.size()));
+    const Score cal = score_found(d_.calibration, x);
+    const bool disjoint = d_.validation != d_.calibration;
+    const Score val = disjoint ? score_found(d_.validation, x) : cal;
+    r.log_ratio_after = cal.log_ratio;
+    r.excess_calibration_after = cal.excess;
+    r.excess_validation_after = val.excess;
+    r.kept = r.log_ratio_after < r.log_ratio_before &&
+             r.excess_validation_after <= r.excess_validation_before;
+    // the effects at their refitted values (found order, each effect's parameters in its order)
+    std::size_t at = 0;
+    for (FittedEffect& f : d_.found) {
+      const std::vector<double> xf(x.begin() + static_cast<std::ptrdiff_t>(at),
+                                   x.begin() + static_cast<std::ptrdiff_t>(at + f.x.size()));
+      at += f.x.size();
+      const std::string spec = f.x.empty() ? f.spec : as_fitted(f.candidate, xf).spec;
+      r.after.push_back(spec);
+      if (!r.kept || f.x.empty()) continue;
+      const FittedEffect refitted = as_fitted(f.candidate, xf);
+      f.x = refitted.x;
+      f.spec = refitted.spec;
+      f.effect = refitted.effect;
+    }
+    say("round " + std::to_string(number) + ": refitted together (" +
+        (r.kept ? "kept" : "not kept") + "): calibration log-ratio " +
+        message_number(r.log_ratio_before) + " -> " + message_number(r.log_ratio_after) +
+        ", held-out excess " + message_number(r.excess_validation_before) + " -> " +
+        message_number(r.excess_validation_after));
+    if (r.kept) {
+      judged_valid_ = false;
+      for (std::size_t k = 0; k < d_.found.size(); ++k) found_specs_[k] = d_.found[k].spec;
+      current_cal_ = r.excess_calibration_after;
+      current_val_ = r.excess_validation_after;
+      current_runs_ = simulate_all(nullptr);
+      for (std::size_t i = 0; i < runs_.size(); ++i) {
+        current_runs_[i].summary.fidelity = "with-effects";
+        current_residuals_[i] = compute_residuals(current_runs_[i], runs_[i].run, sigma_[i]);
+      }
+    }
+    return r;
   }
 
   // discovery: a learned correction per target, fitted on the calibration runs against the current
@@ -1363,12 +1439,25 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
                        {"explained", p.explained},
                        {"explained_on", p.explained_on},
                        {"score", p.score}});
+    json refit = nullptr;
+    if (r.refit)
+      refit = {{"before", r.refit->before},
+               {"after", r.refit->after},
+               {"excess_calibration_before", r.refit->excess_calibration_before},
+               {"excess_calibration_after", r.refit->excess_calibration_after},
+               {"excess_validation_before", r.refit->excess_validation_before},
+               {"excess_validation_after", r.refit->excess_validation_after},
+               {"log_ratio_before", r.refit->log_ratio_before},
+               {"log_ratio_after", r.refit->log_ratio_after},
+               {"kept", r.refit->kept},
+               {"simulations", r.refit->simulations}};
     rounds.push_back({{"excess_before", r.excess_before},
                       {"screened_out", r.screened_out},
                       {"failed", failed},
                       {"fitted", fitted},
                       {"pairs", pairs},
-                      {"added", r.added}});
+                      {"added", r.added},
+                      {"refit", refit}});
   }
   // the sensitivity judgements (docs/sim2real.md): each with its parameters' uncertainty, its cost
   // and every run's excess without and with the spread

@@ -161,6 +161,19 @@ struct FittedPair {
   double score = 0.0;  // as a single's, with both effects' parameters penalised
 };
 
+// the effects found refitted together after a round added one (greedy forward selection fits each
+// with the earlier ones fixed, so an earlier fit may have taken up part of what a later effect
+// explains): kept only if it fits the calibration runs better and leaves the held-out runs no worse
+struct JointRefit {
+  std::vector<std::string> before, after;  // the found effects' specs (after: as refitted)
+  double excess_calibration_before = 0.0, excess_calibration_after = 0.0;
+  double excess_validation_before = 0.0, excess_validation_after = 0.0;
+  double log_ratio_before = 0.0,
+         log_ratio_after = 0.0;  // calibration runs' mean, the fit's objective
+  bool kept = false;
+  int simulations = 0;
+};
+
 struct DiagnosisRound {
   double excess_before = 0.0;            // mean validation excess per run before the round
   std::vector<std::string> screened_out; // labels the signature screen skipped
@@ -169,6 +182,8 @@ struct DiagnosisRound {
   std::vector<FittedEffect> fitted;      // best score first
   std::vector<FittedPair> pairs;         // when no single one explains enough; best score first
   bool added = false;                    // fitted[0] was added, or pairs[0]'s two effects
+  // after an addition that leaves two or more effects with fitted parameters
+  std::optional<JointRefit> refit;
 };
 
 // one fitted parameter in a sensitivity judgement: its value and the fit's uncertainty

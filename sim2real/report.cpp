@@ -72,6 +72,22 @@ std::string sensitivity_note(const Diagnosis& d) {
   return s.str();
 }
 
+std::string refit_note(const Diagnosis& d) {
+  std::ostringstream s;
+  for (std::size_t k = 0; k < d.rounds.size(); ++k) {
+    const auto& r = d.rounds[k].refit;
+    if (!r) continue;
+    s << "\nRefitted together after round " << k + 1 << " (" << (r->kept ? "kept" : "not kept")
+      << "; calibration log-ratio " << std::setprecision(3) << r->log_ratio_before << " -> "
+      << r->log_ratio_after << ", held-out excess " << r->excess_validation_before << " -> "
+      << r->excess_validation_after << ", " << r->simulations << " simulations):";
+    for (std::size_t e = 0; e < r->before.size(); ++e)
+      s << (e ? "; " : " ") << r->before[e] << " -> " << r->after[e];
+    s << ".\n";
+  }
+  return s.str();
+}
+
 std::vector<TableRow> error_table(const std::vector<TableRow>& rows) {
   std::vector<TableRow> table = rows;
   table.push_back(mean_row(rows, "mean over runs"));
@@ -112,6 +128,7 @@ std::string diagnosis_report(const Diagnosis& d, const std::vector<MeasuredRun>&
              << " % of the excess of the " << f.explained_on << " runs)\n";
     report << (d.unexplained ? "\nAn excess beyond noise remains: UNEXPLAINED in part.\n" : "\nWhat remains is within noise.\n");
   }
+  report << refit_note(d);
   report << sensitivity_note(d);
   // what the discovery fitted beyond the candidates
   if (d.discovery_ran) {

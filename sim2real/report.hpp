@@ -29,6 +29,11 @@ std::string spread_note(const Residuals& residuals);
 // not used; empty when nothing was judged
 std::string sensitivity_note(const Diagnosis& d);
 
+// a line per joint refit (DiagnosisRound::refit): kept or not, the calibration log-ratio and the
+// held-out excess before and after, its simulations, and each effect's spec before and after;
+// empty when no round refitted
+std::string refit_note(const Diagnosis& d);
+
 // per-run error rows with their mean over the runs as the last row ("mean over runs"): the
 // report's tables and the CSV files'
 std::vector<TableRow> error_table(const std::vector<TableRow>& rows);

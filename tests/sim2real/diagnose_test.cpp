@@ -147,7 +147,19 @@ TEST(Diagnose, JsonHasTheIssuesFields) {
   f.effect = {{"name", "hydraulic_lag"}, {"params", {{"time_constant", 0.3}}}};
   d.found.push_back(f);
   d.candidates = {"hydraulic_lag", "soil_cohesion"};
+  // two rounds, the second with a joint refit
+  d.rounds.resize(2);
+  JointRefit refit;
+  refit.before = {"hydraulic_lag:time_constant=0.35", "cylinder_friction:force=9000"};
+  refit.after = {"hydraulic_lag:time_constant=0.3", "cylinder_friction:force=10000"};
+  refit.kept = true;
+  refit.simulations = 12;
+  d.rounds[1].refit = refit;
   const auto j = diagnosis_json(d);
+  EXPECT_TRUE(j["rounds"][0]["refit"].is_null());
+  EXPECT_TRUE(j["rounds"][1]["refit"]["kept"].get<bool>());
+  EXPECT_EQ(j["rounds"][1]["refit"]["after"][1], "cylinder_friction:force=10000");
+  EXPECT_EQ(j["rounds"][1]["refit"]["simulations"].get<int>(), 12);
   ASSERT_EQ(j["effects_found"].size(), 1u);
   EXPECT_EQ(j["candidates"], nlohmann::json({"hydraulic_lag", "soil_cohesion"}));
   EXPECT_EQ(j["effects_found"][0]["name"], "hydraulic_lag");

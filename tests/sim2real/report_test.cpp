@@ -75,6 +75,30 @@ TEST(Report, SaysWhenTheSimulationsSpreadJudgedTheResidual) {
     EXPECT_NE(note.find(part), std::string::npos) << part << "\n" << note;
 }
 
+// a joint refit in a line: kept or not, the objective and the held-out excess, each effect's spec
+// before and after; nothing without one
+TEST(Report, SaysInALineWhatTheJointRefitChanged) {
+  Diagnosis d;
+  d.rounds.resize(2);
+  EXPECT_EQ(refit_note(d), "");
+  JointRefit r;
+  r.before = {"cylinder_friction:force=25000", "sensor_bias:channel=f_lift,bias=21884"};
+  r.after = {"cylinder_friction:force=19973", "sensor_bias:channel=f_lift,bias=24835"};
+  r.log_ratio_before = 2.31;
+  r.log_ratio_after = -0.346;
+  r.excess_validation_before = 1.43;
+  r.excess_validation_after = 0.0;
+  r.kept = true;
+  r.simulations = 19;
+  d.rounds[1].refit = r;
+  const std::string note = refit_note(d);
+  for (const char* part : {"Refitted together after round 2 (kept", "log-ratio 2.31 -> -0.346",
+                           "held-out excess 1.43 -> 0", "19 simulations",
+                           "cylinder_friction:force=25000 -> cylinder_friction:force=19973",
+                           "bias=21884 -> sensor_bias:channel=f_lift,bias=24835"})
+    EXPECT_NE(note.find(part), std::string::npos) << part << "\n" << note;
+}
+
 // the verdict's sensitivity judgement in one line: the parameters within one standard error, the
 // simulations, the judged runs' excess without and with it; or why it was not used
 TEST(Report, SaysInALineWhetherTheSensitivitySpreadJudgedTheVerdict) {
