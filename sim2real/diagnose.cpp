@@ -713,15 +713,8 @@ class Search {
         ", held-out excess " + message_number(r.excess_validation_before) + " -> " +
         message_number(r.excess_validation_after));
     if (r.kept) {
-      judged_valid_ = false;
       for (std::size_t k = 0; k < d_.found.size(); ++k) found_specs_[k] = d_.found[k].spec;
-      current_cal_ = r.excess_calibration_after;
-      current_val_ = r.excess_validation_after;
-      current_runs_ = simulate_all(nullptr);
-      for (std::size_t i = 0; i < runs_.size(); ++i) {
-        current_runs_[i].summary.fidelity = "with-effects";
-        current_residuals_[i] = compute_residuals(current_runs_[i], runs_[i].run, sigma_[i]);
-      }
+      resimulate(r.excess_calibration_after, r.excess_validation_after);
     }
     return r;
   }
@@ -1302,11 +1295,17 @@ class Search {
 
   // the effect joins the model; every run is simulated again with it
   void add(const FittedEffect& f) {
-    judged_valid_ = false;
     d_.found.push_back(f);
     found_specs_.push_back(f.spec);
-    current_cal_ = f.excess_calibration;
-    current_val_ = f.excess_validation;
+    resimulate(f.excess_calibration, f.excess_validation);
+  }
+
+  // the model changed (found_specs_ as it now is; cal and val its mean excess on the calibration
+  // and held-out runs): every run simulated again, the verdict's judgement stale
+  void resimulate(double cal, double val) {
+    judged_valid_ = false;
+    current_cal_ = cal;
+    current_val_ = val;
     current_runs_ = simulate_all(nullptr);
     for (std::size_t i = 0; i < runs_.size(); ++i) {
       current_runs_[i].summary.fidelity = "with-effects";
