@@ -223,7 +223,9 @@ TEST(DiagnoseTest, EffectsFoundInTwoRoundsAreRefittedTogether) {
   // cylinder friction of about 20 kN with an f_lift sensor bias of about 25 kN: the friction is
   // found first and fitted with the bias missing, so it takes up part of the bias (25 kN, the top
   // of its scan, for 20 kN: seed 5 of the session that built this), and the bias found in round 2
-  // on top of it comes out low (21.9 kN). Refitted together they must both come back within 5 %
+  // on top of it comes out low (21.9 kN). Refitted together they must both come back within 5 %.
+  // Where the friction alone explains just under half (18.8 and 24.5 kN, seed 2263243748: 49 %)
+  // the pair search adds both in round 1, fitted jointly already: no refit, the same 5 %
   const unsigned seed = test_seed();
   std::mt19937_64 rng(seed);
   const double force = std::uniform_real_distribution<double>(18e3, 22e3)(rng);
@@ -239,14 +241,21 @@ TEST(DiagnoseTest, EffectsFoundInTwoRoundsAreRefittedTogether) {
                  " --effect sensor_bias:channel=f_lift,bias=" + std::to_string(bias),
              seed);
   const auto j = diagnose(base, " --max-effects 2");
-  // the refit ran after the round that added the second effect, and was kept
+  // found in two rounds: the refit ran after the second, and was kept
+  int rounds_adding = 0;
   const nlohmann::json* refit = nullptr;
-  for (const auto& r : j["rounds"])
+  for (const auto& r : j["rounds"]) {
+    rounds_adding += r["added"].get<bool>() ? 1 : 0;
     if (!r["refit"].is_null()) refit = &r["refit"];
-  ASSERT_NE(refit, nullptr) << context << ": " << j["rounds"].dump();
-  EXPECT_TRUE((*refit)["kept"].get<bool>()) << context << ": " << refit->dump();
-  EXPECT_LT((*refit)["log_ratio_after"].get<double>(), (*refit)["log_ratio_before"].get<double>())
-      << context;
+  }
+  if (rounds_adding >= 2) {
+    ASSERT_NE(refit, nullptr) << context << ": " << j["rounds"].dump();
+    EXPECT_TRUE((*refit)["kept"].get<bool>()) << context << ": " << refit->dump();
+    EXPECT_LT((*refit)["log_ratio_after"].get<double>(), (*refit)["log_ratio_before"].get<double>())
+        << context;
+  } else {
+    EXPECT_EQ(refit, nullptr) << context << ": a refit after a round that added a pair alone";
+  }
   // the effects found carry the refitted values, each within 5 % of the truth
   double found_force = 0.0, found_bias = 0.0;
   for (const auto& f : j["effects_found"]) {
