@@ -668,14 +668,8 @@ class Search {
     }
     const auto score_found = [&](const std::vector<std::size_t>& which,
                                  const std::vector<double>& y) {
-      std::vector<double> e, l;
-      for (std::size_t i : which) {
-        const Residuals res = compute_residuals(simulate_found_at(i, y), runs_[i].run, sigma_[i]);
-        e.push_back(res.excess);
-        l.push_back(res.log_ratio);
-        ++r.simulations;
-      }
-      return Score{mean_of(e), mean_of(l)};
+      r.simulations += static_cast<int>(which.size());
+      return score_model(which, [&](std::size_t i) { return simulate_found_at(i, y); });
     };
     std::vector<double> ratio;
     for (std::size_t i : d_.calibration) ratio.push_back(current_residuals_[i].log_ratio);
@@ -699,10 +693,13 @@ class Search {
       const std::vector<double> xf(x.begin() + static_cast<std::ptrdiff_t>(at),
                                    x.begin() + static_cast<std::ptrdiff_t>(at + f.x.size()));
       at += f.x.size();
-      const std::string spec = f.x.empty() ? f.spec : as_fitted(f.candidate, xf).spec;
-      r.after.push_back(spec);
-      if (!r.kept || f.x.empty()) continue;
+      if (f.x.empty()) {
+        r.after.push_back(f.spec);
+        continue;
+      }
       const FittedEffect refitted = as_fitted(f.candidate, xf);
+      r.after.push_back(refitted.spec);
+      if (!r.kept) continue;
       f.x = refitted.x;
       f.spec = refitted.spec;
       f.effect = refitted.effect;
@@ -951,10 +948,17 @@ class Search {
 
   // the mean excess and log-ratio per run of the runs `which` with the candidate at x
   Score score_runs(const std::vector<std::size_t>& which, const Candidate* c, const std::vector<double>& x) {
+    return score_model(which, [&](std::size_t i) {
+      return simulate(i, c ? make_candidate(*c, x, options_.plugins) : nullptr);
+    });
+  }
+
+  // the mean excess and log-ratio over some runs of a model, each run simulated by `simulated`
+  Score score_model(const std::vector<std::size_t>& which,
+                    const std::function<Run(std::size_t)>& simulated) {
     std::vector<double> e, l;
     for (std::size_t i : which) {
-      const Run r = simulate(i, c ? make_candidate(*c, x, options_.plugins) : nullptr);
-      const Residuals res = compute_residuals(r, runs_[i].run, sigma_[i]);
+      const Residuals res = compute_residuals(simulated(i), runs_[i].run, sigma_[i]);
       e.push_back(res.excess);
       l.push_back(res.log_ratio);
     }
@@ -1241,14 +1245,7 @@ class Search {
           {cb, std::vector<double>(y.begin() + static_cast<std::ptrdiff_t>(ka), y.end())}};
     };
     auto score_pair = [&](const std::vector<std::size_t>& which, const std::vector<double>& y) {
-      std::vector<double> e, l;
-      for (std::size_t i : which) {
-        const Residuals res =
-            compute_residuals(simulate_with(i, split(y)), runs_[i].run, sigma_[i]);
-        e.push_back(res.excess);
-        l.push_back(res.log_ratio);
-      }
-      return Score{mean_of(e), mean_of(l)};
+      return score_model(which, [&](std::size_t i) { return simulate_with(i, split(y)); });
     };
     const std::vector<double> start = x;
     minimise([&](const std::vector<double>& y) { return score_pair(d_.calibration, y).log_ratio; },
