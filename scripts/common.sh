@@ -8,7 +8,7 @@ build="$root/build"
 packages=(build-essential cmake pkg-config
   pocl-opencl-icd ocl-icd-opencl-dev opencl-headers opencl-clhpp-headers clinfo
   libeigen3-dev libembree-dev libsuitesparse-dev libgtest-dev libgmock-dev libbenchmark-dev
-  nlohmann-json3-dev libcli11-dev libopenmpi-dev openmpi-bin libpng-dev libnlopt-dev libplplot-dev plplot-driver-cairo libcairo2-dev fonts-dejavu-core python3 python3-venv
+  nlohmann-json3-dev libcli11-dev libopenmpi-dev openmpi-bin libpng-dev libnlopt-dev libboost-dev libplplot-dev plplot-driver-cairo libcairo2-dev fonts-dejavu-core python3 python3-venv
   python3-dev pybind11-dev python3-numpy python3-pytest python3-matplotlib python3-vtk9
   git clang-format clang-tidy doxygen)
 

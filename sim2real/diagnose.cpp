@@ -581,6 +581,7 @@ class Search {
       if (!with.spread) with.spread = RunSpread{};
       with.spread->sensitivity_runs = static_cast<int>(m);
       with.spread->sensitivity = sensitivity_variance(current_runs_[i], runs);
+      with.spread->sensitivity_dof = sensitivity_dof(current_runs_[i], runs);
       judged_[i] = compute_residuals(with, runs_[i].run, sigma_[i]);
       jr.used = true;
       jr.excess_with = judged_[i].excess;
@@ -1397,8 +1398,9 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
     return a;
   };
   // the simulation's own spread in a run's likelihood (sim2real/residuals.hpp): null when the
-  // sensor noise alone judged it, else the piles and each channel's mean share of the variance
-  // its residual was judged against, for the baseline and for the model with what was found
+  // sensor noise alone judged it, else the piles, their variance's degrees of freedom and each
+  // channel's mean share of the variance its residual was judged against, for the baseline and for
+  // the model with what was found
   auto spread_json = [](const Residuals& before, const Residuals& after) {
     if (before.spread_members == 0) return json(nullptr);
     json share_before = json::object(), share_after = json::object();
@@ -1406,7 +1408,15 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
       share_before[kChannelNames[c]] = before.spread_share_of(c);
       share_after[kChannelNames[c]] = after.spread_share_of(c);
     }
+    // the members' variance's degrees of freedom per channel (null: taken as known exactly)
+    json dof = nullptr;
+    if (!before.variance_dof.empty()) {
+      dof = json::object();
+      for (std::size_t c = 1; c < kChannelCount; ++c)
+        dof[kChannelNames[c]] = before.variance_dof[c];
+    }
     return json{{"members", before.spread_members},
+                {"variance_dof", dof},
                 {"variance_share_before", share_before},
                 {"variance_share_after", share_after}};
   };

@@ -70,11 +70,26 @@ TimeSeries ensemble_variance(const std::vector<Run>& runs,
 TimeSeries sensitivity_variance(const Run& fitted, const std::vector<Run>& perturbed,
                                 double half_window_s = kSpreadHalfWindow);
 
+// the degrees of freedom of ensemble_variance's estimate per channel (index as kChannelNames; t's
+// entry 0): ν = (N − 1) max(1, m / τ), m the samples one window pools (their mean count over the
+// run) and τ the integrated autocorrelation time of the members' departures from their mean (each
+// member its own segment: integrated_autocorrelation_time in sim2real/residuals.hpp). The pooled
+// samples scatter independently only as far as the departures decorrelate within the window: on
+// HD27 they stay correlated for 0.2-2 s, so at ±0.2 s three members give ν ≈ 2 in most channels,
+// not the (N − 1) m ≈ 80 of independent samples. Error as ensemble_variance's
+std::vector<double> ensemble_dof(const std::vector<Run>& runs,
+                                 double half_window_s = kSpreadHalfWindow);
+
+// the same for sensitivity_variance's estimate: ν = M max(1, m / τ), the M perturbed runs'
+// departures from the fitted run behind τ. Error as sensitivity_variance's
+std::vector<double> sensitivity_dof(const Run& fitted, const std::vector<Run>& perturbed,
+                                    double half_window_s = kSpreadHalfWindow);
+
 // the ensemble's mean run: every channel averaged sample by sample, loaded mass and work
 // averaged; the runs must share their time base (the same scenario at the same level) and their
 // labels and phase marks, which the mean keeps. Error naming the first run that differs. Two or
-// more runs: the mean carries their spread (Run::spread: N and ensemble_variance), which the
-// residuals add to the sensor noise; one run is returned as it is, without a spread
+// more runs: the mean carries their spread (Run::spread: N, ensemble_variance, ensemble_dof), which
+// the residuals add to the sensor noise; one run is returned as it is, without a spread
 Run ensemble_mean(const std::vector<Run>& runs);
 
 // piles in one simulation's ensemble at most: a bound far above what smooths a D400 dig (3 to 5)

@@ -39,7 +39,17 @@ std::string spread_note(const Residuals& res) {
   for (std::size_t c = 1; c < kChannelCount; ++c)
     s << (c > 1 ? ", " : " ") << kChannelNames[c] << " " << std::setprecision(2) << std::fixed
       << res.spread_share_of(c) << std::defaultfloat;
-  s << ".\n\n";
+  s << ".";
+  // an estimated variance is judged by Student's t with its degrees of freedom
+  if (!res.variance_dof.empty()) {
+    s << " The piles' variance is an estimate, so each sample is judged by Student's t with its "
+         "degrees of freedom (Satterthwaite's, from these):";
+    for (std::size_t c = 1; c < kChannelCount; ++c)
+      s << (c > 1 ? ", " : " ") << kChannelNames[c] << " " << std::setprecision(1) << std::fixed
+        << res.variance_dof[c] << std::defaultfloat;
+    s << ".";
+  }
+  s << "\n\n";
   return s.str();
 }
 

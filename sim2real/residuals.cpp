@@ -1,6 +1,9 @@
 #include "sim2real/residuals.hpp"
 
 #include <algorithm>
+#include <boost/math/distributions/normal.hpp>
+#include <boost/math/distributions/students_t.hpp>
+#include <cfloat>
 #include <cmath>
 #include <utility>
 
@@ -17,6 +20,9 @@ constexpr double kSigmaFloor = 1e-6;
 // and never below this, in the channel's SI unit, for a channel that is zero throughout (its σ²
 // must stay a normal double: 1e-300 squared underflows to 0 and makes the excess NaN)
 constexpr double kSigmaAbsoluteFloor = 1e-12;
+// above this many degrees of freedom Student's t is the normal law to better than 1e-7 in its
+// deviates (the t quantile's expansion: z (1 + (z² + 1) / (4ν) + ...)), so it is judged as one
+constexpr double kGaussianDof = 1e7;
 // derivatives of measured channels by central differences over ±this many samples (0.2 s at
 // 100 Hz): long enough that 1 mm of stroke noise makes only 7 mm/s of rate noise
 constexpr int kDerivativeHalfWidth = 10;
@@ -65,6 +71,18 @@ double noise_sigma(const std::vector<double>& x) {
   for (double& v : d2) v = std::abs(v - centre);
   const double sigma = kMadToSigma * median(d2) / std::sqrt(6.0);
   return std::max(sigma, std::max(kSigmaFloor * largest, kSigmaAbsoluteFloor));
+}
+
+double gaussian_equivalent(double z, double dof) {
+  if (!(dof > 0.0))
+    throw Error("gaussian_equivalent: " + message_number(dof) +
+                " degrees of freedom; give more than 0");
+  const double magnitude = std::abs(z);
+  if (!std::isfinite(magnitude) || dof > kGaussianDof) return magnitude;
+  // the upper tail under t, then the normal deviate with that tail; a tail below the smallest
+  // normal double counts as that (a deviate of about 37: far beyond any noise either way)
+  const double tail = boost::math::cdf(complement(boost::math::students_t(dof), magnitude));
+  return boost::math::quantile(complement(boost::math::normal(), std::max(tail, DBL_MIN)));
 }
 
 std::vector<double> noise_sigmas(const TimeSeries& measured) {
@@ -129,6 +147,19 @@ void check_variance(const Run& simulated, const TimeSeries& variance, const std:
   }
 }
 
+// degrees of freedom: none (known exactly) or one per channel, each above 0 (t's entry ignored)
+void check_dof(const std::vector<double>& dof, const std::string& which) {
+  if (dof.empty()) return;
+  if (dof.size() != kChannelCount)
+    throw Error(which + " has " + std::to_string(dof.size()) + " entries for " +
+                std::to_string(kChannelCount) +
+                " channels; compute it with ensemble_dof or sensitivity_dof");
+  for (std::size_t c = 1; c < kChannelCount; ++c)
+    if (!(dof[c] > 0.0))
+      throw Error(which + "'s " + std::string(kChannelNames[c]) + " is " + message_number(dof[c]) +
+                  "; degrees of freedom are above 0 (or leave them empty: known exactly)");
+}
+
 void check_spread(const Run& simulated) {
   const RunSpread& s = *simulated.spread;
   const std::string which =
@@ -146,6 +177,8 @@ void check_spread(const Run& simulated) {
                 "leave the spread empty instead");
   if (s.members > 0) check_variance(simulated, s.variance, which + ": variance");
   if (s.sensitivity_runs > 0) check_variance(simulated, s.sensitivity, which + ": sensitivity");
+  check_dof(s.variance_dof, which + ": variance_dof");
+  check_dof(s.sensitivity_dof, which + ": sensitivity_dof");
 }
 
 }  // namespace
@@ -166,6 +199,7 @@ Residuals compute_residuals(const Run& simulated, const Run& measured, const std
   if (simulated.spread) {
     check_spread(simulated);
     out.spread_members = simulated.spread->members;
+    if (out.spread_members > 0) out.variance_dof = simulated.spread->variance_dof;
     out.sensitivity_runs = simulated.spread->sensitivity_runs;
   }
   // the measured run stands for one more arrangement and the mean has its own error: (1 + 1/N) v
@@ -175,18 +209,42 @@ Residuals compute_residuals(const Run& simulated, const Run& measured, const std
     // the model's variance per sample, (1 + 1/N) v + s, and the sample's variance in units of
     // the sensor's, w = 1 + ((1 + 1/N) v + s) / σ²: exactly 1 without a spread
     std::vector<double> model(tm.size(), 0.0), w(tm.size(), 1.0);
+    // and each sample's standardised residual on the normal scale [channel unit] (the header
+    // comment; r/√w itself without degrees of freedom) and its square, what MSE_w sums
+    std::vector<double> standard(r), square(tm.size());
+    for (size_t i = 0; i < tm.size(); ++i) square[i] = r[i] * r[i];
     if (simulated.spread) {
+      const RunSpread& spread = *simulated.spread;
+      // Satterthwaite's denominator Σ m_k² / ν_k of the model variance (0: known exactly)
+      std::vector<double> unknown(tm.size(), 0.0);
       if (out.spread_members > 0) {
-        const auto v =
-            at_measured_times(simulated, simulated.spread->variance.columns[c], measured);
-        for (size_t i = 0; i < tm.size(); ++i) model[i] = inflation * v[i];
+        const auto v = at_measured_times(simulated, spread.variance.columns[c], measured);
+        const double dof = spread.variance_dof.empty() ? HUGE_VAL : spread.variance_dof[c];
+        for (size_t i = 0; i < tm.size(); ++i) {
+          model[i] = inflation * v[i];
+          unknown[i] += model[i] * model[i] / dof;
+        }
       }
       if (out.sensitivity_runs > 0) {
-        const auto sv =
-            at_measured_times(simulated, simulated.spread->sensitivity.columns[c], measured);
-        for (size_t i = 0; i < tm.size(); ++i) model[i] += sv[i];
+        const auto sv = at_measured_times(simulated, spread.sensitivity.columns[c], measured);
+        const double dof = spread.sensitivity_dof.empty() ? HUGE_VAL : spread.sensitivity_dof[c];
+        for (size_t i = 0; i < tm.size(); ++i) {
+          model[i] += sv[i];
+          unknown[i] += sv[i] * sv[i] / dof;
+        }
       }
-      for (size_t i = 0; i < tm.size(); ++i) w[i] = 1.0 + model[i] / (sigma[c] * sigma[c]);
+      const double noise = sigma[c] * sigma[c];
+      for (size_t i = 0; i < tm.size(); ++i) {
+        w[i] = 1.0 + model[i] / noise;
+        standard[i] = r[i] / std::sqrt(w[i]);
+        square[i] = r[i] * r[i] / w[i];
+        if (!(unknown[i] > 0.0)) continue;
+        // Satterthwaite's ν of σ² + m, σ² known exactly: (σ² + m)² / Σ m_k² / ν_k
+        const double dof = (noise + model[i]) * (noise + model[i]) / unknown[i];
+        standard[i] =
+            std::copysign(sigma[c] * gaussian_equivalent(standard[i] / sigma[c], dof), r[i]);
+        square[i] = standard[i] * standard[i];
+      }
     }
     for (size_t p = 0; p < out.phases.size(); ++p) {
       // samples of the phase: [t0, t1) except the last phase, which keeps its end
@@ -197,13 +255,13 @@ Residuals compute_residuals(const Run& simulated, const Run& measured, const std
       cell.phase = p;
       cell.sigma = sigma[c];
       double sum = 0.0, sum2 = 0.0, sum2w = 0.0, sum_log_w = 0.0, sum_model = 0.0, sum_share = 0.0;
-      std::vector<double> z;  // the standardised residual r/√w over the cell
+      std::vector<double> z;  // the standardised residual over the cell
       for (size_t i = 0; i < tm.size(); ++i) {
         if (tm[i] < ph.t0 || tm[i] > ph.t1 || (!last && tm[i] >= ph.t1)) continue;
-        z.push_back(r[i] / std::sqrt(w[i]));
+        z.push_back(standard[i]);
         sum += r[i];
         sum2 += r[i] * r[i];
-        sum2w += r[i] * r[i] / w[i];
+        sum2w += square[i];
         sum_log_w += std::log(w[i]);
         sum_model += model[i];
         sum_share += (w[i] - 1.0) / w[i];

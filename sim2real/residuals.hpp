@@ -42,11 +42,29 @@
 // each sample is judged against σ² + (1 + 1/N) v + s, through the same w and the same formulas
 // (N = 0, no ensemble: σ² + s).
 //
+// A variance estimated from few numbers (issue 17): the ensemble's v and the sensitivity's s are
+// each the pooled mean square of a few runs' departures, which stay correlated longer than the
+// pooling window, so each carries ν degrees of freedom (RunSpread::variance_dof, sensitivity_dof;
+// ensemble_dof in sim2real/replay.hpp: about 2 for three piles on HD27). Dividing by such an
+// estimate is not dividing by the variance: r / √(σ² + m̂) follows Student's t, not the normal law,
+// and where m̂ falls short by chance the Gaussian judgement reads noise as excess (a 2-degree
+// estimate of a spread 100 times the sensor variance makes the mean of z² about 4, not 1). So each
+// sample's standardised residual z = r / (σ √w) is judged by its t law and counted on the normal
+// scale the excess was made for: z' = gaussian_equivalent(z, ν_i), the normal deviate with the
+// same two-sided tail probability, ν_i by Satterthwaite's rule for σ² (known exactly) plus the
+// estimates m_k (k: ensemble, sensitivity), ν_i = (σ² + m_i)² / Σ_k (m_k,i² / ν_k). MSE_w and the
+// effective samples then use σ² z'² for r² / w. Without degrees of freedom (a run judged against
+// the sensor alone, or a spread without them) z' = z exactly. Measured on HD27-G400 pile data with
+// the true effect (docs/sim2real.md "Judged by Student's t"): the run excess of the null falls
+// about threefold; the verdict is not yet right with three piles (a dig whose fill lies outside
+// all three members stays beyond noise).
+//
 // Correlated residuals (issue 17): the log-ratio counts every sample as independent, but a dig's
 // residual is correlated in time (two pile arrangements' forces over about 0.1 s, a misfit over a
 // whole phase), so n samples carry the information of fewer. Each cell records its effective
 // samples n_eff = n / τ, τ the integrated autocorrelation time of the standardised residual r/√w
-// in the cell: the variance of a mean of correlated samples is τ times that of independent ones
+// in the cell (z' where the variance has degrees of freedom, above): the variance of a mean of
+// correlated samples is τ times that of independent ones
 // (the discovery's regression inflates its intervals by the same law, sim2real/discovery.hpp).
 // The diagnosis weighs each cell's log-ratio by n_eff where it measures the fit's uncertainty
 // (sim2real/diagnose.cpp, the sensitivity's curvature).
@@ -79,6 +97,12 @@ inline constexpr double kNoiseAllowance = 1.5;
 // gives 1
 double integrated_autocorrelation_time(const std::vector<double>& z,
                                        const std::vector<int>& segment = {});
+
+// the normal deviate with the same two-sided tail probability as |z| under Student's t with `dof`
+// degrees of freedom: |z| itself for infinite dof (or above 1e7, where the two agree to 1e-7),
+// smaller the fewer the degrees (z = 4.303 is 1.960 at 2 degrees, both the 5 % two-sided point).
+// Error for dof ≤ 0 or NaN; a non-finite z is returned as its magnitude
+double gaussian_equivalent(double z, double dof);
 
 // the noise standard deviation of a uniformly sampled signal (at least 3 samples), never below
 // 1e-6 of its largest magnitude (noise-free data would otherwise make any residual infinite)
@@ -125,6 +149,9 @@ struct Residuals {
   double log_ratio = 0.0;
   // N of the simulated run's spread the residual was judged with; 0: none (the sensor noise alone)
   int spread_members = 0;
+  // the degrees of freedom of that ensemble's variance per channel (RunSpread::variance_dof);
+  // empty: known exactly, or no ensemble
+  std::vector<double> variance_dof;
   // the simulations behind the sensitivity it was judged with too; 0: none
   int sensitivity_runs = 0;
   // whether any model variance (ensemble or sensitivity) judged it

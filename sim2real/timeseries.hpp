@@ -72,6 +72,13 @@ struct RunSpread {
   // [channel unit²], pooled as the ensemble's (sensitivity_variance), added to the residual's
   // variance as it is; empty with sensitivity_runs = 0
   TimeSeries sensitivity;
+  // the degrees of freedom of each estimate per channel (index as kChannelNames, t's entry 0):
+  // few members or runs, pooled over a window shorter than their departures last, estimate a
+  // variance from a handful of independent numbers, and compute_residuals judges the residual
+  // against it by Student's t (ensemble_dof, sensitivity_dof in sim2real/replay.hpp). Empty:
+  // exactly known (the Gaussian judgement)
+  std::vector<double> variance_dof;
+  std::vector<double> sensitivity_dof;
 };
 
 struct Run {

@@ -183,7 +183,7 @@ TEST(Diagnose, JsonReportsTheModelSpreadItUsed) {
   measured.summary = test::reference_summary();
   sim2real::Run simulated;
   simulated.series = test::simulated_series();
-  simulated.spread = RunSpread{3, {}, 0, {}};
+  simulated.spread = RunSpread{3, {}, 0, {}, {}, {}};
   simulated.spread->variance[Channel::t] = simulated.series[Channel::t];
   for (std::size_t c = 1; c < kChannelCount; ++c)
     simulated.spread->variance.columns[c].assign(simulated.series.size(), c == 1 ? 4e6 : 0.0);
@@ -209,6 +209,15 @@ TEST(Diagnose, JsonReportsTheModelSpreadItUsed) {
   EXPECT_NEAR(cell["spread_share"].get<double>(), 16.0 / 19.0, 1e-12);
   EXPECT_EQ(cell["effective_samples"].get<double>(),
             d.residuals_before[0].cells[0].effective_samples);
+  // a variance taken as known has no degrees of freedom; an estimated one gives them per channel
+  EXPECT_TRUE(spread["variance_dof"].is_null());
+  simulated.spread->variance_dof.assign(kChannelCount, 2.0);
+  simulated.spread->variance_dof[static_cast<std::size_t>(Channel::power)] = 7.5;
+  d.residuals_before = {compute_residuals(simulated, measured, sigma)};
+  const auto dof = diagnosis_json(d)["runs"][0]["model_spread"]["variance_dof"];
+  EXPECT_EQ(dof["f_lift"].get<double>(), 2.0);
+  EXPECT_EQ(dof["power"].get<double>(), 7.5);
+  EXPECT_FALSE(dof.contains("t"));
 }
 
 // diagnosis.json says per run whether the sensitivity spread judged it, its simulations and the

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <random>
 
 #include "host/error.hpp"
 #include "sim2real/synthetic.hpp"
@@ -204,6 +205,56 @@ TEST(Replay, ASensitivityIsThePerturbedRunsMeanSquareDepartureFromTheFit) {
   for (double& t : later.series[Channel::t]) t += 0.01;
   EXPECT_THROW(sensitivity_variance(fitted, {later}), Error);
   EXPECT_THROW(sensitivity_variance(fitted, perturbed, -0.1), Error);
+}
+
+// the degrees of freedom of a pooled variance: N − 1 per window of samples that scatter
+// independently. Members whose departures are white noise pool m ≈ 41 independent samples at ±0.2 s
+// and 100 Hz, so ν ≈ 2 · 41 (a little less: the windows shrink at the run's ends, and τ of white
+// noise is measured near 1, not exactly); members that differ by a constant (a pile that fills the
+// bucket more throughout) pool one number each however wide the window: ν = N − 1 exactly. The
+// sensitivity's are M per window the same way
+TEST(Replay, APooledVarianceHasAsManyDegreesAsIndependentSamplesInAWindow) {
+  std::mt19937_64 rng(std::random_device{}());
+  std::normal_distribution<double> normal(0.0, 1.0);
+  sim2real::Run base;
+  base.series = test::reference_series();
+  base.summary = test::reference_summary();
+  std::vector<sim2real::Run> runs(3, base);
+  for (std::size_t k = 0; k < runs.size(); ++k) {
+    for (double& f : runs[k].series[Channel::f_lift]) f += normal(rng);      // white departures
+    for (double& f : runs[k].series[Channel::f_tilt]) f += double(k) * 5.0;  // constant ones
+  }
+  const std::size_t lift = static_cast<std::size_t>(Channel::f_lift),
+                    tilt = static_cast<std::size_t>(Channel::f_tilt),
+                    power = static_cast<std::size_t>(Channel::power);
+  const std::vector<double> dof = ensemble_dof(runs);
+  ASSERT_EQ(dof.size(), kChannelCount);
+  EXPECT_EQ(dof[0], 0.0);  // t
+  std::printf("[ measured ] ensemble of 3: f_lift (white) %.1f, f_tilt (constant) %.1f degrees\n",
+              dof[lift], dof[tilt]);
+  EXPECT_GT(dof[lift], 2.0 * 41.0 * 0.7);
+  EXPECT_LE(dof[lift], 2.0 * 41.0);
+  EXPECT_EQ(dof[tilt], 2.0);
+  // channels where the members agree exactly count as white (τ = 1): the window's samples
+  EXPECT_GT(dof[power], 2.0 * 40.0);
+  // the mean carries them beside its variance
+  EXPECT_EQ(ensemble_mean(runs).spread->variance_dof, dof);
+  // without pooling, a sample is its own estimate: N − 1
+  EXPECT_EQ(ensemble_dof(runs, 0.0)[lift], 2.0);
+
+  // the sensitivity: M = 2 perturbed runs, white and constant departures from the fit
+  std::vector<sim2real::Run> perturbed(2, base);
+  for (std::size_t k = 0; k < perturbed.size(); ++k) {
+    for (double& f : perturbed[k].series[Channel::f_lift]) f += normal(rng);
+    for (double& f : perturbed[k].series[Channel::f_tilt]) f += 1.0 + double(k);
+  }
+  const std::vector<double> sdof = sensitivity_dof(base, perturbed);
+  EXPECT_GT(sdof[lift], 2.0 * 41.0 * 0.7);
+  EXPECT_EQ(sdof[tilt], 2.0);
+  // what ensemble_variance and sensitivity_variance refuse, these refuse too
+  EXPECT_THROW(ensemble_dof({runs[0]}), Error);
+  EXPECT_THROW(ensemble_dof(runs, -0.1), Error);
+  EXPECT_THROW(sensitivity_dof(base, {}), Error);
 }
 
 // members on other sample times or of another scenario are not averaged

@@ -59,13 +59,14 @@ TEST(Report, NamesTheResidualTheScanWarningAndTheVerdict) {
 }
 
 // a residual judged against a simulation's spread says so under its table, with the spread's
-// share per channel; one judged against the sensor noise alone says nothing more
+// share per channel (and its degrees of freedom, where estimated); one judged against the sensor
+// noise alone says nothing more
 TEST(Report, SaysWhenTheSimulationsSpreadJudgedTheResidual) {
   const MeasuredRun measured = reference_run();
   sim2real::Run simulated = simulated_run();
   const std::vector<double> sigma(kChannelCount, 1e3);
   EXPECT_EQ(spread_note(compute_residuals(simulated, measured.run, sigma)), "");
-  simulated.spread = RunSpread{3, {}, 0, {}};
+  simulated.spread = RunSpread{3, {}, 0, {}, {}, {}};
   simulated.spread->variance[Channel::t] = simulated.series[Channel::t];
   for (std::size_t c = 1; c < kChannelCount; ++c)
     simulated.spread->variance.columns[c].assign(simulated.series.size(), c == 1 ? 4e6 : 0.0);
@@ -73,6 +74,12 @@ TEST(Report, SaysWhenTheSimulationsSpreadJudgedTheResidual) {
   // f_lift's share: (4/3) 4e6 / (1e6 + (4/3) 4e6) = 16/19 = 0.84
   for (const char* part : {"own spread over 3 piles", "f_lift 0.84", "f_tilt 0.00"})
     EXPECT_NE(note.find(part), std::string::npos) << part << "\n" << note;
+  EXPECT_EQ(note.find("Student"), std::string::npos) << note;
+  // an estimated variance: its degrees of freedom per channel
+  simulated.spread->variance_dof.assign(kChannelCount, 2.0);
+  const std::string t_note = spread_note(compute_residuals(simulated, measured.run, sigma));
+  for (const char* part : {"Student's t", "f_lift 2.0", "power 2.0"})
+    EXPECT_NE(t_note.find(part), std::string::npos) << part << "\n" << t_note;
 }
 
 // a joint refit in a line: kept or not, the objective and the held-out excess, each effect's spec

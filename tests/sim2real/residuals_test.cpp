@@ -315,7 +315,7 @@ TEST(Residuals, ASensitivityAddsToTheVarianceAsItIsBesideTheEnsembles) {
     return out;
   };
   // the sensitivity alone (no ensemble: members 0)
-  model.spread = RunSpread{0, {}, 2, sensitivity(3.0)};
+  model.spread = RunSpread{0, {}, 2, sensitivity(3.0), {}, {}};
   const Residuals alone = compute_residuals(model, measured, sigma);
   EXPECT_EQ(alone.spread_members, 0);
   EXPECT_EQ(alone.sensitivity_runs, 2);
@@ -422,7 +422,7 @@ TEST(Residuals, ASpreadOffTheRunsTimesOrNegativeIsAnError) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("neither"), std::string::npos) << e.what();
   }
-  model.spread = RunSpread{0, {}, 2, uniform_spread(model, 2, 0.0).variance};
+  model.spread = RunSpread{0, {}, 2, uniform_spread(model, 2, 0.0).variance, {}, {}};
   model.spread->sensitivity[Channel::f_tilt][7] = -1.0;
   try {
     compute_residuals(model, measured, sigma);
@@ -430,6 +430,125 @@ TEST(Residuals, ASpreadOffTheRunsTimesOrNegativeIsAnError) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("sensitivity's f_tilt"), std::string::npos) << e.what();
   }
+}
+
+// Student's t on the normal scale: the 5 % two-sided points of t (4.303 at 2 degrees, 2.776 at 4,
+// 2.228 at 10) are the normal's 1.960; infinitely many degrees change nothing; fewer degrees make a
+// deviate smaller, a larger deviate stays larger
+TEST(Residuals, TheGaussianEquivalentOfStudentsT) {
+  EXPECT_NEAR(gaussian_equivalent(4.302653, 2.0), 1.959964, 1e-5);
+  EXPECT_NEAR(gaussian_equivalent(-2.776445, 4.0), 1.959964, 1e-5);
+  EXPECT_NEAR(gaussian_equivalent(2.228139, 10.0), 1.959964, 1e-5);
+  EXPECT_EQ(gaussian_equivalent(3.0, HUGE_VAL), 3.0);
+  EXPECT_EQ(gaussian_equivalent(-3.0, 1e8), 3.0);
+  EXPECT_NEAR(gaussian_equivalent(3.0, 1e6), 3.0, 1e-5);
+  EXPECT_EQ(gaussian_equivalent(0.0, 2.0), 0.0);
+  EXPECT_EQ(gaussian_equivalent(HUGE_VAL, 2.0), HUGE_VAL);
+  double previous = 0.0;
+  for (const double dof : {1.0, 2.0, 5.0, 30.0, 1000.0}) {
+    const double z = gaussian_equivalent(4.0, dof);
+    EXPECT_GT(z, previous) << dof;
+    EXPECT_LT(z, 4.0) << dof;
+    previous = z;
+  }
+  EXPECT_GT(gaussian_equivalent(5.0, 2.0), gaussian_equivalent(4.0, 2.0));
+  // a tail far below a double's range is held at the smallest: a large deviate, not infinity
+  EXPECT_GT(gaussian_equivalent(1e200, 1e6), 30.0);
+  EXPECT_TRUE(std::isfinite(gaussian_equivalent(1e200, 1e6)));
+  EXPECT_THROW(gaussian_equivalent(1.0, 0.0), Error);
+  EXPECT_THROW(gaussian_equivalent(1.0, NAN), Error);
+}
+
+// the model's variance as a pile ensemble estimates it: at every sample of the dig the sample
+// variance of three members' draws (2 degrees of freedom), a spread of 10 σ, and the measured run
+// another arrangement. Judged as if that estimate were the variance, the dig's mean square is
+// about 4 times the noise (E[1/v̂] ≫ 1/v where v̂ falls short by chance: far beyond noise in every
+// channel); judged by Student's t with the estimate's 2 degrees, about 1.3 (within the allowance
+// κ = 1.5: the share in Satterthwaite's rule is itself estimated, which leaves it above 1). Over
+// 800 simulated runs the 13 channels' mean was at most 1.54 by t and at least 3.75 without
+TEST(Residuals, AVarianceFromThreeMembersIsJudgedByStudentsT) {
+  auto rng = fresh_rng();
+  constexpr int kMembers = 3;
+  constexpr double kSpreadOverNoise = 10.0;
+  sim2real::Run clean;
+  clean.series = test::reference_series();
+  sim2real::Run measured = noisy_reference(0.01, rng);
+  const auto sigma = noise_sigmas(measured.series);
+  sim2real::Run model = clean;
+  model.spread = uniform_spread(clean, kMembers, 0.0);
+  const auto& t = clean.series[Channel::t];
+  for (size_t c = 1; c < kChannelCount; ++c) {
+    std::normal_distribution<double> arrangement(0.0, kSpreadOverNoise * sigma[c]);
+    for (size_t i = 0; i < t.size(); ++i) {
+      if (t[i] < test::kDigStart || t[i] >= test::kDigEnd) continue;
+      double x[kMembers], mean = 0.0, square = 0.0;
+      for (double& v : x) mean += (v = arrangement(rng)) / kMembers;
+      for (const double v : x) square += (v - mean) * (v - mean);
+      measured.series.columns[c][i] += arrangement(rng);
+      model.series.columns[c][i] += mean;
+      model.spread->variance.columns[c][i] = square / (kMembers - 1);
+    }
+  }
+  const Residuals gaussian = compute_residuals(model, measured, sigma);
+  model.spread->variance_dof.assign(kChannelCount, double(kMembers - 1));
+  const Residuals t_judged = compute_residuals(model, measured, sigma);
+  // the dig cells' mean square in units of σ², from the log-ratio and the cell's mean ln w
+  const auto dig_mean_square = [&](const Residuals& res) {
+    double sum = 0.0;
+    int cells = 0;
+    const auto& tm = measured.series[Channel::t];
+    for (const auto& cell : res.cells) {
+      if (res.phases[cell.phase].name != "dig") continue;
+      double log_w = 0.0;
+      int n = 0;
+      for (size_t i = 0; i < tm.size(); ++i) {
+        if (tm[i] < test::kDigStart || tm[i] >= test::kDigEnd) continue;
+        log_w += std::log(1.0 + (1.0 + 1.0 / kMembers) *
+                                    model.spread->variance.columns[cell.channel][i] /
+                                    (sigma[cell.channel] * sigma[cell.channel]));
+        ++n;
+      }
+      EXPECT_EQ(n, cell.samples);
+      sum += std::exp(cell.log_ratio - log_w / n);
+      ++cells;
+    }
+    return sum / cells;
+  };
+  const double g = dig_mean_square(gaussian), s = dig_mean_square(t_judged);
+  std::printf(
+      "[ measured ] dig mean square / sigma^2: %.2f judged as known, %.2f by Student's t; "
+      "run excess %.2f and %.2f\n",
+      g, s, gaussian.excess, t_judged.excess);
+  EXPECT_GT(g, 2.5);
+  EXPECT_LT(s, 1.8);
+  EXPECT_GT(s, 0.8);
+  EXPECT_LT(t_judged.excess, gaussian.excess / 4.0);
+  // outside the dig the spread is zero: those cells are the sensor law's, with or without degrees
+  for (size_t k = 0; k < gaussian.cells.size(); ++k) {
+    if (gaussian.phases[gaussian.cells[k].phase].name == "dig") continue;
+    EXPECT_EQ(gaussian.cells[k].log_ratio, t_judged.cells[k].log_ratio);
+  }
+}
+
+// degrees of freedom made by hand wrongly are a program error naming the field
+TEST(Residuals, DegreesOfFreedomOffTheChannelsOrNotPositiveAreAnError) {
+  sim2real::Run measured;
+  measured.series = test::reference_series();
+  const std::vector<double> sigma(kChannelCount, 1.0);
+  sim2real::Run model = measured;
+  model.spread = uniform_spread(model, 3, 1.0);
+  model.spread->variance_dof.assign(3, 2.0);
+  EXPECT_THROW(compute_residuals(model, measured, sigma), Error);
+  model.spread->variance_dof.assign(kChannelCount, 2.0);
+  model.spread->variance_dof[static_cast<std::size_t>(Channel::f_tilt)] = 0.0;
+  try {
+    compute_residuals(model, measured, sigma);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("variance_dof's f_tilt"), std::string::npos) << e.what();
+  }
+  model.spread->variance_dof.assign(kChannelCount, 2.0);
+  EXPECT_NO_THROW(compute_residuals(model, measured, sigma));
 }
 
 TEST(Residuals, PhasesFollowTheDigMarks) {
