@@ -582,6 +582,7 @@ class Search {
       with.spread->sensitivity_runs = static_cast<int>(m);
       with.spread->sensitivity = sensitivity_variance(current_runs_[i], runs);
       with.spread->sensitivity_dof = sensitivity_dof(current_runs_[i], runs);
+      with.spread->sensitivity_tau = sensitivity_departure_time(current_runs_[i], runs);
       judged_[i] = compute_residuals(with, runs_[i].run, sigma_[i]);
       jr.used = true;
       jr.excess_with = judged_[i].excess;
@@ -1390,6 +1391,8 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
         if (res.judged_with_spread()) {
           cell["spread"] = c.spread;
           cell["spread_share"] = c.spread_share;
+          cell["null_samples"] = c.null_samples;
+          cell["allowance"] = c.allowance;
         }
         cells.push_back(cell);
       }

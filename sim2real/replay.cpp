@@ -109,13 +109,13 @@ double mean_window_samples(const std::vector<double>& t, double half_window_s) {
   return sum / static_cast<double>(t.size());
 }
 
-// ν = per_sample · max(1, m / τ) per channel, τ of `departures` (per run, per channel: the
-// series whose squares the variance pools), each run its own segment
-std::vector<double> pooled_dof(const std::vector<double>& t,
-                               const std::vector<std::vector<std::vector<double>>>& departures,
-                               double per_sample, double half_window_s) {
-  const double window = mean_window_samples(t, half_window_s);
-  std::vector<double> dof(kChannelCount, 0.0);
+// per run, per channel: a series whose squares a variance pools
+using Departures = std::vector<std::vector<std::vector<double>>>;
+
+// τ per channel (index as kChannelNames, t's 0): the integrated autocorrelation time of the
+// departures, each run its own segment
+std::vector<double> departure_times(const Departures& departures) {
+  std::vector<double> tau(kChannelCount, 0.0);
   for (std::size_t c = 0; c < kChannelCount; ++c) {
     if (static_cast<Channel>(c) == Channel::t) continue;
     std::vector<double> z;
@@ -124,10 +124,64 @@ std::vector<double> pooled_dof(const std::vector<double>& t,
       z.insert(z.end(), departures[k][c].begin(), departures[k][c].end());
       segment.insert(segment.end(), departures[k][c].size(), static_cast<int>(k));
     }
-    const double tau = integrated_autocorrelation_time(z, segment);
-    dof[c] = per_sample * std::max(1.0, window / tau);
+    tau[c] = integrated_autocorrelation_time(z, segment);
   }
+  return tau;
+}
+
+// ν = per_sample · max(1, m / τ) per channel
+std::vector<double> pooled_dof(const std::vector<double>& t, const std::vector<double>& tau,
+                               double per_sample, double half_window_s) {
+  const double window = mean_window_samples(t, half_window_s);
+  std::vector<double> dof(kChannelCount, 0.0);
+  for (std::size_t c = 0; c < kChannelCount; ++c)
+    if (static_cast<Channel>(c) != Channel::t) dof[c] = per_sample * std::max(1.0, window / tau[c]);
   return dof;
+}
+
+// each member's departure from the members' mean (checked as ensemble_variance's, naming `who`)
+Departures ensemble_departures(const std::vector<Run>& runs, const std::string& who) {
+  check_members(runs, who);
+  if (runs.size() < 2)
+    throw Error(who + ": " + std::to_string(runs.size()) +
+                " run; a sample variance needs 2 or more members");
+  const std::size_t samples = runs.front().series.size();
+  const double n = static_cast<double>(runs.size());
+  Departures departures(runs.size(), std::vector<std::vector<double>>(kChannelCount));
+  for (std::size_t c = 0; c < kChannelCount; ++c) {
+    if (static_cast<Channel>(c) == Channel::t) continue;
+    for (auto& d : departures) d[c].resize(samples);
+    for (std::size_t i = 0; i < samples; ++i) {
+      double mean = 0.0;
+      for (const Run& r : runs) mean += r.series.columns[c][i];
+      mean /= n;
+      for (std::size_t k = 0; k < runs.size(); ++k)
+        departures[k][c][i] = runs[k].series.columns[c][i] - mean;
+    }
+  }
+  return departures;
+}
+
+// each perturbed run's departure from the fitted one (checked as sensitivity_variance's)
+Departures sensitivity_departures(const Run& fitted, const std::vector<Run>& perturbed,
+                                  const std::string& who) {
+  if (perturbed.empty())
+    throw Error(who +
+                ": no perturbed runs; give the simulations at parameters within the fit's "
+                "uncertainty");
+  std::vector<Run> all = {fitted};
+  all.insert(all.end(), perturbed.begin(), perturbed.end());
+  check_members(all, who);
+  Departures departures(perturbed.size(), std::vector<std::vector<double>>(kChannelCount));
+  for (std::size_t k = 0; k < perturbed.size(); ++k)
+    for (std::size_t c = 0; c < kChannelCount; ++c) {
+      if (static_cast<Channel>(c) == Channel::t) continue;
+      const auto& x = perturbed[k].series.columns[c];
+      const auto& centre = fitted.series.columns[c];
+      departures[k][c].resize(x.size());
+      for (std::size_t i = 0; i < x.size(); ++i) departures[k][c][i] = x[i] - centre[i];
+    }
+  return departures;
 }
 
 void check_window(double half_window_s, const std::string& who) {
@@ -171,54 +225,28 @@ TimeSeries ensemble_variance(const std::vector<Run>& runs, double half_window_s)
   return variance;
 }
 
+std::vector<double> ensemble_departure_time(const std::vector<Run>& runs) {
+  return departure_times(ensemble_departures(runs, "ensemble_departure_time"));
+}
+
 std::vector<double> ensemble_dof(const std::vector<Run>& runs, double half_window_s) {
-  check_members(runs, "ensemble_dof");
-  if (runs.size() < 2)
-    throw Error("ensemble_dof: " + std::to_string(runs.size()) +
-                " run; a sample variance needs 2 or more members");
+  const Departures departures = ensemble_departures(runs, "ensemble_dof");
   check_window(half_window_s, "ensemble_dof");
-  const std::size_t samples = runs.front().series.size();
-  const double n = static_cast<double>(runs.size());
-  // each member's departure from the members' mean, channel by channel
-  std::vector<std::vector<std::vector<double>>> departures(
-      runs.size(), std::vector<std::vector<double>>(kChannelCount));
-  for (std::size_t c = 0; c < kChannelCount; ++c) {
-    if (static_cast<Channel>(c) == Channel::t) continue;
-    for (auto& d : departures) d[c].resize(samples);
-    for (std::size_t i = 0; i < samples; ++i) {
-      double mean = 0.0;
-      for (const Run& r : runs) mean += r.series.columns[c][i];
-      mean /= n;
-      for (std::size_t k = 0; k < runs.size(); ++k)
-        departures[k][c][i] = runs[k].series.columns[c][i] - mean;
-    }
-  }
-  return pooled_dof(runs.front().series[Channel::t], departures, n - 1.0, half_window_s);
+  return pooled_dof(runs.front().series[Channel::t], departure_times(departures),
+                    static_cast<double>(runs.size()) - 1.0, half_window_s);
+}
+
+std::vector<double> sensitivity_departure_time(const Run& fitted,
+                                               const std::vector<Run>& perturbed) {
+  return departure_times(sensitivity_departures(fitted, perturbed, "sensitivity_departure_time"));
 }
 
 std::vector<double> sensitivity_dof(const Run& fitted, const std::vector<Run>& perturbed,
                                     double half_window_s) {
-  if (perturbed.empty())
-    throw Error(
-        "sensitivity_dof: no perturbed runs; give the simulations at parameters within the "
-        "fit's uncertainty");
-  std::vector<Run> all = {fitted};
-  all.insert(all.end(), perturbed.begin(), perturbed.end());
-  check_members(all, "sensitivity_dof");
+  const Departures departures = sensitivity_departures(fitted, perturbed, "sensitivity_dof");
   check_window(half_window_s, "sensitivity_dof");
-  // each perturbed run's departure from the fitted one
-  std::vector<std::vector<std::vector<double>>> departures(
-      perturbed.size(), std::vector<std::vector<double>>(kChannelCount));
-  for (std::size_t k = 0; k < perturbed.size(); ++k)
-    for (std::size_t c = 0; c < kChannelCount; ++c) {
-      if (static_cast<Channel>(c) == Channel::t) continue;
-      const auto& x = perturbed[k].series.columns[c];
-      const auto& centre = fitted.series.columns[c];
-      departures[k][c].resize(x.size());
-      for (std::size_t i = 0; i < x.size(); ++i) departures[k][c][i] = x[i] - centre[i];
-    }
-  return pooled_dof(fitted.series[Channel::t], departures, static_cast<double>(perturbed.size()),
-                    half_window_s);
+  return pooled_dof(fitted.series[Channel::t], departure_times(departures),
+                    static_cast<double>(perturbed.size()), half_window_s);
 }
 
 TimeSeries sensitivity_variance(const Run& fitted, const std::vector<Run>& perturbed,
@@ -275,8 +303,14 @@ Run ensemble_mean(const std::vector<Run>& runs) {
   mean.summary.work_J /= n;
   mean.summary.details["pile_ensemble"] = runs.size();
   // the members' spread, which the residuals add to the sensor noise (sim2real/residuals.hpp)
-  mean.spread = RunSpread{
-      static_cast<int>(runs.size()), ensemble_variance(runs), 0, {}, ensemble_dof(runs), {}};
+  mean.spread = RunSpread{static_cast<int>(runs.size()),
+                          ensemble_variance(runs),
+                          0,
+                          {},
+                          ensemble_dof(runs),
+                          {},
+                          ensemble_departure_time(runs),
+                          {}};
   return mean;
 }
 

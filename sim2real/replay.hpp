@@ -85,11 +85,21 @@ std::vector<double> ensemble_dof(const std::vector<Run>& runs,
 std::vector<double> sensitivity_dof(const Run& fitted, const std::vector<Run>& perturbed,
                                     double half_window_s = kSpreadHalfWindow);
 
+// how long the departures behind those estimates stay correlated, per channel (index as
+// kChannelNames; t's entry 0) in samples: the integrated autocorrelation time τ of the members'
+// departures from their mean, or of the perturbed runs' from the fitted run, each its own segment
+// (what ensemble_dof and sensitivity_dof divide the window by). compute_residuals counts a cell's
+// samples under the null by it. Errors as ensemble_variance's and sensitivity_variance's
+std::vector<double> ensemble_departure_time(const std::vector<Run>& runs);
+std::vector<double> sensitivity_departure_time(const Run& fitted,
+                                               const std::vector<Run>& perturbed);
+
 // the ensemble's mean run: every channel averaged sample by sample, loaded mass and work
 // averaged; the runs must share their time base (the same scenario at the same level) and their
 // labels and phase marks, which the mean keeps. Error naming the first run that differs. Two or
-// more runs: the mean carries their spread (Run::spread: N, ensemble_variance, ensemble_dof), which
-// the residuals add to the sensor noise; one run is returned as it is, without a spread
+// more runs: the mean carries their spread (Run::spread: N, ensemble_variance, ensemble_dof,
+// ensemble_departure_time), which the residuals add to the sensor noise; one run is returned as it
+// is, without a spread
 Run ensemble_mean(const std::vector<Run>& runs);
 
 // piles in one simulation's ensemble at most: a bound far above what smooths a D400 dig (3 to 5)

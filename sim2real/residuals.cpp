@@ -1,6 +1,7 @@
 #include "sim2real/residuals.hpp"
 
 #include <algorithm>
+#include <boost/math/distributions/chi_squared.hpp>
 #include <boost/math/distributions/normal.hpp>
 #include <boost/math/distributions/students_t.hpp>
 #include <cfloat>
@@ -71,6 +72,12 @@ double noise_sigma(const std::vector<double>& x) {
   for (double& v : d2) v = std::abs(v - centre);
   const double sigma = kMadToSigma * median(d2) / std::sqrt(6.0);
   return std::max(sigma, std::max(kSigmaFloor * largest, kSigmaAbsoluteFloor));
+}
+
+double noise_quantile(double samples) {
+  if (!(samples > 0.0))
+    throw Error("noise_quantile: " + message_number(samples) + " samples; give more than 0");
+  return boost::math::quantile(boost::math::chi_squared(samples), kAllowanceQuantile) / samples;
 }
 
 double gaussian_equivalent(double z, double dof) {
@@ -213,8 +220,14 @@ Residuals compute_residuals(const Run& simulated, const Run& measured, const std
     // comment; r/√w itself without degrees of freedom) and its square, what MSE_w sums
     std::vector<double> standard(r), square(tm.size());
     for (size_t i = 0; i < tm.size(); ++i) square[i] = r[i] * r[i];
+    // each estimate's share of the sample's variance, and how long its departures stay correlated
+    // [samples]: what a cell's null samples count (the header comment)
+    std::vector<double> share_v(tm.size(), 0.0), share_s(tm.size(), 0.0);
+    double tau_v = 1.0, tau_s = 1.0;
     if (simulated.spread) {
       const RunSpread& spread = *simulated.spread;
+      if (!spread.variance_tau.empty()) tau_v = spread.variance_tau[c];
+      if (!spread.sensitivity_tau.empty()) tau_s = spread.sensitivity_tau[c];
       // Satterthwaite's denominator Σ m_k² / ν_k of the model variance (0: known exactly)
       std::vector<double> unknown(tm.size(), 0.0);
       if (out.spread_members > 0) {
@@ -223,6 +236,7 @@ Residuals compute_residuals(const Run& simulated, const Run& measured, const std
         for (size_t i = 0; i < tm.size(); ++i) {
           model[i] = inflation * v[i];
           unknown[i] += model[i] * model[i] / dof;
+          share_v[i] = model[i];
         }
       }
       if (out.sensitivity_runs > 0) {
@@ -231,11 +245,14 @@ Residuals compute_residuals(const Run& simulated, const Run& measured, const std
         for (size_t i = 0; i < tm.size(); ++i) {
           model[i] += sv[i];
           unknown[i] += sv[i] * sv[i] / dof;
+          share_s[i] = sv[i];
         }
       }
       const double noise = sigma[c] * sigma[c];
       for (size_t i = 0; i < tm.size(); ++i) {
         w[i] = 1.0 + model[i] / noise;
+        share_v[i] /= noise + model[i];
+        share_s[i] /= noise + model[i];
         standard[i] = r[i] / std::sqrt(w[i]);
         square[i] = r[i] * r[i] / w[i];
         if (!(unknown[i] > 0.0)) continue;
@@ -254,7 +271,8 @@ Residuals compute_residuals(const Run& simulated, const Run& measured, const std
       cell.channel = c;
       cell.phase = p;
       cell.sigma = sigma[c];
-      double sum = 0.0, sum2 = 0.0, sum2w = 0.0, sum_log_w = 0.0, sum_model = 0.0, sum_share = 0.0;
+      double sum = 0.0, sum2 = 0.0, sum2w = 0.0, sum_log_w = 0.0, sum_model = 0.0, sum_share = 0.0,
+             sum_share_v2 = 0.0, sum_share_s2 = 0.0;
       std::vector<double> z;  // the standardised residual over the cell
       for (size_t i = 0; i < tm.size(); ++i) {
         if (tm[i] < ph.t0 || tm[i] > ph.t1 || (!last && tm[i] >= ph.t1)) continue;
@@ -265,6 +283,8 @@ Residuals compute_residuals(const Run& simulated, const Run& measured, const std
         sum_log_w += std::log(w[i]);
         sum_model += model[i];
         sum_share += (w[i] - 1.0) / w[i];
+        sum_share_v2 += share_v[i] * share_v[i];
+        sum_share_s2 += share_s[i] * share_s[i];
         ++cell.samples;
       }
       if (cell.samples == 0) continue;
@@ -275,7 +295,17 @@ Residuals compute_residuals(const Run& simulated, const Run& measured, const std
       cell.spread_share = sum_share / cell.samples;
       // the mean square in units of the sensor noise the residual would have if the piles agreed
       const double mse_w = sum2w / cell.samples;
-      cell.excess = std::log(std::max(mse_w / (kNoiseAllowance * sigma[c] * sigma[c]), 1.0));
+      // the samples the cell holds under the null, and the allowance they leave (header comment)
+      const double n = cell.samples;
+      const double correlated = (sum_share_v2 * (std::clamp(tau_v, 1.0, n) - 1.0) +
+                                 sum_share_s2 * (std::clamp(tau_s, 1.0, n) - 1.0)) /
+                                n;
+      cell.null_samples = n / (1.0 + correlated);
+      cell.allowance = correlated > 0.0
+                           ? kNoiseAllowance * std::max(1.0, noise_quantile(cell.null_samples) /
+                                                                 noise_quantile(n))
+                           : kNoiseAllowance;
+      cell.excess = std::log(std::max(mse_w / (cell.allowance * sigma[c] * sigma[c]), 1.0));
       out.excess += cell.excess;
       // the Gaussian log-likelihood's cell term, weighted by the cell's share of the channel's
       // samples (a short phase counts for its length), with its log-determinant (0 without a

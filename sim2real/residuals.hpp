@@ -59,6 +59,20 @@
 // about threefold; the verdict is not yet right with three piles (a dig whose fill lies outside
 // all three members stays beyond noise).
 //
+// A cell's samples under the null (issue 17): the allowance κ is a margin over a mean square of
+// many independent samples (its 99 % point is 1.14 for 600 white samples). Where the model's
+// spread dominates a cell and its departures last the whole cell (one pile's fill: an offset over
+// the after phase), the cell's residual under the null is about one independent number, whose
+// square exceeds 1.5 one time in five, and the verdict takes the worst of several runs. So each
+// cell counts the samples it holds under the null, n_null = n / (1 + Σ_k mean(share_k²) (τ_k − 1))
+// (k: the ensemble's and the sensitivity's parts, share_k their share of each sample's variance,
+// τ_k how long their departures stay correlated, RunSpread::variance_tau and sensitivity_tau,
+// held to [1, n]: Bartlett's variance of a mean square, with Σ ρ² taken as Σ ρ), and is judged
+// with the allowance κ max(1, noise_quantile(n_null) / noise_quantile(n)): κ where the samples are
+// independent, widened by as much as the null's 99 % point widens where they are not (8.7 for one
+// null sample among 600). The log-ratio (the fits' objective) does not use it. Without a spread,
+// or with white departures, the allowance is κ exactly.
+//
 // Correlated residuals (issue 17): the log-ratio counts every sample as independent, but a dig's
 // residual is correlated in time (two pile arrangements' forces over about 0.1 s, a misfit over a
 // whole phase), so n samples carry the information of fewer. Each cell records its effective
@@ -98,6 +112,13 @@ inline constexpr double kNoiseAllowance = 1.5;
 double integrated_autocorrelation_time(const std::vector<double>& z,
                                        const std::vector<int>& segment = {});
 
+// the quantile of the noise's mean square the allowance follows: a cell's mean square of n
+// independent standard normal samples exceeds noise_quantile(n) = χ²_n(0.99) / n once in a hundred
+inline constexpr double kAllowanceQuantile = 0.99;
+// χ²_samples(kAllowanceQuantile) / samples, for samples > 0 (not an integer: an effective count);
+// Error otherwise. 6.63 for 1, 2.32 for 10, 1.50 at 55, 1.11 at 1,000
+double noise_quantile(double samples);
+
 // the normal deviate with the same two-sided tail probability as |z| under Student's t with `dof`
 // degrees of freedom: |z| itself for infinite dof (or above 1e7, where the two agree to 1e-7),
 // smaller the fewer the degrees (z = 4.303 is 1.960 at 2 degrees, both the 5 % two-sided point).
@@ -133,6 +154,11 @@ struct ResidualCell {
   double spread_share = 0.0;
   // the cell's term of the log-likelihood: ln max(MSE_w / σ², 1e-6) + the mean of ln w
   double log_ratio = 0.0;
+  // the samples the cell holds under the null, n / (1 + Σ_k mean(share_k²) (τ_k − 1)), and the
+  // allowance its excess was judged with, κ max(1, noise_quantile(null) / noise_quantile(n)):
+  // κ itself, and null = samples, without a spread (the header comment)
+  double null_samples = 0.0;
+  double allowance = kNoiseAllowance;
   // samples / τ, τ the integrated autocorrelation time of r/√w over the cell's samples
   // (integrated_autocorrelation_time: uncentred, an offset is part of what is correlated)
   double effective_samples = 0.0;

@@ -79,6 +79,11 @@ struct RunSpread {
   // exactly known (the Gaussian judgement)
   std::vector<double> variance_dof;
   std::vector<double> sensitivity_dof;
+  // how long the departures behind each estimate stay correlated per channel [samples]
+  // (ensemble_departure_time, sensitivity_departure_time): a cell's residual under the null holds
+  // fewer independent samples where they do (compute_residuals' allowance). Empty: white (τ = 1)
+  std::vector<double> variance_tau;
+  std::vector<double> sensitivity_tau;
 };
 
 struct Run {

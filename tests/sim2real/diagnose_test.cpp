@@ -183,7 +183,7 @@ TEST(Diagnose, JsonReportsTheModelSpreadItUsed) {
   measured.summary = test::reference_summary();
   sim2real::Run simulated;
   simulated.series = test::simulated_series();
-  simulated.spread = RunSpread{3, {}, 0, {}, {}, {}};
+  simulated.spread = RunSpread{3, {}, 0, {}, {}, {}, {}, {}};
   simulated.spread->variance[Channel::t] = simulated.series[Channel::t];
   for (std::size_t c = 1; c < kChannelCount; ++c)
     simulated.spread->variance.columns[c].assign(simulated.series.size(), c == 1 ? 4e6 : 0.0);
@@ -207,6 +207,9 @@ TEST(Diagnose, JsonReportsTheModelSpreadItUsed) {
   EXPECT_EQ(cell["channel"], "f_lift");
   EXPECT_NEAR(cell["spread"].get<double>(), std::sqrt(4.0 / 3.0 * 4e6), 1e-6);
   EXPECT_NEAR(cell["spread_share"].get<double>(), 16.0 / 19.0, 1e-12);
+  // white departures (no τ given): every sample counts under the null, and the allowance is κ
+  EXPECT_EQ(cell["null_samples"].get<double>(), double(d.residuals_before[0].cells[0].samples));
+  EXPECT_EQ(cell["allowance"].get<double>(), kNoiseAllowance);
   EXPECT_EQ(cell["effective_samples"].get<double>(),
             d.residuals_before[0].cells[0].effective_samples);
   // a variance taken as known has no degrees of freedom; an estimated one gives them per channel

@@ -66,7 +66,7 @@ TEST(Report, SaysWhenTheSimulationsSpreadJudgedTheResidual) {
   sim2real::Run simulated = simulated_run();
   const std::vector<double> sigma(kChannelCount, 1e3);
   EXPECT_EQ(spread_note(compute_residuals(simulated, measured.run, sigma)), "");
-  simulated.spread = RunSpread{3, {}, 0, {}, {}, {}};
+  simulated.spread = RunSpread{3, {}, 0, {}, {}, {}, {}, {}};
   simulated.spread->variance[Channel::t] = simulated.series[Channel::t];
   for (std::size_t c = 1; c < kChannelCount; ++c)
     simulated.spread->variance.columns[c].assign(simulated.series.size(), c == 1 ? 4e6 : 0.0);

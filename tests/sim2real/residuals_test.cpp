@@ -315,7 +315,7 @@ TEST(Residuals, ASensitivityAddsToTheVarianceAsItIsBesideTheEnsembles) {
     return out;
   };
   // the sensitivity alone (no ensemble: members 0)
-  model.spread = RunSpread{0, {}, 2, sensitivity(3.0), {}, {}};
+  model.spread = RunSpread{0, {}, 2, sensitivity(3.0), {}, {}, {}, {}};
   const Residuals alone = compute_residuals(model, measured, sigma);
   EXPECT_EQ(alone.spread_members, 0);
   EXPECT_EQ(alone.sensitivity_runs, 2);
@@ -422,7 +422,7 @@ TEST(Residuals, ASpreadOffTheRunsTimesOrNegativeIsAnError) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("neither"), std::string::npos) << e.what();
   }
-  model.spread = RunSpread{0, {}, 2, uniform_spread(model, 2, 0.0).variance, {}, {}};
+  model.spread = RunSpread{0, {}, 2, uniform_spread(model, 2, 0.0).variance, {}, {}, {}, {}};
   model.spread->sensitivity[Channel::f_tilt][7] = -1.0;
   try {
     compute_residuals(model, measured, sigma);
@@ -528,6 +528,76 @@ TEST(Residuals, AVarianceFromThreeMembersIsJudgedByStudentsT) {
     if (gaussian.phases[gaussian.cells[k].phase].name == "dig") continue;
     EXPECT_EQ(gaussian.cells[k].log_ratio, t_judged.cells[k].log_ratio);
   }
+}
+
+// the 99 % point of a mean square of n standard normal samples
+TEST(Residuals, TheNoiseQuantileOfAMeanSquare) {
+  EXPECT_NEAR(noise_quantile(1.0), 6.634897, 1e-5);
+  EXPECT_NEAR(noise_quantile(10.0), 2.320925, 1e-5);
+  EXPECT_NEAR(noise_quantile(55.0), 1.496220, 1e-5);
+  EXPECT_NEAR(noise_quantile(1000.0), 1.106969, 1e-5);
+  EXPECT_GT(noise_quantile(1.5), noise_quantile(2.0));  // an effective count, not an integer
+  EXPECT_THROW(noise_quantile(0.0), Error);
+}
+
+// a spread whose departures last the whole dig (each pile fills the bucket differently: an
+// offset over the phase) leaves one independent number per cell under the null, and a residual
+// that is one such draw is judged with the allowance of one sample. Ten runs of 13 channels, each
+// dig cell offset by one draw from a spread of 10 σ: judged as if the dig's samples were
+// independent, about a fifth of the cells (P(χ²₁ > 1.5) = 0.22) are beyond noise; with the
+// departures' τ, about one in a hundred
+TEST(Residuals, ACellHoldsAsManySamplesUnderTheNullAsItsSpreadDecorrelates) {
+  auto rng = fresh_rng();
+  constexpr int kMembers = 3, kRuns = 10;
+  constexpr double kSpreadOverNoise = 10.0;
+  int beyond_white = 0, beyond_null = 0, cells = 0;
+  for (int run = 0; run < kRuns; ++run) {
+    sim2real::Run clean;
+    clean.series = test::reference_series();
+    sim2real::Run measured = noisy_reference(0.01, rng);
+    const auto sigma = noise_sigmas(measured.series);
+    sim2real::Run model = clean;
+    model.spread = uniform_spread(clean, kMembers, 0.0);
+    const auto& t = clean.series[Channel::t];
+    for (size_t c = 1; c < kChannelCount; ++c) {
+      const double sd = kSpreadOverNoise * sigma[c];
+      // one draw of the mean's error and one of the measured pile, held over the dig
+      std::normal_distribution<double> arrangement(0.0, sd);
+      const double offset = arrangement(rng) - arrangement(rng) / std::sqrt(double(kMembers));
+      for (size_t i = 0; i < t.size(); ++i) {
+        if (t[i] < test::kDigStart || t[i] >= test::kDigEnd) continue;
+        measured.series.columns[c][i] += offset;
+        model.spread->variance.columns[c][i] = sd * sd;
+      }
+    }
+    const Residuals white = compute_residuals(model, measured, sigma);
+    model.spread->variance_tau.assign(kChannelCount, 1e6);  // longer than any cell
+    const Residuals null = compute_residuals(model, measured, sigma);
+    for (size_t k = 0; k < white.cells.size(); ++k) {
+      if (white.phases[white.cells[k].phase].name != "dig") continue;
+      const ResidualCell& w = white.cells[k];
+      const ResidualCell& n = null.cells[k];
+      // white departures: κ and every sample; correlated ones: about one sample, and the
+      // allowance of one among the dig's 600: κ · 6.63 / 1.14
+      EXPECT_EQ(w.allowance, kNoiseAllowance);
+      EXPECT_EQ(w.null_samples, double(w.samples));
+      EXPECT_LT(n.null_samples, 1.05);
+      EXPECT_NEAR(n.allowance,
+                  kNoiseAllowance * noise_quantile(n.null_samples) / noise_quantile(n.samples),
+                  1e-9);
+      EXPECT_GT(n.allowance, 8.0);
+      // the log-ratio does not use the allowance
+      EXPECT_EQ(w.log_ratio, n.log_ratio);
+      beyond_white += w.excess > 0.0;
+      beyond_null += n.excess > 0.0;
+      ++cells;
+    }
+  }
+  std::printf(
+      "[ measured ] dig cells beyond noise: %d of %d judged as white, %d with the null's samples\n",
+      beyond_white, cells, beyond_null);
+  EXPECT_GE(beyond_white, 12);
+  EXPECT_LE(beyond_null, 6);
 }
 
 // degrees of freedom made by hand wrongly are a program error naming the field
