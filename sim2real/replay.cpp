@@ -245,8 +245,10 @@ std::vector<double> sensitivity_dof(const Run& fitted, const std::vector<Run>& p
                                     double half_window_s) {
   const Departures departures = sensitivity_departures(fitted, perturbed, "sensitivity_dof");
   check_window(half_window_s, "sensitivity_dof");
+  // M departures from one shared run, correlated by ½ where it is chaotic (the header comment)
+  const double m = static_cast<double>(perturbed.size());
   return pooled_dof(fitted.series[Channel::t], departure_times(departures),
-                    static_cast<double>(perturbed.size()), half_window_s);
+                    m / (1.0 + (m - 1.0) / 4.0), half_window_s);
 }
 
 TimeSeries sensitivity_variance(const Run& fitted, const std::vector<Run>& perturbed,

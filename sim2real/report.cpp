@@ -42,8 +42,9 @@ std::string spread_note(const Residuals& res) {
   s << ".";
   // an estimated variance is judged by Student's t with its degrees of freedom
   if (!res.variance_dof.empty()) {
-    s << " The piles' variance is an estimate, so each sample is judged by Student's t with its "
-         "degrees of freedom (Satterthwaite's, from these):";
+    s << " The piles' variance is an estimate, so each sample's r / √w is judged by Student's t "
+         "with its degrees of freedom and counted on the normal scale in MSE_w (Satterthwaite's "
+         "degrees, from these):";
     for (std::size_t c = 1; c < kChannelCount; ++c)
       s << (c > 1 ? ", " : " ") << kChannelNames[c] << " " << std::setprecision(1) << std::fixed
         << res.variance_dof[c] << std::defaultfloat;
@@ -117,9 +118,12 @@ std::string diagnosis_report(const Diagnosis& d, const std::vector<MeasuredRun>&
                           : "validation")
            << ")\n\n"
            << "Baseline residual, largest cells (excess = ln max("
-           << (d.residuals_before[i].spread_members > 0 ? "MSE_w" : "MSE") << " / ("
-           << kNoiseAllowance << " σ²), 1); run total " << std::setprecision(3)
-           << d.residuals_before[i].excess << "):\n\n"
+           << (d.residuals_before[i].spread_members > 0 ? "MSE_w / (κ σ²), 1), κ " : "MSE / (")
+           << kNoiseAllowance
+           << (d.residuals_before[i].spread_members > 0
+                   ? " or more where the spread's samples are correlated"
+                   : " σ²), 1)")
+           << "; run total " << std::setprecision(3) << d.residuals_before[i].excess << "):\n\n"
            << residual_signature(d.residuals_before[i], runs[i].run, d.simulated_before[i]) << "\n"
            << spread_note(d.residuals_before[i]);
     if (d.scan_rms_m[i] && *d.scan_rms_m[i] > kScanWarning)

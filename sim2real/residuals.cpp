@@ -86,10 +86,19 @@ double gaussian_equivalent(double z, double dof) {
                 " degrees of freedom; give more than 0");
   const double magnitude = std::abs(z);
   if (!std::isfinite(magnitude) || dof > kGaussianDof) return magnitude;
-  // the upper tail under t, then the normal deviate with that tail; a tail below the smallest
-  // normal double counts as that (a deviate of about 37: far beyond any noise either way)
+  // the upper tail under t, then the normal deviate with that tail
   const double tail = boost::math::cdf(complement(boost::math::students_t(dof), magnitude));
-  return boost::math::quantile(complement(boost::math::normal(), std::max(tail, DBL_MIN)));
+  if (tail > DBL_MIN) return boost::math::quantile(complement(boost::math::normal(), tail));
+  // a tail below the smallest normal double: Wallace's approximation of the deviate (D. L.
+  // Wallace, "Bounds on normal approximations to Student's and the chi-square distributions",
+  // Ann. Math. Statist. 30, 1959), which tends to |z| as the degrees grow, held at least at the
+  // deviate of the smallest tail so that the mapping stays monotone
+  // ln(1 + z²/ν), written so that z² cannot overflow
+  const double ratio = magnitude / std::sqrt(dof);
+  const double log_term = ratio > 1.0 ? 2.0 * std::log(ratio) + std::log1p(1.0 / (ratio * ratio))
+                                      : std::log1p(ratio * ratio);
+  const double wallace = std::sqrt(dof * log_term) * (8.0 * dof + 1.0) / (8.0 * dof + 3.0);
+  return std::max(wallace, boost::math::quantile(complement(boost::math::normal(), DBL_MIN)));
 }
 
 std::vector<double> noise_sigmas(const TimeSeries& measured) {
@@ -167,6 +176,20 @@ void check_dof(const std::vector<double>& dof, const std::string& which) {
                   "; degrees of freedom are above 0 (or leave them empty: known exactly)");
 }
 
+// correlation times: none (white) or one per channel, each finite and at least 1 sample
+void check_tau(const std::vector<double>& tau, const std::string& which) {
+  if (tau.empty()) return;
+  if (tau.size() != kChannelCount)
+    throw Error(which + " has " + std::to_string(tau.size()) + " entries for " +
+                std::to_string(kChannelCount) +
+                " channels; compute it with ensemble_departure_time or sensitivity_departure_time");
+  for (std::size_t c = 1; c < kChannelCount; ++c)
+    if (!(tau[c] >= 1.0) || !std::isfinite(tau[c]))
+      throw Error(
+          which + "'s " + std::string(kChannelNames[c]) + " is " + message_number(tau[c]) +
+          "; a correlation time is finite and at least 1 sample (or leave it empty: white)");
+}
+
 void check_spread(const Run& simulated) {
   const RunSpread& s = *simulated.spread;
   const std::string which =
@@ -186,6 +209,8 @@ void check_spread(const Run& simulated) {
   if (s.sensitivity_runs > 0) check_variance(simulated, s.sensitivity, which + ": sensitivity");
   check_dof(s.variance_dof, which + ": variance_dof");
   check_dof(s.sensitivity_dof, which + ": sensitivity_dof");
+  check_tau(s.variance_tau, which + ": variance_tau");
+  check_tau(s.sensitivity_tau, which + ": sensitivity_tau");
 }
 
 }  // namespace

@@ -71,7 +71,7 @@
 // with the allowance κ max(1, noise_quantile(n_null) / noise_quantile(n)): κ where the samples are
 // independent, widened by as much as the null's 99 % point widens where they are not (8.7 for one
 // null sample among 600). The log-ratio (the fits' objective) does not use it. Without a spread,
-// or with white departures, the allowance is κ exactly.
+// or with τ = 1, the allowance is κ exactly.
 //
 // Correlated residuals (issue 17): the log-ratio counts every sample as independent, but a dig's
 // residual is correlated in time (two pile arrangements' forces over about 0.1 s, a misfit over a
@@ -121,7 +121,8 @@ double noise_quantile(double samples);
 
 // the normal deviate with the same two-sided tail probability as |z| under Student's t with `dof`
 // degrees of freedom: |z| itself for infinite dof (or above 1e7, where the two agree to 1e-7),
-// smaller the fewer the degrees (z = 4.303 is 1.960 at 2 degrees, both the 5 % two-sided point).
+// smaller the fewer the degrees (z = 4.303 is 1.960 at 2 degrees, both the 5 % two-sided point);
+// where the tail is below the smallest normal double, Wallace's approximation (never capped).
 // Error for dof ≤ 0 or NaN; a non-finite z is returned as its magnitude
 double gaussian_equivalent(double z, double dof);
 

@@ -212,9 +212,11 @@ TEST(Replay, ASensitivityIsThePerturbedRunsMeanSquareDepartureFromTheFit) {
 // and 100 Hz, so ν ≈ 2 · 41 (a little less: the windows shrink at the run's ends, and τ of white
 // noise is measured near 1, not exactly); members that differ by a constant (a pile that fills the
 // bucket more throughout) pool one number each however wide the window: ν = N − 1 exactly. The
-// sensitivity's are M per window the same way
+// sensitivity's are M' = M / (1 + (M − 1)/4) per window the same way
 TEST(Replay, APooledVarianceHasAsManyDegreesAsIndependentSamplesInAWindow) {
-  std::mt19937_64 rng(std::random_device{}());
+  const unsigned seed = std::random_device{}();
+  std::printf("[ seed     ] %u\n", seed);
+  std::mt19937_64 rng(seed);
   std::normal_distribution<double> normal(0.0, 1.0);
   sim2real::Run base;
   base.series = test::reference_series();
@@ -237,8 +239,13 @@ TEST(Replay, APooledVarianceHasAsManyDegreesAsIndependentSamplesInAWindow) {
   EXPECT_EQ(dof[tilt], 2.0);
   // channels where the members agree exactly count as white (τ = 1): the window's samples
   EXPECT_GT(dof[power], 2.0 * 40.0);
-  // the mean carries them beside its variance
+  // the mean carries them beside its variance, with the departures' correlation times: white
+  // about 1, constant as long as the run
+  const std::vector<double> tau = ensemble_departure_time(runs);
   EXPECT_EQ(ensemble_mean(runs).spread->variance_dof, dof);
+  EXPECT_EQ(ensemble_mean(runs).spread->variance_tau, tau);
+  EXPECT_LT(tau[lift], 1.5);
+  EXPECT_GT(tau[tilt], 0.5 * double(base.series.size()));
   // without pooling, a sample is its own estimate: N − 1
   EXPECT_EQ(ensemble_dof(runs, 0.0)[lift], 2.0);
 
@@ -248,13 +255,19 @@ TEST(Replay, APooledVarianceHasAsManyDegreesAsIndependentSamplesInAWindow) {
     for (double& f : perturbed[k].series[Channel::f_lift]) f += normal(rng);
     for (double& f : perturbed[k].series[Channel::f_tilt]) f += 1.0 + double(k);
   }
+  // two departures from one shared run are worth 2 / (1 + 1/4) = 1.6 independent ones
   const std::vector<double> sdof = sensitivity_dof(base, perturbed);
-  EXPECT_GT(sdof[lift], 2.0 * 41.0 * 0.7);
-  EXPECT_EQ(sdof[tilt], 2.0);
+  EXPECT_GT(sdof[lift], 1.6 * 41.0 * 0.7);
+  EXPECT_DOUBLE_EQ(sdof[tilt], 1.6);
+  const std::vector<double> stau = sensitivity_departure_time(base, perturbed);
+  EXPECT_LT(stau[lift], 1.5);
+  EXPECT_GT(stau[tilt], 0.5 * double(base.series.size()));
   // what ensemble_variance and sensitivity_variance refuse, these refuse too
   EXPECT_THROW(ensemble_dof({runs[0]}), Error);
   EXPECT_THROW(ensemble_dof(runs, -0.1), Error);
   EXPECT_THROW(sensitivity_dof(base, {}), Error);
+  EXPECT_THROW(ensemble_departure_time({runs[0]}), Error);
+  EXPECT_THROW(sensitivity_departure_time(base, {}), Error);
 }
 
 // members on other sample times or of another scenario are not averaged
