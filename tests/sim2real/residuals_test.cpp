@@ -232,6 +232,22 @@ RunSpread uniform_spread(const sim2real::Run& run, int members, double v) {
   return spread;
 }
 
+// a judgement with a pile ensemble's spread: the clean reference as the model (the mean of
+// `members` piles, a zero spread to be filled), the measured run with sensor noise of 1 % of each
+// channel's scale, and that noise's σ
+struct SpreadCase {
+  sim2real::Run model, measured;
+  std::vector<double> sigma;
+};
+SpreadCase spread_case(std::mt19937_64& rng, int members) {
+  SpreadCase k;
+  k.model.series = test::reference_series();
+  k.measured = noisy_reference(0.01, rng);
+  k.sigma = noise_sigmas(k.measured.series);
+  k.model.spread = uniform_spread(k.model, members, 0.0);
+  return k;
+}
+
 // without a spread, and with one that is zero everywhere, the residuals are the sensor-noise law's
 // bit for bit: w = 1 exactly, r² / 1 = r² and ln 1 = 0 (issue 17: the spread must not move a
 // diagnosis of runs without an ensemble)
@@ -359,13 +375,10 @@ TEST(Residuals, AResidualAsLargeAsTheSimulationsSpreadIsWithinNoiseOnlyWithIt) {
   auto rng = fresh_rng();
   constexpr int kMembers = 3;
   constexpr double kSpreadOverNoise = 10.0;  // √v / σ in the dig
-  sim2real::Run clean;
-  clean.series = test::reference_series();
-  sim2real::Run measured = noisy_reference(0.01, rng);  // sensor noise σ_c on every channel
-  const auto sigma = noise_sigmas(measured.series);
-  sim2real::Run model = clean;
-  model.spread = uniform_spread(clean, kMembers, 0.0);
-  const auto& t = clean.series[Channel::t];
+  SpreadCase k = spread_case(rng, kMembers);
+  sim2real::Run &model = k.model, &measured = k.measured;
+  const std::vector<double>& sigma = k.sigma;
+  const auto& t = model.series[Channel::t];
   for (size_t c = 1; c < kChannelCount; ++c) {
     const double sd = kSpreadOverNoise * sigma[c];
     std::normal_distribution<double> arrangement(0.0, sd);
@@ -484,13 +497,10 @@ TEST(Residuals, AVarianceFromThreeMembersIsJudgedByStudentsT) {
   auto rng = fresh_rng();
   constexpr int kMembers = 3;
   constexpr double kSpreadOverNoise = 10.0;
-  sim2real::Run clean;
-  clean.series = test::reference_series();
-  sim2real::Run measured = noisy_reference(0.01, rng);
-  const auto sigma = noise_sigmas(measured.series);
-  sim2real::Run model = clean;
-  model.spread = uniform_spread(clean, kMembers, 0.0);
-  const auto& t = clean.series[Channel::t];
+  SpreadCase k = spread_case(rng, kMembers);
+  sim2real::Run &model = k.model, &measured = k.measured;
+  const std::vector<double>& sigma = k.sigma;
+  const auto& t = model.series[Channel::t];
   for (size_t c = 1; c < kChannelCount; ++c) {
     std::normal_distribution<double> arrangement(0.0, kSpreadOverNoise * sigma[c]);
     for (size_t i = 0; i < t.size(); ++i) {
@@ -566,13 +576,10 @@ TEST(Residuals, ACellHoldsAsManySamplesUnderTheNullAsItsSpreadDecorrelates) {
   constexpr double kSpreadOverNoise = 10.0;
   int beyond_white = 0, beyond_null = 0, cells = 0;
   for (int run = 0; run < kRuns; ++run) {
-    sim2real::Run clean;
-    clean.series = test::reference_series();
-    sim2real::Run measured = noisy_reference(0.01, rng);
-    const auto sigma = noise_sigmas(measured.series);
-    sim2real::Run model = clean;
-    model.spread = uniform_spread(clean, kMembers, 0.0);
-    const auto& t = clean.series[Channel::t];
+    SpreadCase k = spread_case(rng, kMembers);
+    sim2real::Run &model = k.model, &measured = k.measured;
+    const std::vector<double>& sigma = k.sigma;
+    const auto& t = model.series[Channel::t];
     for (size_t c = 1; c < kChannelCount; ++c) {
       const double sd = kSpreadOverNoise * sigma[c];
       // one draw of the mean's error and one of the measured pile, held over the dig
