@@ -304,14 +304,16 @@ Run ensemble_mean(const std::vector<Run>& runs) {
   mean.summary.loaded_mass_kg /= n;
   mean.summary.work_J /= n;
   mean.summary.details["pile_ensemble"] = runs.size();
-  // the members' spread, which the residuals add to the sensor noise (sim2real/residuals.hpp)
+  // the members' spread, which the residuals add to the sensor noise (sim2real/residuals.hpp):
+  // the departures' τ found once, the degrees of freedom from it (ensemble_dof's law)
+  const std::vector<double> tau = ensemble_departure_time(runs);
   mean.spread = RunSpread{static_cast<int>(runs.size()),
                           ensemble_variance(runs),
                           0,
                           {},
-                          ensemble_dof(runs),
+                          pooled_dof(first.series[Channel::t], tau, n - 1.0, kSpreadHalfWindow),
                           {},
-                          ensemble_departure_time(runs),
+                          tau,
                           {}};
   return mean;
 }
