@@ -20,6 +20,11 @@ namespace talus::app {
 
 namespace {
 
+// --one-group-rows of both benchmarks: the threshold is a device's speed question (same bits)
+const char* const kOneGroupRowsHelp =
+    "PGS sweeps systems of at most this many rows in one work-group, larger ones a launch per "
+    "colour (the same results; 0: never)";
+
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   return v.empty() ? 0.0 : v[v.size() / 2];
@@ -34,7 +39,8 @@ std::vector<std::string> split(const std::string& s, char sep) {
 }
 
 // the default pile at a level, settled briefly, then timed with the preset's dt and N_it
-nlohmann::json bench_level(Device& dev, const FidelityPreset& preset, int steps, bool quiet) {
+nlohmann::json bench_level(Device& dev, const FidelityPreset& preset, int steps, int one_group_rows,
+                           bool quiet) {
   PileBuildOptions build;
   build.min_time = 0.5;
   build.max_time = 1.0;
@@ -49,6 +55,7 @@ nlohmann::json bench_level(Device& dev, const FidelityPreset& preset, int steps,
   DemSettings settings;
   settings.dt = preset.dt;
   settings.iterations = preset.iterations;
+  settings.one_group_rows = one_group_rows;
   DemWorld world(dev, gravel(), settings, pile.bounds, pile.geoms);
   world.set_particles(pile.particles);
   world.step();  // contacts exist from here on, warm start as in a run
@@ -67,6 +74,7 @@ nlohmann::json bench_level(Device& dev, const FidelityPreset& preset, int steps,
           {"particles", world.size()},
           {"contacts", n_contacts},
           {"colours", world.stats().colours},
+          {"one_group_rows", one_group_rows},
           {"iterations", preset.iterations},
           {"dt_s", preset.dt},
           {"steps_timed", steps},
@@ -76,10 +84,12 @@ nlohmann::json bench_level(Device& dev, const FidelityPreset& preset, int steps,
           {"realtime_factor", preset.dt / median(step_s)}};
 }
 
-nlohmann::json bench_settle10k(Device& dev, double dt, int iterations, unsigned seed, bool quiet) {
+nlohmann::json bench_settle10k(Device& dev, double dt, int iterations, unsigned seed,
+                               int one_group_rows, bool quiet) {
   Scene scene = settle10k_scene(seed);
   if (dt > 0) scene.settings.dt = dt;
   if (iterations > 0) scene.settings.iterations = iterations;
+  scene.settings.one_group_rows = one_group_rows;
   DemWorld world(dev, scene.material, scene.settings, scene.bounds, scene.geoms);
   world.set_particles(scene.particles);
   const double sim_time = 0.5;  // [s], as the peers
@@ -112,6 +122,7 @@ nlohmann::json bench_settle10k(Device& dev, double dt, int iterations, unsigned 
           {"seed", seed},
           {"steps", steps},
           {"colouring_kept_steps", colouring_kept},
+          {"one_group_rows", one_group_rows},
           {"sim_time_s", sim_time},
           {"wall_s", wall},
           {"wall_s_per_sim_s", wall / sim_time},
@@ -157,6 +168,7 @@ void add_bench_dig(CLI::App& bench) {
     bool quiet = false;
     bool pile_cache = true;  // the pile through the pile cache (--no-pile-cache)
     double sweep_tolerance = kDigSweepTolerance;  // [m/s] DiggingOptions::sweep_tolerance
+    int one_group_rows = kPgsOneGroupRows;        // DiggingOptions::one_group_rows
   };
   auto opt = std::make_shared<Options>();
   auto* dig = bench.add_subcommand("dig",
@@ -181,6 +193,9 @@ void add_bench_dig(CLI::App& bench) {
                   "(docs/dem.md) [m/s]")
       ->check(number_in(0.0, 1.0, "m/s", true))
       ->capture_default_str();
+  dig->add_option("--one-group-rows", opt->one_group_rows, kOneGroupRowsHelp)
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   dig->add_flag("--quiet", opt->quiet, "no progress on stderr");
   dig->add_flag(
       "!--no-pile-cache", opt->pile_cache,
@@ -199,6 +214,7 @@ void add_bench_dig(CLI::App& bench) {
     DiggingOptions options;
     options.pile.seed = opt->seed;
     options.sweep_tolerance = opt->sweep_tolerance;
+    options.one_group_rows = opt->one_group_rows;
     options.pile_cache.enabled = opt->pile_cache;
     options.pile_cache.note = [](const std::string& line) {
       std::cerr << "talus bench dig: " << line << "\n";
@@ -215,7 +231,8 @@ void add_bench_dig(CLI::App& bench) {
     const DigCost cost =
         measure_dig_cost(dev, scenario, preset, pile, options, opt->seconds, &progress);
     progress.finish();
-    const nlohmann::ordered_json j = dig_cost_json(cost, dev.description());
+    nlohmann::ordered_json j = dig_cost_json(cost, dev.description());
+    j["one_group_rows"] = opt->one_group_rows;
     if (!opt->json.empty()) write_file_atomically(opt->json, j.dump(2) + "\n");
     std::cout << j.dump(2) << "\n";
   });
@@ -310,6 +327,7 @@ void add_bench_command(CLI::App& app) {
     double settle_dt = 0.0;      // 0: the scene's own (terrain/scenes.cpp)
     int settle_iterations = 0;
     unsigned settle_seed = LatticeBox{}.seed;
+    int one_group_rows = kPgsOneGroupRows;
     bool quiet = false;
   };
   auto opt = std::make_shared<Options>();
@@ -336,6 +354,9 @@ void add_bench_command(CLI::App& app) {
   dem->add_option("--settle-seed", opt->settle_seed,
                   "seed of the 10k settling case's lattice jitter (default: the peers' inputs')")
       ->capture_default_str();
+  dem->add_option("--one-group-rows", opt->one_group_rows, kOneGroupRowsHelp)
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   dem->add_flag("--quiet", opt->quiet, "no progress on stderr");
   dem->callback([opt] {
     std::vector<const FidelityPreset*> presets;
@@ -344,10 +365,11 @@ void add_bench_command(CLI::App& app) {
     if (!opt->plot.empty()) check_writable(opt->plot, "--plot");
     Device dev;
     nlohmann::json results = nlohmann::json::array();
-    for (auto* preset : presets) results.push_back(bench_level(dev, *preset, opt->steps, opt->quiet));
+    for (auto* preset : presets)
+      results.push_back(bench_level(dev, *preset, opt->steps, opt->one_group_rows, opt->quiet));
     if (!opt->no_settle10k)
       results.push_back(bench_settle10k(dev, opt->settle_dt, opt->settle_iterations,
-                                        opt->settle_seed, opt->quiet));
+                                        opt->settle_seed, opt->one_group_rows, opt->quiet));
     nlohmann::json j = {{"device", dev.description()}, {"results", results}};
     if (!opt->json.empty()) write_json(opt->json, j);
     if (!opt->plot.empty()) {

@@ -41,6 +41,9 @@ struct DiggingOptions {
   PileBuildOptions pile;         // settling of the pile before the machine starts
   CouplingSettings coupling;     // bucket contacts and outer passes
   SweepKind sweep = SweepKind::Pgs;
+  // PGS sweeps a system of at most this many rows in one work-group (DemSettings::one_group_rows;
+  // type D and the type-G zone alike): the same bits, a device-dependent speed
+  int one_group_rows = kPgsOneGroupRows;
   // a type-D dig's sweeps end early once the particle rows' RMS residual is below this [m/s]
   // (DemSettings::tolerance; the level's N_it is the cap). 0: always N_it, as the paper's presets
   double sweep_tolerance = kDigSweepTolerance;

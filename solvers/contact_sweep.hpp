@@ -24,16 +24,12 @@ class ContactSweep {
   virtual const char* name() const = 0;
 };
 
-// rows up to which PGS sweeps all colours in one work-group (kernels/solver.cl
-// pgs_sweeps_one_group), a launch per sweep instead of one per colour: below it the launches
-// cost more than one compute unit's loss of the others (bench/RESULTS.md, 2026-11-27)
-inline constexpr int kPgsOneGroupRows = 4096;
-
 // graph-coloured projected Gauss-Seidel (solvers/pgs_sweep.cpp); systems of up to
-// `one_group_rows` rows are swept in one work-group
+// `one_group_rows` rows are swept in one work-group (DemSettings::one_group_rows)
 std::unique_ptr<ContactSweep> make_pgs_sweep(Device& dev, int one_group_rows = kPgsOneGroupRows);
 // projected Jacobi with mass splitting (solvers/jacobi_sweep.cpp)
 std::unique_ptr<ContactSweep> make_jacobi_sweep(Device& dev, int particles);
-std::unique_ptr<ContactSweep> make_sweep(SweepKind kind, Device& dev, int particles);
+// the sweep of `settings` (its kind; PGS's one-group threshold)
+std::unique_ptr<ContactSweep> make_sweep(const DemSettings& settings, Device& dev, int particles);
 
 }  // namespace talus

@@ -29,6 +29,12 @@ inline bool carry_colours_after(int colours, int fresh_colours) {
   return colours <= kCarriedColourGrowth * fresh_colours;
 }
 
+// rows up to which PGS sweeps all colours in one work-group (kernels/solver.cl
+// pgs_sweeps_one_group), a launch per sweep instead of one per colour: below it the launches
+// cost more than one compute unit's loss of the others (PoCL on 2 cores: gain at 3,440 rows,
+// loss at 30,370; bench/RESULTS.md, 2026-11-27)
+inline constexpr int kPgsOneGroupRows = 4096;
+
 struct DemSettings {
   double dt = 1.0e-3;       // timestep h [s]
   int iterations = 50;      // sweeps per step (upper bound when tolerance > 0)
@@ -38,6 +44,9 @@ struct DemSettings {
   // dig (solvers/split_solver) applies it to each outer pass's sweeps
   double tolerance = 0.0;
   SweepKind sweep = SweepKind::Pgs;
+  // PGS sweeps systems of at most this many rows in one work-group, larger ones a launch per
+  // colour (the same bits either way; only the speed differs by device): 0 never, INT_MAX always
+  int one_group_rows = kPgsOneGroupRows;
   Vec3 gravity = Vec3(0.0, 0.0, -9.81);  // [m/s^2]
   // pairs closer than margin_rel * min(r_a, r_b) get a (speculative) contact row: it never
   // pulls them together, and with damping it brakes an approach that would close more than

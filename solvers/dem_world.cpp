@@ -37,8 +37,15 @@ TlGeom to_device(const StaticGeom& g) {
 
 DemWorld::DemWorld(Device& dev, const Material& material, const DemSettings& settings,
                    const Bounds& bounds, std::vector<StaticGeom> geoms)
-    : dev_(dev), material_(material), settings_(settings), bounds_(bounds), geoms_(std::move(geoms)),
-      buffers_(dev), scan_(dev), sweep_kind_(settings.sweep) {
+    : dev_(dev),
+      material_(material),
+      settings_(settings),
+      bounds_(bounds),
+      geoms_(std::move(geoms)),
+      buffers_(dev),
+      scan_(dev),
+      sweep_kind_(settings.sweep),
+      sweep_one_group_rows_(settings.one_group_rows) {
   if (!(settings.dt > 0.0)) throw InputError("DemSettings.dt: the timestep must be positive");
   if (!(settings.overlap_floor_rel > 0.0))
     throw InputError("DemSettings.overlap_floor_rel: must be positive (it keeps the compliance finite)");
@@ -134,9 +141,11 @@ void DemWorld::update_params() {
   p.geoms = static_cast<int>(geoms_.size());
   p.speculative = static_cast<float>(speculative);
   p.cohesion = static_cast<float>(kRumpfPerR2 * material_.cohesion);
-  if (!sweep_ || sweep_kind_ != settings_.sweep) {
+  if (!sweep_ || sweep_kind_ != settings_.sweep ||
+      sweep_one_group_rows_ != settings_.one_group_rows) {
     sweep_kind_ = settings_.sweep;
-    sweep_ = make_sweep(sweep_kind_, dev_, p.particles);
+    sweep_one_group_rows_ = settings_.one_group_rows;
+    sweep_ = make_sweep(settings_, dev_, p.particles);
   }
   bin_geoms();
 }

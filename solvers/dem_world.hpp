@@ -157,7 +157,9 @@ class DemWorld {
   int coloured_contacts_ = 0;
   size_t coloured_particles_ = 0;
   SweepKind coloured_sweep_ = SweepKind::Pgs;
+  // what sweep_ was made for (DemSettings::sweep, one_group_rows): a change makes a new one
   SweepKind sweep_kind_;
+  int sweep_one_group_rows_;
   cl::Kernel k_cell_count_, k_cell_fill_, k_cell_sort_;
   cl::Kernel k_contact_count_, k_contact_write_;
   cl::Kernel k_adj_count_, k_adj_fill_, k_adj_sort_;

@@ -60,8 +60,8 @@ std::unique_ptr<ContactSweep> make_pgs_sweep(Device& dev, int one_group_rows) {
   return std::make_unique<PgsSweep>(dev, one_group_rows);
 }
 
-std::unique_ptr<ContactSweep> make_sweep(SweepKind kind, Device& dev, int particles) {
-  if (kind == SweepKind::Pgs) return make_pgs_sweep(dev);
+std::unique_ptr<ContactSweep> make_sweep(const DemSettings& settings, Device& dev, int particles) {
+  if (settings.sweep == SweepKind::Pgs) return make_pgs_sweep(dev, settings.one_group_rows);
   return make_jacobi_sweep(dev, particles);
 }
 

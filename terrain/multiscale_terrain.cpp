@@ -112,6 +112,7 @@ MultiscaleTerrain::MultiscaleTerrain(Device& dev, const PileProfile& profile,
   settings.dt = level.dt;
   settings.iterations = level.iterations;
   settings.max_speed = options.max_particle_speed;
+  settings.one_group_rows = options.one_group_rows;
   dem_ = std::make_unique<DemWorld>(dev, options.particle_material, settings,
                                     pile_bounds(profile, level.diameter), pile_container(profile));
   Tool tool;

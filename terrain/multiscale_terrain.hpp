@@ -58,6 +58,7 @@ struct MultiscaleOptions {
   double no_merge_margin = 0.5;           // [m] around the bucket's bounding box: no merging there
   double front_margin = 2.0;              // voxels ahead of the toe [m] (VoxelTerrainOptions)
   double max_particle_speed = 4.0;        // [m/s] DemSettings::max_speed of the zone's particles
+  int one_group_rows = kPgsOneGroupRows;  // DemSettings::one_group_rows of the zone's sweeps
   unsigned seed = 1;                      // of the particles' sizes
 };
 

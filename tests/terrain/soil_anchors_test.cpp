@@ -5,8 +5,10 @@
 // tables these reproduce at CI size.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <vector>
 
 #include "terrain/collapse_test.hpp"
 #include "terrain/cutting_test.hpp"
@@ -64,16 +66,28 @@ TEST(SoilAnchors, ColumnCollapseRunsOutAsInTheLaboratory) {
 
 // a flat blade cutting 1.5 D deep in D400 gravel needs the force of the fundamental earthmoving
 // equation with the paper's phi 32 deg and bucket-soil friction 0.2, under the heap it pushes
-// (within 25 %; ~5 s). The finer levels' numbers are in docs/soil.md
+// (within 25 %). One bed's cut is one realisation of a chaotic flow: over ten beds on the CI VM the
+// ratio was 1.02-1.33 (median 1.07; bench seeds 1-10, docs/soil.md), and one bed on an NVIDIA GPU
+// (another rounding of the same law) fell outside the band. So the test takes the median of three
+// beds (~11 s). The finer levels' numbers are in docs/soil.md
 TEST(SoilAnchors, BladeForceMeetsTheEarthmovingEquation) {
   Device dev;
-  CuttingOptions o = at_level<CuttingOptions>(fidelity_preset("D400"));
-  o.depth = 0.6;
-  const CuttingResult r = run_cutting_test(dev, gravel(), o);
-  std::printf("[ measured ] D400 cut 0.6 m deep, %.1f m wide: %.1f kN (spread %.1f), equation %.1f kN (level bed "
-              "%.1f kN), ratio %.2f\n", r.width, 1e-3 * r.force, 1e-3 * r.force_spread, 1e-3 * r.fee_force,
-              1e-3 * r.fee_force_level, r.force / r.fee_force);
-  EXPECT_NEAR(r.force / r.fee_force, 1.0, 0.25);
+  std::vector<double> ratios;
+  for (unsigned seed : {1u, 2u, 3u}) {
+    CuttingOptions o = at_level<CuttingOptions>(fidelity_preset("D400"));
+    o.depth = 0.6;
+    o.seed = seed;
+    const CuttingResult r = run_cutting_test(dev, gravel(), o);
+    std::printf(
+        "[ measured ] D400 cut 0.6 m deep, %.1f m wide, bed %u: %.1f kN (spread %.1f), equation "
+        "%.1f kN "
+        "(level bed %.1f kN), ratio %.2f\n",
+        r.width, seed, 1e-3 * r.force, 1e-3 * r.force_spread, 1e-3 * r.fee_force,
+        1e-3 * r.fee_force_level, r.force / r.fee_force);
+    ratios.push_back(r.force / r.fee_force);
+  }
+  std::sort(ratios.begin(), ratios.end());
+  EXPECT_NEAR(ratios[1], 1.0, 0.25) << "the median of three beds' force over the equation's";
 }
 
 // the same cut on the type-G terrain at G400 and G200 (~4 s): the force the blade's motor needs
