@@ -6,19 +6,6 @@
 // seen from the bucket), which is what makes the coupling strong.
 // Double-precision twins: solvers/bucket_rows.cpp (reference namespace).
 
-// the bucket's twist change from an impulse wrench [p; l] about its centre of mass: W [p; l]
-void bucket_twist_change(const float* W, float3 p, float3 l, float3* dv, float3* dw) {
-  float x[6] = {p.x, p.y, p.z, l.x, l.y, l.z};
-  float y[6];
-  for (int i = 0; i < 6; ++i) {
-    float s = 0.0f;
-    for (int j = 0; j < 6; ++j) s += W[6 * i + j] * x[j];
-    y[i] = s;
-  }
-  *dv += (float3)(y[0], y[1], y[2]);
-  *dw += (float3)(y[3], y[4], y[5]);
-}
-
 // the candidates' state before the step, for the host's rows: centre and radius, velocity and
 // inverse mass, angular velocity and inverse inertia
 __kernel void bucket_gather(__global const int* index, int n, __global const float4* position,
@@ -120,12 +107,57 @@ __kernel void bucket_warm_start(__global const TlRow* rows, int n_rows, __global
   }
 }
 
+// The chain's latency is what a GPU pays for (one work-item, each row waiting for the last):
+// every bucket impulse moved the twist by W [p; arm_b x p], a cross product then a 6x6 product,
+// three times a row. The row's own part of that does not depend on the chain: G = W J_b^T, the
+// twist change per unit impulse at the row's contact point (6x3, J_b^T = [I; [arm_b]x]), and
+// G n for its normal. So the work-group forms them for the whole chunk in parallel while loading
+// it (bucket_chunk_coupling), and the chain is left with 6 products for the normal, 6 dot
+// products of 3 for friction and for rolling (the last three columns of W). Each row's G is the
+// same whatever the chunk, so the walk stays independent of the work-group size.
+#define TL_COUPLING_FLOATS 24  // G row-major (18 floats), then G n (6)
+
+// G = W J_b^T and G n of each row of the chunk, one work-item a row
+void bucket_chunk_coupling(int count, __global const TlBucketBody* bucket,
+                           __local const TlRow* chunk_rows, __local float* chunk_coupling) {
+  int k = get_local_id(0);
+  if (k < count) {
+    float3 b = chunk_rows[k].arm_b.xyz;
+    float3 n = chunk_rows[k].normal.xyz;
+    // column c of J_b^T: [e_c; arm_b x e_c]
+    float3 r[3] = {(float3)(0.0f, b.z, -b.y), (float3)(-b.z, 0.0f, b.x), (float3)(b.y, -b.x, 0.0f)};
+    __local float* g = chunk_coupling + TL_COUPLING_FLOATS * k;
+    for (int i = 0; i < 6; ++i) {
+      float3 w_lin = (float3)(bucket->mobility[6 * i], bucket->mobility[6 * i + 1],
+                              bucket->mobility[6 * i + 2]);
+      float3 w_ang = (float3)(bucket->mobility[6 * i + 3], bucket->mobility[6 * i + 4],
+                              bucket->mobility[6 * i + 5]);
+      float3 gi = w_lin + (float3)(dot(w_ang, r[0]), dot(w_ang, r[1]), dot(w_ang, r[2]));
+      g[3 * i] = gi.x;
+      g[3 * i + 1] = gi.y;
+      g[3 * i + 2] = gi.z;
+      g[18 + i] = dot(gi, n);
+    }
+  }
+  barrier(CLK_LOCAL_MEM_FENCE);
+}
+
+// the twist change of the 6x3 matrix M (row-major, rows `stride` floats apart) times x
+void bucket_twist_change3(const float* M, int stride, float3 x, float3* dv, float3* dw) {
+  float y[6];
+  for (int i = 0; i < 6; ++i)
+    y[i] = M[stride * i] * x.x + M[stride * i + 1] * x.y + M[stride * i + 2] * x.z;
+  *dv += (float3)(y[0], y[1], y[2]);
+  *dw += (float3)(y[3], y[4], y[5]);
+}
+
 // one row against the bucket: normal, friction, then rolling, as kernels/solver.cl
-// solve_contact, with the bucket's side through W instead of a diagonal mass. The row's
-// impulses, the particle's velocity and omega (w: inverse mass and inertia) and the bucket's
-// twist are updated in place.
-void bucket_row_solve(TlRow* row, float4* velocity, float4* omega, const float* W, float3* vb,
-                      float3* wb) {
+// solve_contact, with the bucket's side through W instead of a diagonal mass (G and G n of the
+// row above, the rolling part through W's last three columns). The row's impulses, the
+// particle's velocity and omega (w: inverse mass and inertia) and the bucket's twist are
+// updated in place.
+void bucket_row_solve(TlRow* row, float4* velocity, float4* omega, const float* W, const float* G,
+                      float3* vb, float3* wb) {
   float3 va = velocity->xyz, wa = omega->xyz;
   float ima = velocity->w, iia = omega->w;
   float3 n = row->normal.xyz;
@@ -137,9 +169,10 @@ void bucket_row_solve(TlRow* row, float4* velocity, float4* omega, const float* 
   // bucket holds no tensile impulse
   float un = dot(n, *vb + cross(*wb, arm_b) - va);
   float ln_new = normal_impulse(ln, ROW_RHS(*row), un, ROW_SIGMA(*row), ROW_INV_DN(*row), 0.0f);
-  float3 dp = (ln_new - ln) * n;
-  va -= ima * dp;
-  bucket_twist_change(W, dp, cross(arm_b, dp), vb, wb);
+  float dln = ln_new - ln;
+  va -= ima * dln * n;
+  *vb += dln * (float3)(G[18], G[19], G[20]);
+  *wb += dln * (float3)(G[21], G[22], G[23]);
   ln = ln_new;
 
   // friction on the disc mu lambda_n
@@ -150,7 +183,7 @@ void bucket_row_solve(TlRow* row, float4* velocity, float4* omega, const float* 
   float3 dlt = lt_new - lt;
   va -= ima * dlt;
   wa -= iia * cross(arm_a, dlt);
-  bucket_twist_change(W, dlt, cross(arm_b, dlt), vb, wb);
+  bucket_twist_change3(G, 3, dlt, vb, wb);
 
   // rolling (on the disc) and twist (about n), both bounded by mu_r R* lambda_n
   float3 wrel = *wb - wa;
@@ -158,7 +191,7 @@ void bucket_row_solve(TlRow* row, float4* velocity, float4* omega, const float* 
   float3 lr_new = rolling_impulse(lr, wrel, n, ROW_INV_DR(*row), ROW_ROLLING_LIMIT(*row) * ln);
   float3 dlr = lr_new - lr;
   wa -= iia * dlr;
-  bucket_twist_change(W, (float3)(0.0f), dlr, vb, wb);
+  bucket_twist_change3(W + 3, 6, dlr, vb, wb);
 
   row->impulse_t = (float4)(lt_new, ln);
   row->impulse_r = (float4)(lr_new, ROW_INV_DT(*row));
@@ -172,7 +205,7 @@ __kernel void bucket_sweep(__global TlRow* rows, int n_rows, __global float4* ve
                            __global float4* omega, __global TlBucketBody* bucket,
                            __local TlRow* chunk_rows, __local float4* chunk_velocity,
                            __local float4* chunk_omega, __local int* chunk_particle,
-                           __local int* chunk_slot) {
+                           __local int* chunk_slot, __local float* chunk_coupling) {
   int chunk = get_local_size(0);
   int k = get_local_id(0);
   float W[36];
@@ -186,6 +219,7 @@ __kernel void bucket_sweep(__global TlRow* rows, int n_rows, __global float4* ve
     int count = min(chunk, n_rows - base);
     bucket_chunk_load(rows, base, count, velocity, omega, chunk_rows, chunk_velocity, chunk_omega,
                       chunk_particle, chunk_slot);
+    bucket_chunk_coupling(count, bucket, chunk_rows, chunk_coupling);
     // one work-item walks the chunk's rows in order
     if (k == 0) {
       for (int j = 0; j < count; ++j) {
@@ -193,7 +227,10 @@ __kernel void bucket_sweep(__global TlRow* rows, int n_rows, __global float4* ve
         int s = chunk_slot[j];
         float4 va = chunk_velocity[s];
         float4 wa = chunk_omega[s];
-        bucket_row_solve(&row, &va, &wa, W, &vb, &wb);
+        float G[TL_COUPLING_FLOATS];
+        for (int i = 0; i < TL_COUPLING_FLOATS; ++i)
+          G[i] = chunk_coupling[TL_COUPLING_FLOATS * j + i];
+        bucket_row_solve(&row, &va, &wa, W, G, &vb, &wb);
         chunk_rows[j].impulse_t = row.impulse_t;
         chunk_rows[j].impulse_r = row.impulse_r;
         chunk_velocity[s] = va;

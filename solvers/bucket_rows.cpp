@@ -278,14 +278,20 @@ void bucket_sweep(std::vector<ContactRow>& rows, Particles& particles, BucketBod
 
 namespace {
 
-// the chunk's local memory, the last five arguments of both chain kernels from `first` on
-// (kernels/bucket.cl: rows, velocities, omegas, particle indices, slots)
-void set_chunk_args(cl::Kernel& kernel, cl_uint first, size_t chunk) {
+// the floats of a row's coupling in the sweep's local memory: G = W J_b^T (6x3) and G n
+// (kernels/bucket.cl TL_COUPLING_FLOATS)
+constexpr size_t kCouplingFloats = 24;
+
+// the chunk's local memory, the last arguments of both chain kernels from `first` on
+// (kernels/bucket.cl: rows, velocities, omegas, particle indices, slots; the sweep's rows'
+// couplings too)
+void set_chunk_args(cl::Kernel& kernel, cl_uint first, size_t chunk, bool coupling) {
   cl_checked("setting the bucket chunk's local memory", [&] {
     kernel.setArg(first, cl::Local(chunk * sizeof(TlRow)));
     kernel.setArg(first + 1, cl::Local(chunk * sizeof(cl_float4)));
     kernel.setArg(first + 2, cl::Local(chunk * sizeof(cl_float4)));
     kernel.setArg(first + 3, cl::Local(chunk * sizeof(cl_int)));
+    if (coupling) kernel.setArg(first + 5, cl::Local(chunk * kCouplingFloats * sizeof(cl_float)));
     return kernel.setArg(first + 4, cl::Local(chunk * sizeof(cl_int)));
   });
 }
@@ -334,14 +340,14 @@ void BucketRowBlock::set_bucket(const BucketBody& bucket) { body_.upload({to_dev
 void BucketRowBlock::warm_start(Buffer<cl_float4>& velocity, Buffer<cl_float4>& omega) {
   if (rows_count_ == 0) return;
   set_args(warm_kernel_, rows_, rows_count_, velocity, omega);
-  set_chunk_args(warm_kernel_, 4, chunk_);
+  set_chunk_args(warm_kernel_, 4, chunk_, false);
   launch_group(dev_, warm_kernel_, chunk_, "bucket_warm_start");
 }
 
 void BucketRowBlock::sweep(Buffer<cl_float4>& velocity, Buffer<cl_float4>& omega) {
   if (rows_count_ == 0) return;
   set_args(sweep_kernel_, rows_, rows_count_, velocity, omega, body_);
-  set_chunk_args(sweep_kernel_, 5, chunk_);
+  set_chunk_args(sweep_kernel_, 5, chunk_, true);
   launch_group(dev_, sweep_kernel_, chunk_, "bucket_sweep");
 }
 
