@@ -634,12 +634,15 @@ class Search {
     // together
     const bool earlier_fitted = std::any_of(d_.found.begin(), d_.found.end(),
                                             [](const FittedEffect& f) { return !f.x.empty(); });
-    if (!dr.fitted.empty() && dr.fitted[0].explained >= kMinExplained) {
+    if (!dr.fitted.empty() && dr.fitted[0].explained >= kMinExplained &&
+        holds_on_reference(dr, {dr.fitted[0].spec}, dr.fitted[0].explained_on)) {
       dr.added = true;
       add(dr.fitted[0]);
       say("round " + std::to_string(number) + ": added " + dr.fitted[0].spec);
     } else if (search_pairs(candidates, dr);
-               !dr.pairs.empty() && dr.pairs[0].explained >= kMinExplained) {
+               !dr.pairs.empty() && dr.pairs[0].explained >= kMinExplained &&
+               holds_on_reference(dr, {dr.pairs[0].first.spec, dr.pairs[0].second.spec},
+                                  dr.pairs[0].explained_on)) {
       dr.added = true;
       add(dr.pairs[0].first);
       add(dr.pairs[0].second);
@@ -801,6 +804,10 @@ class Search {
           " % of the excess left");
       return false;
     }
+    if (!holds_on_reference(d_.discovery_chaos_checks, {best->spec}, best->explained_on)) {
+      say("discovery: " + best->expression + " does not hold on the reference piles; not added");
+      return false;
+    }
     d_.discovered = *best;
     FittedEffect f;
     f.candidate = {best->target.effect_name(), "", {}};
@@ -918,6 +925,52 @@ class Search {
                 ? (current_cal_ - excess_calibration) / current_cal_
                 : 0.0,
             "calibration"};
+  }
+
+  // whether an addition (its specs) whose share was counted `on` those runs holds on the chaos
+  // reference (ChaosCheck): always on held-out runs or flat-ground data; on pile data with the
+  // share counted on the calibration runs, only if it explains enough there too
+  bool holds_on_reference(DiagnosisRound& dr, const std::vector<std::string>& specs,
+                          const std::string& on) {
+    return holds_on_reference(dr.chaos_checks, specs, on);
+  }
+  bool holds_on_reference(std::vector<ChaosCheck>& checks, const std::vector<std::string>& specs,
+                          const std::string& on) {
+    if (on != "calibration" || !any_pile_) return true;
+    ChaosCheck check;
+    check.effects = specs;
+    // the model as it is, then with the addition, each calibration run on the reference piles
+    const std::vector<std::string> none;
+    for (const std::vector<std::string>* extra : {&none, &specs}) {
+      std::vector<double> excess;
+      for (std::size_t i : d_.calibration) {
+        std::vector<std::unique_ptr<vehicle::Effect>> effects;
+        for (const auto& spec : found_specs_)
+          effects.push_back(vehicle::make_effect(spec, options_.plugins));
+        for (const auto& spec : *extra)
+          effects.push_back(vehicle::make_effect(spec, options_.plugins));
+        vehicle::EffectSet set = in_hook_order(std::move(effects));
+        // a flat-ground run among pile runs has no chaos: its own simulation
+        const Run r = replays_[i]->scenario().pile ? replays_[i]->simulate_reference(set)
+                                                   : replays_[i]->simulate(set);
+        ++simulations_;
+        ++check.simulations;
+        excess.push_back(compute_residuals(r, runs_[i].run, sigma_[i]).excess);
+      }
+      (extra == &none ? check.excess_before : check.excess_with) = mean_of(excess);
+    }
+    check.explained = check.excess_before >= kSignificantExcess
+                          ? (check.excess_before - check.excess_with) / check.excess_before
+                          : 0.0;
+    check.passed = check.explained >= kMinExplained;
+    std::string names;
+    for (const auto& spec : specs) names += (names.empty() ? "" : " and ") + spec;
+    say("  chaos check of " + names + " on the reference piles: calibration excess " +
+        message_number(check.excess_before) + " -> " + message_number(check.excess_with) +
+        " (explains " + message_number(100.0 * check.explained) + " %; " +
+        (check.passed ? "holds" : "refused: a chance fit of the model's own piles") + ")");
+    checks.push_back(check);
+    return check.passed;
   }
 
   // a candidate whose simulation threw: reported in the round and the notes, then skipped
@@ -1432,6 +1485,17 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
   };
   json found = json::array();
   for (const auto& f : d.found) found.push_back({{"name", f.effect["name"]}, {"params", f.effect["params"]}});
+  auto chaos_checks_json = [](const std::vector<ChaosCheck>& checks) {
+    json out = json::array();
+    for (const auto& c : checks)
+      out.push_back({{"effects", c.effects},
+                     {"excess_before", c.excess_before},
+                     {"excess_with", c.excess_with},
+                     {"explained", c.explained},
+                     {"passed", c.passed},
+                     {"simulations", c.simulations}});
+    return out;
+  };
   json rounds = json::array();
   for (const auto& r : d.rounds) {
     json fitted = json::array();
@@ -1466,6 +1530,7 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
                       {"fitted", fitted},
                       {"pairs", pairs},
                       {"added", r.added},
+                      {"chaos_checks", chaos_checks_json(r.chaos_checks)},
                       {"refit", refit}});
   }
   // the sensitivity judgements (docs/sim2real.md): each with its parameters' uncertainty, its cost
@@ -1539,7 +1604,10 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
       {"effects_found", found},
       {"candidates", d.candidates},
       {"discovered", discovered},
-      {"discovery", {{"ran", d.discovery_ran}, {"tried", tried}}},
+      {"discovery",
+       {{"ran", d.discovery_ran},
+        {"tried", tried},
+        {"chaos_checks", chaos_checks_json(d.discovery_chaos_checks)}}},
       {"error_before", table_json(d.error_before)},
       {"error_after", table_json(d.error_after)},
       {"unexplained", d.unexplained},

@@ -382,44 +382,70 @@ Replay::~Replay() = default;
 Run Replay::simulate(vehicle::EffectSet& effects) {
   const auto start = std::chrono::steady_clock::now();
   Run run;
-  if (!scenario_.pile) {
+  if (!scenario_.pile)
     run = vehicle_run(scenario_, simulate_on_flat_ground(scenario_, effects));
-  } else {
-    // the ensemble's piles at the level, once; every simulation digs a copy of each
-    const FidelityPreset& preset = level_preset(options_.fidelity);
-    const int piles = options_.pile_ensemble;
-    std::vector<Run> members;
-    for (int k = 0; k < piles; ++k) {
-      DiggingOptions digging;
-      digging.pile.seed = options_.pile_seed + static_cast<unsigned>(k);
-      if (piles_.size() <= static_cast<std::size_t>(k)) {
-        const PileProfile placed = scenario_pile_profile(scenario_);
-        const std::string label =
-            "pile " + preset.name + (piles > 1 ? " seed " + std::to_string(digging.pile.seed) : "");
-        Progress progress(label, 1.5 * digging.pile.max_time, options_.progress);
-        piles_.push_back(std::make_unique<PileBuild>(
-            build_scenario_pile(*device_, scenario_, placed, preset, digging, &progress)));
-        progress.finish(std::to_string(piles_.back()->particles.size()) + " particles");
-        // the scan difference of the ensemble: its piles' mean
-        const auto rms = scan_difference(measured_.meta.pile_scan,
-                                         scan_scenario_pile(*piles_.back(), placed, preset).points);
-        if (rms) scan_rms_ = (scan_rms_.value_or(0.0) * k + *rms) / (k + 1);
-      }
-      DiggingSimulation sim(*device_, scenario_, preset, *piles_[k], digging, &effects);
-      sim.run([&](int) {
-        if (interrupt_requested())
-          throw_if_interrupted("the replay of " + scenario_.name +
-                               " at t = " + std::to_string(sim.time()) + " s");
-      });
-      members.push_back(dig_run(scenario_, preset.name, sim));
-    }
-    run = ensemble_mean(members);
-    members_ = std::move(members);
-  }
+  else
+    run = simulate_piles(effects, options_.pile_seed, piles_, &members_);
   run.dir = measured_.run.dir;
   const std::lock_guard<std::mutex> lock(count_mutex_);
   ++simulations_;
   wall_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return run;
+}
+
+Run Replay::simulate_reference(vehicle::EffectSet& effects) {
+  if (!scenario_.pile)
+    throw InputError(
+        "replay of " + measured_.run.dir.string() +
+        ": a chaos reference needs a pile scenario (flat-ground runs are not chaotic)");
+  const auto start = std::chrono::steady_clock::now();
+  Run run =
+      simulate_piles(effects, options_.pile_seed + static_cast<unsigned>(options_.pile_ensemble),
+                     reference_piles_, nullptr);
+  run.dir = measured_.run.dir;
+  const std::lock_guard<std::mutex> lock(count_mutex_);
+  ++simulations_;
+  wall_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return run;
+}
+
+Run Replay::simulate_piles(vehicle::EffectSet& effects, unsigned first_seed,
+                           std::vector<std::unique_ptr<PileBuild>>& built,
+                           std::vector<Run>* members_out) {
+  // the ensemble's piles at the level, once; every simulation digs a copy of each
+  const FidelityPreset& preset = level_preset(options_.fidelity);
+  const int piles = options_.pile_ensemble;
+  const bool scan_of_these = &built == &piles_;  // the reported scan difference is the model's
+  std::vector<Run> members;
+  for (int k = 0; k < piles; ++k) {
+    DiggingOptions digging;
+    digging.pile.seed = first_seed + static_cast<unsigned>(k);
+    if (built.size() <= static_cast<std::size_t>(k)) {
+      const PileProfile placed = scenario_pile_profile(scenario_);
+      const std::string label =
+          "pile " + preset.name +
+          (piles > 1 || !scan_of_these ? " seed " + std::to_string(digging.pile.seed) : "");
+      Progress progress(label, 1.5 * digging.pile.max_time, options_.progress);
+      built.push_back(std::make_unique<PileBuild>(
+          build_scenario_pile(*device_, scenario_, placed, preset, digging, &progress)));
+      progress.finish(std::to_string(built.back()->particles.size()) + " particles");
+      // the scan difference of the ensemble: its piles' mean
+      if (scan_of_these) {
+        const auto rms = scan_difference(measured_.meta.pile_scan,
+                                         scan_scenario_pile(*built.back(), placed, preset).points);
+        if (rms) scan_rms_ = (scan_rms_.value_or(0.0) * k + *rms) / (k + 1);
+      }
+    }
+    DiggingSimulation sim(*device_, scenario_, preset, *built[k], digging, &effects);
+    sim.run([&](int) {
+      if (interrupt_requested())
+        throw_if_interrupted("the replay of " + scenario_.name +
+                             " at t = " + std::to_string(sim.time()) + " s");
+    });
+    members.push_back(dig_run(scenario_, preset.name, sim));
+  }
+  Run run = ensemble_mean(members);
+  if (members_out) *members_out = std::move(members);
   return run;
 }
 

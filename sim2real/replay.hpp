@@ -132,6 +132,12 @@ class Replay {
   // scenario without a pile may be simulated from several threads at once (each call builds its
   // own machine; the diagnosis runs its scans so); a pile scenario from one thread at a time
   Run simulate(vehicle::EffectSet& effects);
+  // the same simulation on the chaos reference: a second ensemble of as many piles, disjoint
+  // from the first (seeds pile_seed + pile_ensemble, ...), built at first use. On pile data a
+  // model can fit one ensemble's chaotic realisation by chance; the reference is where such a fit
+  // must hold again (the diagnosis's chaos check). members() is left as simulate() set it. A
+  // scenario without a pile has no chaos: InputError
+  Run simulate_reference(vehicle::EffectSet& effects);
 
   const vehicle::Scenario& scenario() const { return scenario_; }
   const MeasuredRun& measured() const { return measured_; }
@@ -151,7 +157,12 @@ class Replay {
   vehicle::Scenario scenario_;
   ReplayOptions options_;
   Device* device_ = nullptr;
+  // the piles of the first `piles` members from `first_seed`, each built at first use into
+  // `built`, dug with the effects; their ensemble mean
+  Run simulate_piles(vehicle::EffectSet& effects, unsigned first_seed,
+                     std::vector<std::unique_ptr<PileBuild>>& built, std::vector<Run>* members);
   std::vector<std::unique_ptr<PileBuild>> piles_;  // one per ensemble member, built at first use
+  std::vector<std::unique_ptr<PileBuild>> reference_piles_;  // the chaos reference's, likewise
   std::optional<double> scan_rms_;
   std::vector<Run> members_;
   mutable std::mutex count_mutex_;  // guards the two counts below

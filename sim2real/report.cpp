@@ -83,6 +83,24 @@ std::string sensitivity_note(const Diagnosis& d) {
   return s.str();
 }
 
+std::string chaos_check_note(const Diagnosis& d) {
+  std::ostringstream s;
+  auto line = [&](const std::string& where, const ChaosCheck& c) {
+    s << "\nChaos check " << where << " (its share was counted on the calibration runs, so they "
+      << "were dug again on a second ensemble of piles): ";
+    for (std::size_t e = 0; e < c.effects.size(); ++e) s << (e ? " and " : "") << c.effects[e];
+    s << ", calibration excess " << std::setprecision(3) << c.excess_before << " -> "
+      << c.excess_with << " there (explains " << std::setprecision(2) << 100.0 * c.explained
+      << " %): " << (c.passed ? "holds" : "refused, a chance fit of the model's own piles")
+      << ".\n";
+  };
+  for (std::size_t k = 0; k < d.rounds.size(); ++k)
+    for (const ChaosCheck& c : d.rounds[k].chaos_checks)
+      line("in round " + std::to_string(k + 1), c);
+  for (const ChaosCheck& c : d.discovery_chaos_checks) line("of the discovery", c);
+  return s.str();
+}
+
 std::string refit_note(const Diagnosis& d) {
   std::ostringstream s;
   for (std::size_t k = 0; k < d.rounds.size(); ++k) {
@@ -142,6 +160,7 @@ std::string diagnosis_report(const Diagnosis& d, const std::vector<MeasuredRun>&
              << " % of the excess of the " << f.explained_on << " runs)\n";
     report << (d.unexplained ? "\nAn excess beyond noise remains: UNEXPLAINED in part.\n" : "\nWhat remains is within noise.\n");
   }
+  report << chaos_check_note(d);
   report << refit_note(d);
   report << sensitivity_note(d);
   // what the discovery fitted beyond the candidates

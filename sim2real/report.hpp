@@ -29,6 +29,10 @@ std::string spread_note(const Residuals& residuals);
 // not used; empty when nothing was judged
 std::string sensitivity_note(const Diagnosis& d);
 
+// a line per chaos check (DiagnosisRound::chaos_checks): the addition, the reference's
+// calibration excess without and with it, the share, held or refused; empty when none ran
+std::string chaos_check_note(const Diagnosis& d);
+
 // a line per joint refit (DiagnosisRound::refit): kept or not, the calibration log-ratio and the
 // held-out excess before and after, its simulations, and each effect's spec before and after;
 // empty when no round refitted

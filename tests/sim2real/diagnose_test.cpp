@@ -155,7 +155,22 @@ TEST(Diagnose, JsonHasTheIssuesFields) {
   refit.kept = true;
   refit.simulations = 12;
   d.rounds[1].refit = refit;
+  ChaosCheck check;
+  check.effects = {"hydraulic_lag:time_constant=0.002"};
+  check.excess_before = 0.8;
+  check.excess_with = 0.7;
+  check.explained = 0.125;
+  check.simulations = 8;
+  d.rounds[0].chaos_checks.push_back(check);
   const auto j = diagnosis_json(d);
+  // the chaos check of round 1 (refused), none in round 2 or the discovery
+  ASSERT_EQ(j["rounds"][0]["chaos_checks"].size(), 1u);
+  EXPECT_EQ(j["rounds"][0]["chaos_checks"][0]["effects"][0], "hydraulic_lag:time_constant=0.002");
+  EXPECT_FALSE(j["rounds"][0]["chaos_checks"][0]["passed"].get<bool>());
+  EXPECT_DOUBLE_EQ(j["rounds"][0]["chaos_checks"][0]["explained"].get<double>(), 0.125);
+  EXPECT_EQ(j["rounds"][0]["chaos_checks"][0]["simulations"].get<int>(), 8);
+  EXPECT_TRUE(j["rounds"][1]["chaos_checks"].empty());
+  EXPECT_TRUE(j["discovery"]["chaos_checks"].empty());
   EXPECT_TRUE(j["rounds"][0]["refit"].is_null());
   EXPECT_TRUE(j["rounds"][1]["refit"]["kept"].get<bool>());
   EXPECT_EQ(j["rounds"][1]["refit"]["after"][1], "cylinder_friction:force=10000");

@@ -291,6 +291,52 @@ TEST(Replay, AnEnsemblesMeanRefusesRunsThatDoNotShareTheirTimeBase) {
   EXPECT_THROW(Replay(measured, options, nullptr), InputError);
 }
 
+// the chaos reference (HD27 at G400, an ensemble of two, seeds 4-5): a second ensemble of as many
+// piles right after the model's, seeds 6-7, so the reference is, bit for bit, the dig a replay on
+// seeds 6-7 gives, differs from the model's own, and leaves the model's members as they were. A
+// flat-ground run has no chaos and no reference
+TEST(Replay, AChaosReferenceDigsTheNextEnsembleOfPiles) {
+  const vehicle::Scenario sc = vehicle::load_scenario("hd27");
+  MeasuredRun measured;
+  measured.meta = synthetic_metadata(sc, {{3.0, 0.0}, {6.0, 1.8}}, RunSummary{});
+  measured.run.series[Channel::t] = {0.0, sc.duration};
+  measured.run.summary.dig_start_s = sc.dig_start;
+  measured.run.summary.dig_end_s = sc.dig_end;
+  Device& dev = test::shared_device();
+  ReplayOptions model;
+  model.fidelity = "G400";
+  model.pile_seed = 4;
+  model.pile_ensemble = 2;
+  Replay replay(measured, model, &dev);
+  vehicle::EffectSet none;
+  const sim2real::Run own = replay.simulate(none);
+  const std::vector<sim2real::Run> members = replay.members();
+  const sim2real::Run reference = replay.simulate_reference(none);
+  ReplayOptions next = model;
+  next.pile_seed = 6;
+  Replay shifted(measured, next, &dev);
+  const sim2real::Run expected = shifted.simulate(none);
+  std::printf(
+      "[ measured ] HD27-G400 loaded mass: piles 4-5 %.1f kg, reference %.1f kg, piles 6-7 %.1f "
+      "kg\n",
+      own.summary.loaded_mass_kg, reference.summary.loaded_mass_kg,
+      expected.summary.loaded_mass_kg);
+  EXPECT_EQ(reference.summary.loaded_mass_kg, expected.summary.loaded_mass_kg);
+  EXPECT_EQ(reference.series[Channel::f_lift], expected.series[Channel::f_lift]);
+  ASSERT_TRUE(reference.spread.has_value());
+  EXPECT_EQ(reference.spread->members, 2);
+  EXPECT_NE(reference.series[Channel::f_lift], own.series[Channel::f_lift]);
+  ASSERT_EQ(replay.members().size(), members.size());
+  for (std::size_t k = 0; k < members.size(); ++k)
+    EXPECT_EQ(replay.members()[k].series[Channel::f_lift], members[k].series[Channel::f_lift]);
+  EXPECT_EQ(replay.simulations(), 2);
+
+  const auto dir = test::fresh_temp_dir("replay");
+  const MeasuredRun flat = load_carry_run(dir, 1.0);
+  Replay flat_replay(flat, ReplayOptions{}, nullptr);
+  EXPECT_THROW(flat_replay.simulate_reference(none), InputError);
+}
+
 // HD27 at D400 replayed on an ensemble of two piles (seeds 4 and 5): the simulation is the mean
 // of its members, the second member is the dig a single replay on seed 5 gives, bit for bit, and
 // the two piles dig differently (what the ensemble averages out). The mean carries the members'

@@ -106,6 +106,34 @@ TEST(Report, SaysInALineWhatTheJointRefitChanged) {
     EXPECT_NE(note.find(part), std::string::npos) << part << "\n" << note;
 }
 
+// a chaos check in a line: where, the addition, the reference's calibration excess without and
+// with it, its share, held or refused; nothing without one
+TEST(Report, SaysInALineWhatTheChaosCheckFound) {
+  Diagnosis d;
+  d.rounds.resize(1);
+  EXPECT_EQ(chaos_check_note(d), "");
+  ChaosCheck c;
+  c.effects = {"hydraulic_lag:time_constant=0.002"};
+  c.excess_before = 0.31;
+  c.excess_with = 0.29;
+  c.explained = 0.0;
+  c.passed = false;
+  d.rounds[0].chaos_checks.push_back(c);
+  ChaosCheck discovery = c;
+  discovery.effects = {"learned_correction:target=lift"};
+  discovery.excess_before = 2.0;
+  discovery.excess_with = 0.5;
+  discovery.explained = 0.75;
+  discovery.passed = true;
+  d.discovery_chaos_checks.push_back(discovery);
+  const std::string note = chaos_check_note(d);
+  for (const char* part :
+       {"Chaos check in round 1", "hydraulic_lag:time_constant=0.002",
+        "calibration excess 0.31 -> 0.29", "refused", "Chaos check of the discovery",
+        "learned_correction:target=lift", "2 -> 0.5", "explains 75 %", "holds"})
+    EXPECT_NE(note.find(part), std::string::npos) << part << "\n" << note;
+}
+
 // the verdict's sensitivity judgement in one line: the parameters within one standard error, the
 // simulations, the judged runs' excess without and with it; or why it was not used
 TEST(Report, SaysInALineWhetherTheSensitivitySpreadJudgedTheVerdict) {
