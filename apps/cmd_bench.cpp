@@ -40,7 +40,7 @@ std::vector<std::string> split(const std::string& s, char sep) {
 
 // the default pile at a level, settled briefly, then timed with the preset's dt and N_it
 nlohmann::json bench_level(Device& dev, const FidelityPreset& preset, int steps, int one_group_rows,
-                           bool quiet) {
+                           bool pair_reach, bool quiet) {
   PileBuildOptions build;
   build.min_time = 0.5;
   build.max_time = 1.0;
@@ -56,6 +56,7 @@ nlohmann::json bench_level(Device& dev, const FidelityPreset& preset, int steps,
   settings.dt = preset.dt;
   settings.iterations = preset.iterations;
   settings.one_group_rows = one_group_rows;
+  settings.pair_reach = pair_reach;
   DemWorld world(dev, gravel(), settings, pile.bounds, pile.geoms);
   world.set_particles(pile.particles);
   world.step();  // contacts exist from here on, warm start as in a run
@@ -75,6 +76,7 @@ nlohmann::json bench_level(Device& dev, const FidelityPreset& preset, int steps,
           {"contacts", n_contacts},
           {"colours", world.stats().colours},
           {"one_group_rows", one_group_rows},
+          {"pair_reach", pair_reach},
           {"iterations", preset.iterations},
           {"dt_s", preset.dt},
           {"steps_timed", steps},
@@ -85,11 +87,12 @@ nlohmann::json bench_level(Device& dev, const FidelityPreset& preset, int steps,
 }
 
 nlohmann::json bench_settle10k(Device& dev, double dt, int iterations, unsigned seed,
-                               int one_group_rows, bool quiet) {
+                               int one_group_rows, bool pair_reach, bool quiet) {
   Scene scene = settle10k_scene(seed);
   if (dt > 0) scene.settings.dt = dt;
   if (iterations > 0) scene.settings.iterations = iterations;
   scene.settings.one_group_rows = one_group_rows;
+  scene.settings.pair_reach = pair_reach;
   DemWorld world(dev, scene.material, scene.settings, scene.bounds, scene.geoms);
   world.set_particles(scene.particles);
   const double sim_time = 0.5;  // [s], as the peers
@@ -123,6 +126,7 @@ nlohmann::json bench_settle10k(Device& dev, double dt, int iterations, unsigned 
           {"steps", steps},
           {"colouring_kept_steps", colouring_kept},
           {"one_group_rows", one_group_rows},
+          {"pair_reach", pair_reach},
           {"sim_time_s", sim_time},
           {"wall_s", wall},
           {"wall_s_per_sim_s", wall / sim_time},
@@ -169,6 +173,7 @@ void add_bench_dig(CLI::App& bench) {
     bool pile_cache = true;  // the pile through the pile cache (--no-pile-cache)
     double sweep_tolerance = kDigSweepTolerance;  // [m/s] DiggingOptions::sweep_tolerance
     int one_group_rows = kPgsOneGroupRows;        // DiggingOptions::one_group_rows
+    bool pair_reach = false;                      // DiggingOptions::pair_reach
   };
   auto opt = std::make_shared<Options>();
   auto* dig = bench.add_subcommand("dig",
@@ -196,6 +201,7 @@ void add_bench_dig(CLI::App& bench) {
   dig->add_option("--one-group-rows", opt->one_group_rows, kOneGroupRowsHelp)
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
+  dig->add_flag("--pair-reach", opt->pair_reach, kPairReachHelp);
   dig->add_flag("--quiet", opt->quiet, "no progress on stderr");
   dig->add_flag(
       "!--no-pile-cache", opt->pile_cache,
@@ -215,6 +221,7 @@ void add_bench_dig(CLI::App& bench) {
     options.pile.seed = opt->seed;
     options.sweep_tolerance = opt->sweep_tolerance;
     options.one_group_rows = opt->one_group_rows;
+    options.pair_reach = opt->pair_reach;
     options.pile_cache.enabled = opt->pile_cache;
     options.pile_cache.note = [](const std::string& line) {
       std::cerr << "talus bench dig: " << line << "\n";
@@ -233,6 +240,7 @@ void add_bench_dig(CLI::App& bench) {
     progress.finish();
     nlohmann::ordered_json j = dig_cost_json(cost, dev.description());
     j["one_group_rows"] = opt->one_group_rows;
+    j["pair_reach"] = opt->pair_reach;
     if (!opt->json.empty()) write_file_atomically(opt->json, j.dump(2) + "\n");
     std::cout << j.dump(2) << "\n";
   });
@@ -328,6 +336,7 @@ void add_bench_command(CLI::App& app) {
     int settle_iterations = 0;
     unsigned settle_seed = LatticeBox{}.seed;
     int one_group_rows = kPgsOneGroupRows;
+    bool pair_reach = false;
     bool quiet = false;
   };
   auto opt = std::make_shared<Options>();
@@ -357,6 +366,7 @@ void add_bench_command(CLI::App& app) {
   dem->add_option("--one-group-rows", opt->one_group_rows, kOneGroupRowsHelp)
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
+  dem->add_flag("--pair-reach", opt->pair_reach, kPairReachHelp);
   dem->add_flag("--quiet", opt->quiet, "no progress on stderr");
   dem->callback([opt] {
     std::vector<const FidelityPreset*> presets;
@@ -366,10 +376,12 @@ void add_bench_command(CLI::App& app) {
     Device dev;
     nlohmann::json results = nlohmann::json::array();
     for (auto* preset : presets)
-      results.push_back(bench_level(dev, *preset, opt->steps, opt->one_group_rows, opt->quiet));
+      results.push_back(
+          bench_level(dev, *preset, opt->steps, opt->one_group_rows, opt->pair_reach, opt->quiet));
     if (!opt->no_settle10k)
       results.push_back(bench_settle10k(dev, opt->settle_dt, opt->settle_iterations,
-                                        opt->settle_seed, opt->one_group_rows, opt->quiet));
+                                        opt->settle_seed, opt->one_group_rows, opt->pair_reach,
+                                        opt->quiet));
     nlohmann::json j = {{"device", dev.description()}, {"results", results}};
     if (!opt->json.empty()) write_json(opt->json, j);
     if (!opt->plot.empty()) {

@@ -16,6 +16,12 @@ namespace talus::app {
 inline constexpr int kExitFailure = 1;
 inline constexpr int kExitUsage = 2;
 
+// --pair-reach of run, bench dig and bench dem (DemSettings::pair_reach)
+inline const char* const kPairReachHelp =
+    "study: each particle pair's own speculative reach, 2 h times its closing speed, instead of "
+    "the fastest particle's for every pair (fewer rows in a bed at rest; not yet the default, "
+    "docs/dem.md)";
+
 // a numeric option that must be a finite number: CLI11's range checks let NaN through (every
 // comparison with it is false), and a NaN timestep or rolling resistance would run silently
 inline CLI::Validator finite_number() {

@@ -32,6 +32,8 @@ struct RunOptions {
   double damping_time = 0.0;
   // end a step's sweeps once the particle rows' RMS residual is below this [m/s]; 0: N_it always
   double sweep_tolerance = kDigSweepTolerance;
+  // each particle pair's own speculative reach (DemSettings::pair_reach; study, not the default)
+  bool pair_reach = false;
   bool residuals = false;
   // settled piles read from and saved to the pile cache (terrain/pile_cache.hpp; --no-pile-cache)
   bool pile_cache = true;

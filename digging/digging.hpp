@@ -44,6 +44,9 @@ struct DiggingOptions {
   // PGS sweeps a system of at most this many rows in one work-group (DemSettings::one_group_rows;
   // type D and the type-G zone alike): the same bits, a device-dependent speed
   int one_group_rows = kPgsOneGroupRows;
+  // each particle pair's own speculative reach instead of the fastest particle's (DemSettings::
+  // pair_reach; type D and the type-G zone alike). Not yet the default (docs/dem.md)
+  bool pair_reach = false;
   // a type-D dig's sweeps end early once the particle rows' RMS residual is below this [m/s]
   // (DemSettings::tolerance; the level's N_it is the cap). 0: always N_it, as the paper's presets
   double sweep_tolerance = kDigSweepTolerance;

@@ -60,6 +60,10 @@ typedef struct {
   // rolling resistance of a grain against static geometry (ground, walls): mu_r of
   // solvers/particles.hpp Material::ground_rolling, with R* = r
   tl_float ground_rolling;
+  // 1: each pair's speculative reach is its own, 2 h (closing speed + |g| h), at most
+  // `speculative` (DemSettings::pair_reach); 0: every pair gets `speculative`
+  tl_int pair_reach;
+  tl_int pad_params[3];
 } TlStepParams;
 
 // a contact as found by the narrow phase, grouped by its owner particle a (b > a, or static).

@@ -7,9 +7,15 @@
 // are those of a loop over all of them, without testing the hundreds of voxel columns of the
 // multiscale terrain (issue 14) against every particle.
 
-// the margin below which a pair becomes a (possibly speculative) contact
-float contact_margin(float ra, float rb, const TlStepParams p) {
-  return p.margin_rel * min(ra, rb) + p.speculative;
+// the margin below which a pair becomes a (possibly speculative) contact: the relative margin
+// plus the speculative reach, the fastest particle's 2 h v_max for every pair, or (pair_reach)
+// what this pair can close within the step, 2 h (its closing speed along n + |g| h), no more than
+// that: a bed at rest makes no speculative rows, a grain falling onto it does
+float contact_margin(float ra, float rb, float closing, const TlStepParams p) {
+  float reach = p.speculative;
+  if (p.pair_reach)
+    reach = min(reach, 2.0f * p.dt * max(0.0f, closing + length(p.gravity.xyz) * p.dt));
+  return p.margin_rel * min(ra, rb) + reach;
 }
 
 // finds where the previous step stored the pair (a, b); -1 when it is new
@@ -82,10 +88,11 @@ int visit_contacts(int i, int write, int limit, __global const float4* position,
           float3 d = pj.xyz - xi;
           float dist = length(d);
           float gap = dist - ri - pj.w;
-          if (gap >= contact_margin(ri, pj.w, p)) continue;
+          float3 n = dist > 0.0f ? d / dist : (float3)(0.0f, 0.0f, 1.0f);
+          float closing = dot(velocity[i].xyz - velocity[j].xyz, n);
+          if (gap >= contact_margin(ri, pj.w, closing, p)) continue;
           if (write && count >= limit) return count;
           if (write) {
-            float3 n = dist > 0.0f ? d / dist : (float3)(0.0f, 0.0f, 1.0f);
             float reduced = ri * pj.w / (ri + pj.w);
             emit_contact(out + count, i, j, n, gap, n * (ri + 0.5f * gap), -n * (pj.w + 0.5f * gap),
                          reduced, p, prev_offsets, prev, has_prev);
@@ -102,7 +109,7 @@ int visit_contacts(int i, int write, int limit, __global const float4* position,
     int g = geom_column_list[k];
     float3 n;
     float gap = sphere_geom(xi, ri, geoms + g, &n);
-    if (gap >= contact_margin(ri, ri, p)) continue;
+    if (gap >= contact_margin(ri, ri, dot(velocity[i].xyz, n), p)) continue;
     if (write && count >= limit) return count;
     if (write)
       emit_contact(out + count, i, TL_STATIC_BODY(g), n, gap, n * (ri + 0.5f * gap),

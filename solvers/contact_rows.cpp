@@ -32,6 +32,7 @@ StepParams from_device(const TlStepParams& p) {
   out.margin_rel = p.margin_rel;
   out.overlap_floor_rel = p.overlap_floor_rel;
   out.speculative = p.speculative;
+  out.pair_reach = p.pair_reach != 0;
   out.cohesion = p.cohesion;
   out.ground_rolling = p.ground_rolling;
   out.particles = p.particles;

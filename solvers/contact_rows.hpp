@@ -26,6 +26,8 @@ struct StepParams {
   double margin_rel = 0.0;
   double overlap_floor_rel = 0.0;
   double speculative = 0.0;  // extra contact distance 2 h v_max [m]
+  bool pair_reach =
+      false;  // each pair's own reach, at most `speculative` (DemSettings::pair_reach)
   double cohesion = 0.0;     // a touching particle pair's tensile force per R*^2 [N/m^2]
   double ground_rolling = 0.0;  // rolling resistance against static geometry
   int particles = 0;

@@ -12,9 +12,13 @@ namespace talus::reference {
 
 namespace {
 
-// the margin below which a pair becomes a (possibly speculative) contact
-double contact_margin(double ra, double rb, const StepParams& p) {
-  return p.margin_rel * std::min(ra, rb) + p.speculative;
+// the margin below which a pair becomes a (possibly speculative) contact, its reach the
+// fastest particle's or the pair's own closing (kernels/narrowphase.cl contact_margin)
+double contact_margin(double ra, double rb, double closing, const StepParams& p) {
+  double reach = p.speculative;
+  if (p.pair_reach)
+    reach = std::min(reach, 2.0 * p.dt * std::max(0.0, closing + p.gravity.norm() * p.dt));
+  return p.margin_rel * std::min(ra, rb) + reach;
 }
 
 // the contact index where the previous step stored the pair (a, b); -1 when it is new
@@ -261,8 +265,9 @@ ContactSet find_contacts(const Particles& particles, const std::vector<StaticGeo
             Vec3 d = particles.position[j] - xi;
             double dist = d.norm();
             double gap = dist - ri - rj;
-            if (gap >= contact_margin(ri, rj, p)) continue;
             Vec3 normal = dist > 0.0 ? Vec3(d / dist) : Vec3(0.0, 0.0, 1.0);
+            const double closing = (particles.velocity[i] - particles.velocity[j]).dot(normal);
+            if (gap >= contact_margin(ri, rj, closing, p)) continue;
             double reduced = ri * rj / (ri + rj);
             out.contacts.push_back(make_contact(i, j, normal, gap, normal * (ri + 0.5 * gap),
                                                 -normal * (rj + 0.5 * gap), reduced, p, previous,
@@ -275,7 +280,7 @@ ContactSet find_contacts(const Particles& particles, const std::vector<StaticGeo
     for (int g = 0; g < (particles.inv_mass[i] == 0.0 ? 0 : p.geoms); ++g) {
       Vec3 normal;
       double gap = sphere_geom(xi, ri, geoms[g], &normal);
-      if (gap >= contact_margin(ri, ri, p)) continue;
+      if (gap >= contact_margin(ri, ri, particles.velocity[i].dot(normal), p)) continue;
       out.contacts.push_back(make_contact(i, TL_STATIC_BODY(g), normal, gap,
                                           normal * (ri + 0.5 * gap), Vec3::Zero(), ri, p, previous,
                                           match_static));

@@ -59,6 +59,11 @@ struct DemSettings {
   // speculative row, so particles moving more than the margin in one step cannot tunnel into
   // each other (large steps, fast bucket). 0: off (the margin alone)
   double max_speed = 0.0;
+  // false: every pair within 2 h max_speed gets a speculative row (the fastest particle's reach,
+  // also for grains at rest side by side); true: each pair's own, 2 h (its closing speed + |g| h)
+  // and at most that, so a bed at rest makes no speculative rows (kernels/narrowphase.cl). Not yet
+  // the default: docs/dem.md "Speculative reach" has what it was measured on
+  bool pair_reach = false;
 };
 
 }  // namespace talus

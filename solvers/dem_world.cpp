@@ -140,6 +140,7 @@ void DemWorld::update_params() {
   p.particles = static_cast<int>(particle_count_);
   p.geoms = static_cast<int>(geoms_.size());
   p.speculative = static_cast<float>(speculative);
+  p.pair_reach = settings_.pair_reach ? 1 : 0;
   p.cohesion = static_cast<float>(kRumpfPerR2 * material_.cohesion);
   if (!sweep_ || sweep_kind_ != settings_.sweep ||
       sweep_one_group_rows_ != settings_.one_group_rows) {

@@ -59,6 +59,7 @@ struct MultiscaleOptions {
   double front_margin = 2.0;              // voxels ahead of the toe [m] (VoxelTerrainOptions)
   double max_particle_speed = 4.0;        // [m/s] DemSettings::max_speed of the zone's particles
   int one_group_rows = kPgsOneGroupRows;  // DemSettings::one_group_rows of the zone's sweeps
+  bool pair_reach = false;                // DemSettings::pair_reach of the zone's particles
   unsigned seed = 1;                      // of the particles' sizes
 };
 

@@ -286,6 +286,34 @@ TEST(ReferenceNarrowPhase, ContactsMatchPairsOrderAndGeometry) {
       s.particles.size(), k.contacts, k.plane, k.box, k.inside_box, k.speculative);
 }
 
+// each pair's own speculative reach (DemSettings::pair_reach): the device finds the reference's
+// contacts with the reach 2 h (closing speed + |g| h) of each pair and each wall, at most the
+// fastest's; fewer than with the fastest's reach for every pair, and still speculative ones (the
+// scene's grains move at up to 0.5 m/s in every component)
+TEST(ReferenceNarrowPhase, EachPairsOwnReachMatchesAndMakesFewerContacts) {
+  uint64_t seed = test::fresh_seed();
+  SCOPED_TRACE(test::seed_note(seed));
+  std::mt19937_64 rng(seed);
+  Scene s = test::random_scene(rng);
+  s.settings.max_speed = 2.0;  // [m/s] a reach of 2 h v_max = 0.4 r at the scene's 1 ms
+  // particles within rounding of either rule's threshold are dropped for both
+  std::vector<char> drop = test::ambiguous(s);
+  s.settings.pair_reach = true;
+  const std::vector<char> drop_own = test::ambiguous(s);
+  for (std::size_t i = 0; i < drop.size(); ++i) drop[i] = drop[i] || drop_own[i];
+  s.particles = test::keep(s.particles, drop);
+  s.settings.pair_reach = false;
+  const ContactKinds fastest = expect_narrow_phase_matches(s);
+  s.settings.pair_reach = true;
+  const ContactKinds own = expect_narrow_phase_matches(s);
+  EXPECT_GT(own.speculative, 0);
+  EXPECT_LT(own.contacts, fastest.contacts);
+  std::printf(
+      "[ measured ] %zu particles: %zu contacts with the fastest's reach, %zu with each "
+      "pair's own (%d speculative)\n",
+      s.particles.size(), fastest.contacts, own.contacts, own.speculative);
+}
+
 // many small boxes among the particles, as the multiscale terrain's voxel columns are (issue
 // 14): the device tests each particle only against the boxes binned to its grid column, and
 // still finds every contact the reference finds by looping over them all

@@ -74,7 +74,8 @@ inline reference::StepParams expected_grid(const Scene& s) {
   double max_radius = 0.0;
   for (double r : s.particles.radius) max_radius = std::max(max_radius, r);
   Vec3 extent = s.bounds.hi - s.bounds.lo;
-  double cell = 2.0 * max_radius * (1.0 + s.settings.margin_rel);
+  const double speculative = 2.0 * s.settings.dt * s.settings.max_speed;
+  double cell = 2.0 * max_radius * (1.0 + s.settings.margin_rel) + speculative;
   Eigen::Vector3i dims = (extent / cell).array().ceil().cast<int>().cwiseMax(1);
   p.grid_origin = as_float(s.bounds.lo);
   p.cell_size = as_float(cell);
@@ -82,7 +83,18 @@ inline reference::StepParams expected_grid(const Scene& s) {
   p.grid_ny = dims.y();
   p.grid_nz = dims.z();
   p.margin_rel = as_float(s.settings.margin_rel);
+  p.dt = s.settings.dt;
+  p.gravity = s.settings.gravity;
+  p.speculative = speculative;
+  p.pair_reach = s.settings.pair_reach;
   return p;
+}
+
+// the speculative reach of a pair closing at `closing` [m/s] (kernels/narrowphase.cl
+// contact_margin, in double)
+inline double speculative_reach(const reference::StepParams& p, double closing) {
+  if (!p.pair_reach) return p.speculative;
+  return std::min(p.speculative, 2.0 * p.dt * std::max(0.0, closing + p.gravity.norm() * p.dt));
 }
 
 // particles whose discrete decisions sit within rounding of a threshold: a coordinate within
@@ -102,7 +114,8 @@ inline std::vector<char> ambiguous(const Scene& s) {
     for (const StaticGeom& g : s.geoms) {
       Vec3 normal;
       double gap = reference::sphere_geom(ps.position[i], ri, g, &normal);
-      if (std::abs(gap - p.margin_rel * ri) < tiny * ri) bad[i] = 1;
+      const double reach = speculative_reach(p, ps.velocity[i].dot(normal));
+      if (std::abs(gap - p.margin_rel * ri - reach) < tiny * ri) bad[i] = 1;
       if (g.type != StaticGeom::Type::Box) continue;
       // distance of the centre from the surface, and the two shallowest face depths inside
       Vec3 d = ps.position[i] - g.centre;
@@ -121,9 +134,12 @@ inline std::vector<char> ambiguous(const Scene& s) {
     for (size_t j = i + 1; j < n; ++j) {
       if (bad[j]) continue;
       double rmin = std::min(ps.radius[i], ps.radius[j]);
-      double dist = (ps.position[j] - ps.position[i]).norm();
+      const Vec3 d = ps.position[j] - ps.position[i];
+      double dist = d.norm();
       double gap = dist - ps.radius[i] - ps.radius[j];
-      if (std::abs(gap - p.margin_rel * rmin) < tiny * rmin || dist < tiny * rmin) bad[j] = 1;
+      const double closing = dist > 0.0 ? (ps.velocity[i] - ps.velocity[j]).dot(d / dist) : 0.0;
+      const double margin = p.margin_rel * rmin + speculative_reach(p, closing);
+      if (std::abs(gap - margin) < tiny * rmin || dist < tiny * rmin) bad[j] = 1;
     }
   }
   return bad;
