@@ -291,17 +291,23 @@ TEST(Replay, AnEnsemblesMeanRefusesRunsThatDoNotShareTheirTimeBase) {
   EXPECT_THROW(Replay(measured, options, nullptr), InputError);
 }
 
+// an HD27 measured run to replay on piles: the scenario's inputs, no series but its time span
+MeasuredRun hd27_measured(const vehicle::Scenario& sc) {
+  MeasuredRun measured;
+  measured.meta = synthetic_metadata(sc, {{3.0, 0.0}, {6.0, 1.8}}, RunSummary{});
+  measured.run.series[Channel::t] = {0.0, sc.duration};
+  measured.run.summary.dig_start_s = sc.dig_start;
+  measured.run.summary.dig_end_s = sc.dig_end;
+  return measured;
+}
+
 // the chaos reference (HD27 at G400, an ensemble of two, seeds 4-5): a second ensemble of as many
 // piles right after the model's, seeds 6-7, so the reference is, bit for bit, the dig a replay on
 // seeds 6-7 gives, differs from the model's own, and leaves the model's members as they were. A
 // flat-ground run has no chaos and no reference
 TEST(Replay, AChaosReferenceDigsTheNextEnsembleOfPiles) {
   const vehicle::Scenario sc = vehicle::load_scenario("hd27");
-  MeasuredRun measured;
-  measured.meta = synthetic_metadata(sc, {{3.0, 0.0}, {6.0, 1.8}}, RunSummary{});
-  measured.run.series[Channel::t] = {0.0, sc.duration};
-  measured.run.summary.dig_start_s = sc.dig_start;
-  measured.run.summary.dig_end_s = sc.dig_end;
+  const MeasuredRun measured = hd27_measured(sc);
   Device& dev = test::shared_device();
   ReplayOptions model;
   model.fidelity = "G400";
@@ -344,11 +350,7 @@ TEST(Replay, AChaosReferenceDigsTheNextEnsembleOfPiles) {
 // which pile lies ahead), beyond that through the dig; a single pile carries none
 TEST(Replay, APileEnsembleIsTheMeanOfItsPilesDigs) {
   const vehicle::Scenario sc = vehicle::load_scenario("hd27");
-  MeasuredRun measured;
-  measured.meta = synthetic_metadata(sc, {{3.0, 0.0}, {6.0, 1.8}}, RunSummary{});
-  measured.run.series[Channel::t] = {0.0, sc.duration};
-  measured.run.summary.dig_start_s = sc.dig_start;
-  measured.run.summary.dig_end_s = sc.dig_end;
+  const MeasuredRun measured = hd27_measured(sc);
   Device& dev = test::shared_device();
   ReplayOptions two;
   two.pile_seed = 4;
