@@ -944,12 +944,10 @@ class Search {
     for (const std::vector<std::string>* extra : {&none, &specs}) {
       std::vector<double> excess;
       for (std::size_t i : d_.calibration) {
-        std::vector<std::unique_ptr<vehicle::Effect>> effects;
-        for (const auto& spec : found_specs_)
-          effects.push_back(vehicle::make_effect(spec, options_.plugins));
+        std::vector<std::unique_ptr<vehicle::Effect>> extras;
         for (const auto& spec : *extra)
-          effects.push_back(vehicle::make_effect(spec, options_.plugins));
-        vehicle::EffectSet set = in_hook_order(std::move(effects));
+          extras.push_back(vehicle::make_effect(spec, options_.plugins));
+        vehicle::EffectSet set = model_effects(std::move(extras));
         // a flat-ground run among pile runs has no chaos: its own simulation
         const Run r = replays_[i]->scenario().pile ? replays_[i]->simulate_reference(set)
                                                    : replays_[i]->simulate(set);
@@ -979,13 +977,20 @@ class Search {
     say("  " + label + ": its simulation failed (" + what + "); skipped");
   }
 
-  // run i simulated with the effects found so far plus, optionally, a candidate
-  Run simulate(std::size_t i, std::unique_ptr<vehicle::Effect> extra) {
+  // the effects found so far, then `extra`, in hook order
+  vehicle::EffectSet model_effects(std::vector<std::unique_ptr<vehicle::Effect>> extra) const {
     std::vector<std::unique_ptr<vehicle::Effect>> effects;
     for (const auto& spec : found_specs_)
       effects.push_back(vehicle::make_effect(spec, options_.plugins));
-    if (extra) effects.push_back(std::move(extra));
-    vehicle::EffectSet set = in_hook_order(std::move(effects));
+    for (auto& e : extra) effects.push_back(std::move(e));
+    return in_hook_order(std::move(effects));
+  }
+
+  // run i simulated with the effects found so far plus, optionally, a candidate
+  Run simulate(std::size_t i, std::unique_ptr<vehicle::Effect> extra) {
+    std::vector<std::unique_ptr<vehicle::Effect>> extras;
+    if (extra) extras.push_back(std::move(extra));
+    vehicle::EffectSet set = model_effects(std::move(extras));
     Run r = replays_[i]->simulate(set);
     ++simulations_;
     return r;
@@ -1165,11 +1170,10 @@ class Search {
   // run i simulated with the effects found so far plus the candidates at their normalised values
   Run simulate_with(std::size_t i,
                     const std::vector<std::pair<const Candidate*, std::vector<double>>>& extras) {
-    std::vector<std::unique_ptr<vehicle::Effect>> effects;
-    for (const auto& spec : found_specs_)
-      effects.push_back(vehicle::make_effect(spec, options_.plugins));
-    for (const auto& [c, x] : extras) effects.push_back(make_candidate(*c, x, options_.plugins));
-    vehicle::EffectSet set = in_hook_order(std::move(effects));
+    std::vector<std::unique_ptr<vehicle::Effect>> candidates;
+    candidates.reserve(extras.size());
+    for (const auto& [c, x] : extras) candidates.push_back(make_candidate(*c, x, options_.plugins));
+    vehicle::EffectSet set = model_effects(std::move(candidates));
     Run r = replays_[i]->simulate(set);
     ++simulations_;
     return r;

@@ -386,11 +386,15 @@ Run Replay::simulate(vehicle::EffectSet& effects) {
     run = vehicle_run(scenario_, simulate_on_flat_ground(scenario_, effects));
   else
     run = simulate_piles(effects, options_.pile_seed, piles_, &members_);
+  count(start);
   run.dir = measured_.run.dir;
+  return run;
+}
+
+void Replay::count(std::chrono::steady_clock::time_point start) {
   const std::lock_guard<std::mutex> lock(count_mutex_);
   ++simulations_;
   wall_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  return run;
 }
 
 Run Replay::simulate_reference(vehicle::EffectSet& effects) {
@@ -402,10 +406,8 @@ Run Replay::simulate_reference(vehicle::EffectSet& effects) {
   Run run =
       simulate_piles(effects, options_.pile_seed + static_cast<unsigned>(options_.pile_ensemble),
                      reference_piles_, nullptr);
+  count(start);
   run.dir = measured_.run.dir;
-  const std::lock_guard<std::mutex> lock(count_mutex_);
-  ++simulations_;
-  wall_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return run;
 }
 

@@ -7,6 +7,7 @@
 // scan: the scan is compared with the simulated pile's scan instead (scan_rms_m), and a large
 // difference is reported, not hidden.
 #pragma once
+#include <chrono>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -161,6 +162,8 @@ class Replay {
   // `built`, dug with the effects; their ensemble mean
   Run simulate_piles(vehicle::EffectSet& effects, unsigned first_seed,
                      std::vector<std::unique_ptr<PileBuild>>& built, std::vector<Run>* members);
+  // one simulation more, and its wall time since `start`
+  void count(std::chrono::steady_clock::time_point start);
   std::vector<std::unique_ptr<PileBuild>> piles_;  // one per ensemble member, built at first use
   std::vector<std::unique_ptr<PileBuild>> reference_piles_;  // the chaos reference's, likewise
   std::optional<double> scan_rms_;

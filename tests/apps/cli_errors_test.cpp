@@ -233,6 +233,15 @@ TEST(CliErrors, StepCountsAndLoadsOutsideTheirRangeAreRefused) {
   EXPECT_EQ(ensemble.code, 2) << ensemble.err;
   EXPECT_NE(ensemble.err.find("--pile-ensemble: Value 17 not in range 1 to 16"), std::string::npos)
       << ensemble.err;
+  // the one-group threshold: a whole number of rows, not negative
+  for (const char* rows : {"-1", "x", "1.5"})
+    for (const char* bench :
+         {"bench dem --levels D400 --one-group-rows ", "bench dig --one-group-rows "}) {
+      const Outcome o = run("", std::string(bench) + rows);
+      EXPECT_EQ(o.code, 2) << bench << rows << ": " << o.err;
+      EXPECT_NE(o.err.find("--one-group-rows"), std::string::npos)
+          << bench << rows << ": " << o.err;
+    }
 }
 
 // a shard that a crash or a hand cut up holds a value no cycle gives: --collect names the file,
