@@ -41,11 +41,14 @@ TEST(Residuals, NoiseSigmaOfWhiteNoiseOnASmoothSignal) {
   auto rng = fresh_rng();
   std::normal_distribution<double> noise(0.0, 0.3);
   std::vector<double> x;
-  for (int i = 0; i < 2000; ++i) x.push_back(100.0 * std::sin(0.01 * i) + noise(rng));
-  // 2000 samples: the MAD estimate scatters by about 3 %
+  for (int i = 0; i < 8000; ++i) x.push_back(100.0 * std::sin(0.0025 * i) + noise(rng));
+  // the MAD of second differences scatters by 3.2 % of sigma at 2000 samples (1500 draws), so a
+  // 10 % band there failed about once in 300 runs (seen in CI); at 8000 samples it scatters by
+  // about 1.6 % and the band is six of its deviations, while a wrong constant (the MAD's 1.4826
+  // or the second difference's sqrt(6)) still lands far outside
   EXPECT_NEAR(noise_sigma(x), 0.3, 0.03);
   // a step (a command) barely moves it: the median ignores the two samples at the corner
-  for (int i = 1000; i < 2000; ++i) x[i] += 50.0;
+  for (int i = 4000; i < 8000; ++i) x[i] += 50.0;
   EXPECT_NEAR(noise_sigma(x), 0.3, 0.03);
   // noise-free data gets the floor, not zero
   std::vector<double> clean(100, 5.0);
