@@ -38,9 +38,43 @@ std::vector<std::string> split(const std::string& s, char sep) {
   return out;
 }
 
+// the sweeps' study flags of bench dem and bench dig (DemSettings: one_group_rows, pair_reach,
+// relaxation), registered, applied and reported in one place
+struct SolverStudy {
+  int one_group_rows = kPgsOneGroupRows;
+  bool pair_reach = false;
+  double relaxation = 1.0;
+
+  void add_flags(CLI::App& cmd) {
+    cmd.add_option("--one-group-rows", one_group_rows, kOneGroupRowsHelp)
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
+    cmd.add_flag("--pair-reach", pair_reach, kPairReachHelp);
+    cmd.add_option("--relaxation", relaxation, kRelaxationHelp)
+        ->check(relaxation_number())
+        ->capture_default_str();
+  }
+  void apply(DemSettings& s) const {
+    s.one_group_rows = one_group_rows;
+    s.pair_reach = pair_reach;
+    s.relaxation = relaxation;
+  }
+  void apply(DiggingOptions& o) const {
+    o.one_group_rows = one_group_rows;
+    o.pair_reach = pair_reach;
+    o.relaxation = relaxation;
+  }
+  template <class Json>
+  void describe(Json& j) const {
+    j["one_group_rows"] = one_group_rows;
+    j["pair_reach"] = pair_reach;
+    j["relaxation"] = relaxation;
+  }
+};
+
 // the default pile at a level, settled briefly, then timed with the preset's dt and N_it
-nlohmann::json bench_level(Device& dev, const FidelityPreset& preset, int steps, int one_group_rows,
-                           bool pair_reach, bool quiet) {
+nlohmann::json bench_level(Device& dev, const FidelityPreset& preset, int steps,
+                           const SolverStudy& study, bool quiet) {
   PileBuildOptions build;
   build.min_time = 0.5;
   build.max_time = 1.0;
@@ -55,8 +89,7 @@ nlohmann::json bench_level(Device& dev, const FidelityPreset& preset, int steps,
   DemSettings settings;
   settings.dt = preset.dt;
   settings.iterations = preset.iterations;
-  settings.one_group_rows = one_group_rows;
-  settings.pair_reach = pair_reach;
+  study.apply(settings);
   DemWorld world(dev, gravel(), settings, pile.bounds, pile.geoms);
   world.set_particles(pile.particles);
   world.step();  // contacts exist from here on, warm start as in a run
@@ -71,28 +104,27 @@ nlohmann::json bench_level(Device& dev, const FidelityPreset& preset, int steps,
   }
   double ms = 1e3 * median(step_s);
   double n_contacts = median(contacts);
-  return {{"level", preset.name},
-          {"particles", world.size()},
-          {"contacts", n_contacts},
-          {"colours", world.stats().colours},
-          {"one_group_rows", one_group_rows},
-          {"pair_reach", pair_reach},
-          {"iterations", preset.iterations},
-          {"dt_s", preset.dt},
-          {"steps_timed", steps},
-          {"ms_per_step", ms},
-          {"ms_sweeps_per_step", 1e3 * median(sweep_s)},
-          {"contact_updates_per_s", n_contacts * preset.iterations / median(sweep_s)},
-          {"realtime_factor", preset.dt / median(step_s)}};
+  nlohmann::json j = {{"level", preset.name},
+                      {"particles", world.size()},
+                      {"contacts", n_contacts},
+                      {"colours", world.stats().colours},
+                      {"iterations", preset.iterations},
+                      {"dt_s", preset.dt},
+                      {"steps_timed", steps},
+                      {"ms_per_step", ms},
+                      {"ms_sweeps_per_step", 1e3 * median(sweep_s)},
+                      {"contact_updates_per_s", n_contacts * preset.iterations / median(sweep_s)},
+                      {"realtime_factor", preset.dt / median(step_s)}};
+  study.describe(j);
+  return j;
 }
 
 nlohmann::json bench_settle10k(Device& dev, double dt, int iterations, unsigned seed,
-                               int one_group_rows, bool pair_reach, bool quiet) {
+                               const SolverStudy& study, bool quiet) {
   Scene scene = settle10k_scene(seed);
   if (dt > 0) scene.settings.dt = dt;
   if (iterations > 0) scene.settings.iterations = iterations;
-  scene.settings.one_group_rows = one_group_rows;
-  scene.settings.pair_reach = pair_reach;
+  study.apply(scene.settings);
   DemWorld world(dev, scene.material, scene.settings, scene.bounds, scene.geoms);
   world.set_particles(scene.particles);
   const double sim_time = 0.5;  // [s], as the peers
@@ -117,24 +149,25 @@ nlohmann::json bench_settle10k(Device& dev, double dt, int iterations, unsigned 
   for (size_t i = 0; i < p.size(); ++i) tops.push_back(p.position[i].z() + p.radius[i]);
   std::sort(tops.begin(), tops.end());
   double d = 2.0 * p.radius[0];
-  return {{"level", "settle10k"},
-          {"particles", p.size()},
-          {"contacts", contacts.back()},
-          {"iterations", scene.settings.iterations},
-          {"dt_s", scene.settings.dt},
-          {"seed", seed},
-          {"steps", steps},
-          {"colouring_kept_steps", colouring_kept},
-          {"one_group_rows", one_group_rows},
-          {"pair_reach", pair_reach},
-          {"sim_time_s", sim_time},
-          {"wall_s", wall},
-          {"wall_s_per_sim_s", wall / sim_time},
-          {"ms_per_step", 1e3 * wall / steps},
-          {"contact_updates_per_s", median(contacts) * scene.settings.iterations / median(sweep_s)},
-          {"bed_height_m", tops[static_cast<size_t>(0.99 * (tops.size() - 1))]},
-          {"max_overlap_rel", max_overlap(p, scene.geoms) / d},
-          {"rms_speed_m_s", rms_speed(p)}};
+  nlohmann::json j = {
+      {"level", "settle10k"},
+      {"particles", p.size()},
+      {"contacts", contacts.back()},
+      {"iterations", scene.settings.iterations},
+      {"dt_s", scene.settings.dt},
+      {"seed", seed},
+      {"steps", steps},
+      {"colouring_kept_steps", colouring_kept},
+      {"sim_time_s", sim_time},
+      {"wall_s", wall},
+      {"wall_s_per_sim_s", wall / sim_time},
+      {"ms_per_step", 1e3 * wall / steps},
+      {"contact_updates_per_s", median(contacts) * scene.settings.iterations / median(sweep_s)},
+      {"bed_height_m", tops[static_cast<size_t>(0.99 * (tops.size() - 1))]},
+      {"max_overlap_rel", max_overlap(p, scene.geoms) / d},
+      {"rms_speed_m_s", rms_speed(p)}};
+  study.describe(j);
+  return j;
 }
 
 // the stages keep the order they ran in (an ordered object)
@@ -172,8 +205,7 @@ void add_bench_dig(CLI::App& bench) {
     bool quiet = false;
     bool pile_cache = true;  // the pile through the pile cache (--no-pile-cache)
     double sweep_tolerance = kDigSweepTolerance;  // [m/s] DiggingOptions::sweep_tolerance
-    int one_group_rows = kPgsOneGroupRows;        // DiggingOptions::one_group_rows
-    bool pair_reach = false;                      // DiggingOptions::pair_reach
+    SolverStudy study;
   };
   auto opt = std::make_shared<Options>();
   auto* dig = bench.add_subcommand("dig",
@@ -198,10 +230,7 @@ void add_bench_dig(CLI::App& bench) {
                   "(docs/dem.md) [m/s]")
       ->check(number_in(0.0, 1.0, "m/s", true))
       ->capture_default_str();
-  dig->add_option("--one-group-rows", opt->one_group_rows, kOneGroupRowsHelp)
-      ->check(CLI::NonNegativeNumber)
-      ->capture_default_str();
-  dig->add_flag("--pair-reach", opt->pair_reach, kPairReachHelp);
+  opt->study.add_flags(*dig);
   dig->add_flag("--quiet", opt->quiet, "no progress on stderr");
   dig->add_flag(
       "!--no-pile-cache", opt->pile_cache,
@@ -220,8 +249,7 @@ void add_bench_dig(CLI::App& bench) {
     DiggingOptions options;
     options.pile.seed = opt->seed;
     options.sweep_tolerance = opt->sweep_tolerance;
-    options.one_group_rows = opt->one_group_rows;
-    options.pair_reach = opt->pair_reach;
+    opt->study.apply(options);
     options.pile_cache.enabled = opt->pile_cache;
     options.pile_cache.note = [](const std::string& line) {
       std::cerr << "talus bench dig: " << line << "\n";
@@ -239,8 +267,7 @@ void add_bench_dig(CLI::App& bench) {
         measure_dig_cost(dev, scenario, preset, pile, options, opt->seconds, &progress);
     progress.finish();
     nlohmann::ordered_json j = dig_cost_json(cost, dev.description());
-    j["one_group_rows"] = opt->one_group_rows;
-    j["pair_reach"] = opt->pair_reach;
+    opt->study.describe(j);
     if (!opt->json.empty()) write_file_atomically(opt->json, j.dump(2) + "\n");
     std::cout << j.dump(2) << "\n";
   });
@@ -335,8 +362,7 @@ void add_bench_command(CLI::App& app) {
     double settle_dt = 0.0;      // 0: the scene's own (terrain/scenes.cpp)
     int settle_iterations = 0;
     unsigned settle_seed = LatticeBox{}.seed;
-    int one_group_rows = kPgsOneGroupRows;
-    bool pair_reach = false;
+    SolverStudy study;
     bool quiet = false;
   };
   auto opt = std::make_shared<Options>();
@@ -363,10 +389,7 @@ void add_bench_command(CLI::App& app) {
   dem->add_option("--settle-seed", opt->settle_seed,
                   "seed of the 10k settling case's lattice jitter (default: the peers' inputs')")
       ->capture_default_str();
-  dem->add_option("--one-group-rows", opt->one_group_rows, kOneGroupRowsHelp)
-      ->check(CLI::NonNegativeNumber)
-      ->capture_default_str();
-  dem->add_flag("--pair-reach", opt->pair_reach, kPairReachHelp);
+  opt->study.add_flags(*dem);
   dem->add_flag("--quiet", opt->quiet, "no progress on stderr");
   dem->callback([opt] {
     std::vector<const FidelityPreset*> presets;
@@ -376,12 +399,10 @@ void add_bench_command(CLI::App& app) {
     Device dev;
     nlohmann::json results = nlohmann::json::array();
     for (auto* preset : presets)
-      results.push_back(
-          bench_level(dev, *preset, opt->steps, opt->one_group_rows, opt->pair_reach, opt->quiet));
+      results.push_back(bench_level(dev, *preset, opt->steps, opt->study, opt->quiet));
     if (!opt->no_settle10k)
       results.push_back(bench_settle10k(dev, opt->settle_dt, opt->settle_iterations,
-                                        opt->settle_seed, opt->one_group_rows, opt->pair_reach,
-                                        opt->quiet));
+                                        opt->settle_seed, opt->study, opt->quiet));
     nlohmann::json j = {{"device", dev.description()}, {"results", results}};
     if (!opt->json.empty()) write_json(opt->json, j);
     if (!opt->plot.empty()) {

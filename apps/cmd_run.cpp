@@ -169,6 +169,7 @@ DiggingOptions digging_options(const RunOptions& o) {
   options.coupling.record_residual = o.residuals;
   options.sweep_tolerance = o.sweep_tolerance;
   options.pair_reach = o.pair_reach;
+  options.relaxation = o.relaxation;
   if (o.form_speed >= 0.0) options.pile.form_speed = o.form_speed;
   options.pile.hold_face = o.hold_face;
   options.sweep = parse_sweep(o.sweep, "--sweep");
@@ -264,6 +265,7 @@ nlohmann::json dig_details(const RunOptions& o, const vehicle::Scenario& sc,
         {"mean_sweeps", sim.mean_sweeps()},
         {"sweep_tolerance_m_s", options.sweep_tolerance},
         {"pair_reach", options.pair_reach},
+        {"relaxation", options.relaxation},
         {"max_passes", sim.max_passes()},
         {"max_residual_m_s", sim.max_residual()},
         {"steps_at_pass_limit", sim.steps_at_pass_limit()},
@@ -495,6 +497,9 @@ void add_run_command(CLI::App& app, const std::string& command_line) {
       // a residual above 1 m/s is no convergence at all (the bucket moves at about 1 m/s)
       ->check(number_in(0.0, 1.0, "m/s", true));
   cmd->add_flag("--pair-reach", opts->pair_reach, kPairReachHelp);
+  cmd->add_option("--relaxation", opts->relaxation, kRelaxationHelp)
+      ->check(relaxation_number())
+      ->capture_default_str();
   cmd->add_option("--form-speed", opts->form_speed,
                   "study, with --free-face: speed the pile's formwork withdraws at before it "
                   "settles, 0 = removed at once [m/s]")

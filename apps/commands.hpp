@@ -9,6 +9,7 @@
 
 #include "host/error.hpp"
 #include "host/files.hpp"
+#include "solvers/dem_settings.hpp"
 
 namespace talus::app {
 
@@ -21,6 +22,11 @@ inline const char* const kPairReachHelp =
     "study: each particle pair's own speculative reach, 2 h times its closing speed, instead of "
     "the fastest particle's for every pair (fewer rows in a bed at rest; not yet the default, "
     "docs/dem.md)";
+
+// --relaxation of run, bench dig and bench dem (DemSettings::relaxation)
+inline const char* const kRelaxationHelp =
+    "study: the relaxation omega of the particle rows' PGS sweeps, in (0, 2): each row's step is "
+    "omega times Gauss-Seidel's (projected SOR; 1 = plain PGS, docs/dem.md \"Relaxation\")";
 
 // a numeric option that must be a finite number: CLI11's range checks let NaN through (every
 // comparison with it is false), and a NaN timestep or rolling resistance would run silently
@@ -53,6 +59,17 @@ inline CLI::Validator signed_number(bool allow_zero) {
       allow_zero ? "NON-NEGATIVE" : "POSITIVE");
 }
 inline CLI::Validator positive_number() { return signed_number(false); }
+
+// a PGS relaxation, 0 < omega < 2 (solvers/dem_settings relaxation_in_range)
+inline CLI::Validator relaxation_number() {
+  return CLI::Validator(
+      [](std::string& text) {
+        const std::optional<double> x = finite_number_in(text);
+        if (x && relaxation_in_range(*x)) return std::string();
+        return "must be a number in (0, 2), 1 for plain projected Gauss-Seidel; got '" + text + "'";
+      },
+      "(0, 2)");
+}
 inline CLI::Validator non_negative_number() { return signed_number(true); }
 
 // the contact coefficients a study may ask for (Coulomb friction, rolling resistance μ_r): 0 to 2,

@@ -34,6 +34,8 @@ struct RunOptions {
   double sweep_tolerance = kDigSweepTolerance;
   // each particle pair's own speculative reach (DemSettings::pair_reach; study, not the default)
   bool pair_reach = false;
+  // the relaxation of the particle rows' PGS sweeps (DemSettings::relaxation; study)
+  double relaxation = 1.0;
   bool residuals = false;
   // settled piles read from and saved to the pile cache (terrain/pile_cache.hpp; --no-pile-cache)
   bool pile_cache = true;

@@ -106,6 +106,7 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
     terrain.max_particle_speed = options.max_particle_speed;
     terrain.one_group_rows = options.one_group_rows;
     terrain.pair_reach = options.pair_reach;
+    terrain.relaxation = options.relaxation;
     terrain.seed = options.pile.seed;
     terrain_ = std::make_unique<MultiscaleTerrain>(dev, scenario_pile_profile(scenario), preset,
                                                    loader_->bucket_mesh(),
@@ -123,6 +124,7 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
   settings.sweep = options.sweep;
   settings.one_group_rows = options.one_group_rows;
   settings.pair_reach = options.pair_reach;
+  settings.relaxation = options.relaxation;
   settings.max_speed = options.max_particle_speed;
   // the soil: the options' gravel, and what the effects make of it (soil_cohesion)
   dem_ = std::make_unique<DemWorld>(dev, soil, settings, pile.bounds, pile.geoms);

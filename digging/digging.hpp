@@ -47,6 +47,9 @@ struct DiggingOptions {
   // each particle pair's own speculative reach instead of the fastest particle's (DemSettings::
   // pair_reach; type D and the type-G zone alike). Not yet the default (docs/dem.md)
   bool pair_reach = false;
+  // the relaxation omega of the particle rows' PGS sweeps (DemSettings::relaxation; type D and the
+  // type-G zone alike; the pile is settled with its own settings)
+  double relaxation = 1.0;
   // a type-D dig's sweeps end early once the particle rows' RMS residual is below this [m/s]
   // (DemSettings::tolerance; the level's N_it is the cap). 0: always N_it, as the paper's presets
   double sweep_tolerance = kDigSweepTolerance;

@@ -63,7 +63,11 @@ typedef struct {
   // 1: each pair's speculative reach is its own, 2 h (closing speed + |g| h), at most
   // `speculative` (DemSettings::pair_reach); 0: every pair gets `speculative`
   tl_int pair_reach;
-  tl_int pad_params[3];
+  // the PGS relaxation factor omega in (0, 2): each row's step is omega times the projected
+  // Gauss-Seidel step (projected SOR), folded into the rows' inverse effective masses by
+  // prepare_rows (DemSettings::relaxation); 1 is plain PGS
+  tl_float relaxation;
+  tl_int pad_params[2];
 } TlStepParams;
 
 // a contact as found by the narrow phase, grouped by its owner particle a (b > a, or static).
@@ -85,14 +89,16 @@ typedef struct {
 
 // one contact's constraint rows prepared for the sweeps (SPOOK, Hertz), laid out in colour
 // order for PGS. Friction and rolling rows act on world vectors: for spheres the lever arms
-// are parallel to the normal, so their effective masses are isotropic (one scalar each).
+// are parallel to the normal, so their effective masses are isotropic (one scalar each). The
+// particle rows carry the relaxation omega in their inverse effective masses
+// (TlStepParams::relaxation); the bucket's rows, made on the host, carry 1.
 typedef struct {
   tl_float4 normal;     // xyz normal; w = rhs of the normal row B_n [m/s]
-  tl_float4 arm_a;      // xyz lever arm of a; w = 1/D_n, D_n = G M^-1 G^T + Sigma_n
+  tl_float4 arm_a;      // xyz lever arm of a; w = omega/D_n, D_n = G M^-1 G^T + Sigma_n
   tl_float4 arm_b;      // xyz lever arm of b; w = Sigma_n [m/(N s)]
   tl_float4 impulse_t;  // xyz friction impulse; w = normal impulse lambda_n
-  tl_float4 impulse_r;  // xyz rolling impulse; w = 1/D_t (friction effective mass)
-  tl_float4 coef;       // x = mu, y = mu_r R* [m], z = 1/D_r (rolling effective mass),
+  tl_float4 impulse_r;  // xyz rolling impulse; w = omega/D_t (friction effective mass)
+  tl_float4 coef;       // x = mu, y = mu_r R* [m], z = omega/D_r (rolling effective mass),
                         // w = the tensile impulse the contact holds, h F_c [N s] (0: no cohesion)
   tl_int a, b;          // bodies (b < 0 static)
   tl_int contact;       // index of the TlContact this row was made from

@@ -72,13 +72,16 @@ __kernel void prepare_rows(__global const TlContact* contacts, __global const in
     lr = roll + twist * n;
   }
 
+  // the inverse effective masses times the relaxation: every projected step of the sweeps is
+  // omega times Gauss-Seidel's (projected SOR; omega = 1 is PGS and the same bits as 1/D)
+  float omega_sor = p.relaxation;
   TlRow row;
   row.normal = (float4)(n, rhs);
-  row.arm_a = (float4)(arm_a, 1.0f / (inv_m + sigma));
+  row.arm_a = (float4)(arm_a, omega_sor / (inv_m + sigma));
   row.arm_b = (float4)(arm_b, sigma);
   row.impulse_t = (float4)(lt, ln);
-  row.impulse_r = (float4)(lr, d_t > 0.0f ? 1.0f / d_t : 0.0f);
-  row.coef = (float4)(p.friction, rolling * reduced, d_r > 0.0f ? 1.0f / d_r : 0.0f, cohesion);
+  row.impulse_r = (float4)(lr, d_t > 0.0f ? omega_sor / d_t : 0.0f);
+  row.coef = (float4)(p.friction, rolling * reduced, d_r > 0.0f ? omega_sor / d_r : 0.0f, cohesion);
   row.a = con.a;
   row.b = con.b;
   row.contact = c;
@@ -307,9 +310,12 @@ __kernel void jacobi_bodies(__global const TlRow* rows, __global const float4* d
 
 // the natural-map residual of each contact (velocity units): how far one more projection step
 // would move the normal, friction and rolling impulses, times their effective masses (rolling
-// times the lever arm's length); zero at the exact solution
+// times the lever arm's length); zero at the exact solution. The step is plain Gauss-Seidel's
+// whatever the sweeps' relaxation (the rows' inverse masses divided by it), so a tolerance means
+// the same for every omega
 __kernel void row_residual(__global const TlRow* rows, int n_rows, __global const float4* velocity,
-                           __global const float4* omega, __global float* residual) {
+                           __global const float4* omega, float relaxation,
+                           __global float* residual) {
   int k = get_global_id(0);
   if (k >= n_rows) return;
   TlRow row = rows[k];
@@ -319,23 +325,26 @@ __kernel void row_residual(__global const TlRow* rows, int n_rows, __global cons
   float ln = ROW_IMPULSE_N(row);
   float un = dot(n, vb4.xyz - va4.xyz);
   float cohesion = ROW_COHESION(row);
-  float rn = (normal_impulse(ln, ROW_RHS(row), un, ROW_SIGMA(row), ROW_INV_DN(row), -cohesion) - ln) /
-             ROW_INV_DN(row);
+  float inv_dn = ROW_INV_DN(row) / relaxation;
+  float inv_dt = ROW_INV_DT(row) / relaxation;
+  float inv_dr = ROW_INV_DR(row) / relaxation;
+  float rn =
+      (normal_impulse(ln, ROW_RHS(row), un, ROW_SIGMA(row), inv_dn, -cohesion) - ln) / inv_dn;
   float3 u = (vb4.xyz + cross(wb4.xyz, row.arm_b.xyz)) - (va4.xyz + cross(wa4.xyz, row.arm_a.xyz));
   float3 ut = u - dot(u, n) * n;
   float rt = 0.0f;
-  if (ROW_INV_DT(row) > 0.0f) {
+  if (inv_dt > 0.0f) {
     float3 lt = row.impulse_t.xyz;
-    float3 lt_new = friction_impulse(lt, ut, ROW_INV_DT(row), ROW_FRICTION(row) * (ln + cohesion));
-    rt = length(lt_new - lt) / ROW_INV_DT(row);
+    float3 lt_new = friction_impulse(lt, ut, inv_dt, ROW_FRICTION(row) * (ln + cohesion));
+    rt = length(lt_new - lt) / inv_dt;
   }
   // rolling and twist: the same, turned into a velocity by the lever arm's length
   float rr = 0.0f;
-  if (ROW_INV_DR(row) > 0.0f) {
+  if (inv_dr > 0.0f) {
     float3 wrel = wb4.xyz - wa4.xyz;
     float3 lr = row.impulse_r.xyz;
-    float3 lr_new = rolling_impulse(lr, wrel, n, ROW_INV_DR(row), ROW_ROLLING_LIMIT(row) * (ln + cohesion));
-    rr = length(lr_new - lr) / ROW_INV_DR(row) * length(row.arm_a.xyz);
+    float3 lr_new = rolling_impulse(lr, wrel, n, inv_dr, ROW_ROLLING_LIMIT(row) * (ln + cohesion));
+    rr = length(lr_new - lr) / inv_dr * length(row.arm_a.xyz);
   }
   residual[k] = rn * rn + rt * rt + rr * rr;
 }

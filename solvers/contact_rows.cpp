@@ -35,6 +35,7 @@ StepParams from_device(const TlStepParams& p) {
   out.pair_reach = p.pair_reach != 0;
   out.cohesion = p.cohesion;
   out.ground_rolling = p.ground_rolling;
+  out.relaxation = p.relaxation;
   out.particles = p.particles;
   out.geoms = p.geoms;
   return out;

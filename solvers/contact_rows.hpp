@@ -30,6 +30,7 @@ struct StepParams {
       false;  // each pair's own reach, at most `speculative` (DemSettings::pair_reach)
   double cohesion = 0.0;     // a touching particle pair's tensile force per R*^2 [N/m^2]
   double ground_rolling = 0.0;  // rolling resistance against static geometry
+  double relaxation = 1.0;      // PGS relaxation omega (DemSettings::relaxation)
   int particles = 0;
   int geoms = 0;
 

@@ -479,16 +479,17 @@ std::vector<Row> prepare_rows(const std::vector<Contact>& contacts, const std::v
     row.normal = n;
     row.rhs = rhs;
     row.arm_a = con.arm_a;
-    row.inv_dn = 1.0 / (inv_m + sigma);
+    // the inverse effective masses times the relaxation omega (kernels/solver.cl explains)
+    row.inv_dn = p.relaxation / (inv_m + sigma);
     row.arm_b = con.arm_b;
     row.sigma = sigma;
     row.impulse_n = ln;
     row.impulse_t = lt;
     row.impulse_r = lr;
-    row.inv_dt = d_t > 0.0 ? 1.0 / d_t : 0.0;
+    row.inv_dt = d_t > 0.0 ? p.relaxation / d_t : 0.0;
     row.friction = p.friction;
     row.rolling_limit = rolling * con.reduced_radius;
-    row.inv_dr = d_r > 0.0 ? 1.0 / d_r : 0.0;
+    row.inv_dr = d_r > 0.0 ? p.relaxation / d_r : 0.0;
     row.cohesion = cohesion;
     row.a = con.a;
     row.b = con.b;
@@ -585,7 +586,8 @@ void jacobi_iteration(std::vector<Row>& rows, const Adjacency& adjacency,
   }
 }
 
-std::vector<double> row_residuals(const std::vector<Row>& rows, const Particles& bodies) {
+std::vector<double> row_residuals(const std::vector<Row>& rows, const Particles& bodies,
+                                  double relaxation) {
   std::vector<double> out;
   out.reserve(rows.size());
   for (const Row& row : rows) {
@@ -593,34 +595,41 @@ std::vector<double> row_residuals(const std::vector<Row>& rows, const Particles&
     BodyVelocity b = body_velocity(bodies, row.b);
     const Vec3& n = row.normal;
     double ln = row.impulse_n;
+    // plain Gauss-Seidel's step whatever the relaxation (kernels/solver.cl explains)
+    const double inv_dn = row.inv_dn / relaxation, inv_dt = row.inv_dt / relaxation,
+                 inv_dr = row.inv_dr / relaxation;
     // normal: one projection step, times the effective mass
     double un = n.dot(b.v - a.v);
-    double rn = (contact_law::normal_impulse(ln, row.rhs, un, row.sigma, row.inv_dn, -row.cohesion) - ln) / row.inv_dn;
+    double rn =
+        (contact_law::normal_impulse(ln, row.rhs, un, row.sigma, inv_dn, -row.cohesion) - ln) /
+        inv_dn;
     // friction: the same for the tangential impulse (rows with an effective mass only)
     Vec3 u = (b.v + b.w.cross(row.arm_b)) - (a.v + a.w.cross(row.arm_a));
     Vec3 ut = u - u.dot(n) * n;
     double rt = 0.0;
-    if (row.inv_dt > 0.0) {
-      Vec3 lt_new = contact_law::friction_impulse(row.impulse_t, ut, row.inv_dt, row.friction * (ln + row.cohesion));
-      rt = (lt_new - row.impulse_t).norm() / row.inv_dt;
+    if (inv_dt > 0.0) {
+      Vec3 lt_new = contact_law::friction_impulse(row.impulse_t, ut, inv_dt,
+                                                  row.friction * (ln + row.cohesion));
+      rt = (lt_new - row.impulse_t).norm() / inv_dt;
     }
     // rolling and twist, turned into a velocity by the lever arm's length
     double rr = 0.0;
-    if (row.inv_dr > 0.0) {
+    if (inv_dr > 0.0) {
       Vec3 wrel = b.w - a.w;
       const Vec3& lr = row.impulse_r;
-      Vec3 lr_new = contact_law::rolling_impulse(lr, wrel, n, row.inv_dr, row.rolling_limit * (ln + row.cohesion));
-      rr = (lr_new - lr).norm() / row.inv_dr * row.arm_a.norm();
+      Vec3 lr_new = contact_law::rolling_impulse(lr, wrel, n, inv_dr,
+                                                 row.rolling_limit * (ln + row.cohesion));
+      rr = (lr_new - lr).norm() / inv_dr * row.arm_a.norm();
     }
     out.push_back(rn * rn + rt * rt + rr * rr);
   }
   return out;
 }
 
-double residual(const std::vector<Row>& rows, const Particles& bodies) {
+double residual(const std::vector<Row>& rows, const Particles& bodies, double relaxation) {
   if (rows.empty()) return 0.0;
   double sum = 0.0;
-  for (double r : row_residuals(rows, bodies)) sum += r;
+  for (double r : row_residuals(rows, bodies, relaxation)) sum += r;
   return std::sqrt(sum / static_cast<double>(rows.size()));
 }
 
@@ -707,7 +716,7 @@ void step(ReferenceWorld& world) {
         int chunk = std::min(kToleranceCheckInterval, s.iterations - world.iterations);
         sweeps(world, chunk);
         world.iterations += chunk;
-        if (residual(world.rows, world.particles) < s.tolerance) break;
+        if (residual(world.rows, world.particles, p.relaxation) < s.tolerance) break;
       }
     }
   }

@@ -140,10 +140,12 @@ void pgs_sweep(std::vector<Row>& rows, const std::vector<int>& colour_start, Par
 void jacobi_iteration(std::vector<Row>& rows, const Adjacency& adjacency,
                       const std::vector<int>& row_of_contact, Particles& bodies);
 
-// kernels/solver.cl row_residual: squared natural-map residual of each row [m^2/s^2]
-std::vector<double> row_residuals(const std::vector<Row>& rows, const Particles& bodies);
+// kernels/solver.cl row_residual: squared natural-map residual of each row [m^2/s^2], of plain
+// Gauss-Seidel's step for rows made with `relaxation` (StepParams::relaxation)
+std::vector<double> row_residuals(const std::vector<Row>& rows, const Particles& bodies,
+                                  double relaxation);
 // DemWorld::residual: the RMS of the row residuals [m/s]
-double residual(const std::vector<Row>& rows, const Particles& bodies);
+double residual(const std::vector<Row>& rows, const Particles& bodies, double relaxation);
 
 // kernels/solver.cl store_impulses: the rows' impulses back into their contacts
 void store_impulses(const std::vector<Row>& rows, std::vector<Contact>& contacts);

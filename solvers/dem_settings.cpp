@@ -12,4 +12,16 @@ SweepKind parse_sweep(const std::string& text, const std::string& field) {
   throw InputError(field + ": unknown sweep '" + text + "'; use 'pgs' or 'jacobi'");
 }
 
+bool relaxation_in_range(double omega) {
+  // projected SOR converges for 0 < omega < 2 on a symmetric positive definite system (the
+  // normal rows'); outside it the sweeps diverge or stand still
+  return omega > 0.0 && omega < 2.0;
+}
+
+void check_relaxation(double omega, const std::string& field) {
+  if (!relaxation_in_range(omega))
+    throw InputError(field + ": the relaxation " + message_number(omega) +
+                     " is outside (0, 2); use 1 for plain projected Gauss-Seidel");
+}
+
 }  // namespace talus

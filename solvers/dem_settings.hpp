@@ -64,6 +64,16 @@ struct DemSettings {
   // and at most that, so a bed at rest makes no speculative rows (kernels/narrowphase.cl). Not yet
   // the default: docs/dem.md "Speculative reach" has what it was measured on
   bool pair_reach = false;
+  // the relaxation omega of the PGS sweeps over particle rows: each row's projected step is omega
+  // times Gauss-Seidel's (projected successive over-relaxation), which leaves the solution where
+  // it is and changes how fast the sweeps reach it; 1 is plain PGS. In (0, 2). The Jacobi sweeps
+  // (their own split masses) and the bucket's rows do not use it (docs/dem.md "Relaxation")
+  double relaxation = 1.0;
 };
+
+// whether 0 < omega < 2 (where projected SOR can converge); check_relaxation throws InputError
+// naming `field` otherwise
+bool relaxation_in_range(double omega);
+void check_relaxation(double omega, const std::string& field);
 
 }  // namespace talus

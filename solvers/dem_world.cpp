@@ -141,6 +141,8 @@ void DemWorld::update_params() {
   p.geoms = static_cast<int>(geoms_.size());
   p.speculative = static_cast<float>(speculative);
   p.pair_reach = settings_.pair_reach ? 1 : 0;
+  check_relaxation(settings_.relaxation, "DemSettings.relaxation");
+  p.relaxation = static_cast<float>(settings_.relaxation);
   p.cohesion = static_cast<float>(kRumpfPerR2 * material_.cohesion);
   if (!sweep_ || sweep_kind_ != settings_.sweep ||
       sweep_one_group_rows_ != settings_.one_group_rows) {
@@ -659,7 +661,7 @@ double DemWorld::residual() {
   const int blocks = (nc + kResidualBlock - 1) / kResidualBlock;
   b.residual.resize(nc);
   b.residual_block_sums.resize(blocks);
-  set_args(k_residual_, b.rows, nc, b.velocity, b.omega, b.residual);
+  set_args(k_residual_, b.rows, nc, b.velocity, b.omega, params_.relaxation, b.residual);
   launch(dev_, k_residual_, nc, "row_residual");
   set_args(k_sum_blocks_, b.residual, nc, kResidualBlock, b.residual_block_sums);
   launch(dev_, k_sum_blocks_, blocks, "sum_blocks");

@@ -114,6 +114,7 @@ MultiscaleTerrain::MultiscaleTerrain(Device& dev, const PileProfile& profile,
   settings.max_speed = options.max_particle_speed;
   settings.one_group_rows = options.one_group_rows;
   settings.pair_reach = options.pair_reach;
+  settings.relaxation = options.relaxation;
   dem_ = std::make_unique<DemWorld>(dev, options.particle_material, settings,
                                     pile_bounds(profile, level.diameter), pile_container(profile));
   Tool tool;

@@ -60,6 +60,7 @@ struct MultiscaleOptions {
   double max_particle_speed = 4.0;        // [m/s] DemSettings::max_speed of the zone's particles
   int one_group_rows = kPgsOneGroupRows;  // DemSettings::one_group_rows of the zone's sweeps
   bool pair_reach = false;                // DemSettings::pair_reach of the zone's particles
+  double relaxation = 1.0;                // DemSettings::relaxation of the zone's sweeps
   unsigned seed = 1;                      // of the particles' sizes
 };
 

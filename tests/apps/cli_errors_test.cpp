@@ -242,6 +242,15 @@ TEST(CliErrors, StepCountsAndLoadsOutsideTheirRangeAreRefused) {
       EXPECT_NE(o.err.find("--one-group-rows"), std::string::npos)
           << bench << rows << ": " << o.err;
     }
+  // the PGS relaxation: a number in (0, 2), refused before any pile is built or folder made
+  for (const char* omega : {"0", "2", "-0.5", "nan", "x"})
+    for (const char* cmd : {"bench dem --levels D400 --relaxation ", "bench dig --relaxation ",
+                            "run --scenario hd27 --out /tmp/talus_cli_relaxation --relaxation "}) {
+      const Outcome o = run("", std::string(cmd) + omega);
+      EXPECT_EQ(o.code, 2) << cmd << omega << ": " << o.err;
+      EXPECT_NE(o.err.find("--relaxation"), std::string::npos) << cmd << omega << ": " << o.err;
+      EXPECT_FALSE(std::filesystem::exists("/tmp/talus_cli_relaxation")) << cmd << omega;
+    }
 }
 
 // a shard that a crash or a hand cut up holds a value no cycle gives: --collect names the file,

@@ -671,9 +671,10 @@ TEST(ReferenceColouring, RenumberedParticlesKeepTheirPairsWarmStartAndColours) {
 // (touching pairs hold tension, so the rows' lower bounds and cones differ from dry ones; the dry
 // path is the five-step test's), and random warm-start impulses on its contacts
 std::unique_ptr<DemWorld> world_with_contacts(std::mt19937_64& rng, SweepKind sweep,
-                                              Scene* scene_out = nullptr) {
+                                              Scene* scene_out = nullptr, double relaxation = 1.0) {
   Scene s = test::random_scene(rng);
   s.settings.sweep = sweep;
+  s.settings.relaxation = relaxation;
   // moist-soil tensile strengths [Pa]: bonds of the order of the injected impulses per step
   s.material.cohesion = std::uniform_real_distribution<double>(1e3, 3e4)(rng);
   auto world = make_world(s);
@@ -810,12 +811,13 @@ void compare_sweep_state(SweepStart& s, const std::string& label) {
 void compare_residuals(SweepStart& s, const std::string& label) {
   double device_rms = s.world->residual();
   auto got = s.world->buffers().residual.download(s.rows.size());
-  std::vector<double> want = ref::row_residuals(s.rows, s.bodies);
+  const double relaxation = params_of(*s.world).relaxation;
+  std::vector<double> want = ref::row_residuals(s.rows, s.bodies, relaxation);
   Tally t(label + " row residual [m^2/s^2]");
   // a squared residual: relative 1e-3, floor at (1e-5 m/s)^2
   for (size_t k = 0; k < want.size(); ++k) t.scalar(got[k], want[k], 1e-3, 1e-10, at("row", k));
   t.expect_within();
-  EXPECT_NEAR(device_rms, ref::residual(s.rows, s.bodies), 1e-3 * device_rms + 1e-6);
+  EXPECT_NEAR(device_rms, ref::residual(s.rows, s.bodies, relaxation), 1e-3 * device_rms + 1e-6);
 }
 
 TEST(ReferenceSweeps, PgsOneAndFiveSweeps) {
@@ -845,6 +847,56 @@ TEST(ReferenceSweeps, PgsOneAndFiveSweeps) {
     EXPECT_EQ(stored[r.contact].impulse_t, r.impulse_t);
     EXPECT_EQ(stored[r.contact].impulse_r, r.impulse_r);
   }
+}
+
+// projected SOR (DemSettings::relaxation): the rows' inverse effective masses carry a fresh omega
+// in (0.3, 1.9), and one and five relaxed sweeps match the reference's
+TEST(ReferenceSweeps, RelaxedPgsMatchesWithAFreshOmega) {
+  uint64_t seed = test::fresh_seed();
+  SCOPED_TRACE(test::seed_note(seed));
+  std::mt19937_64 rng(seed);
+  const double omega = std::uniform_real_distribution<double>(0.3, 1.9)(rng);
+  std::printf("[ measured ] relaxation %.4f\n", omega);
+  // the rows on the state before the step, as the reference makes them with the same omega
+  std::mt19937_64 twin_rng = rng;
+  auto world = world_with_contacts(rng, SweepKind::Pgs, nullptr, omega);
+  const ref::StepParams p = params_of(*world);
+  EXPECT_EQ(p.relaxation, static_cast<double>(static_cast<float>(omega)));
+  const std::vector<ref::Contact> contacts = current_contacts(*world);
+  const std::vector<int> order = world->buffers().order.download(contacts.size());
+  const Particles before = world->particles();
+  world->prepare_rows();
+  compare_rows(rows_of(*world), ref::prepare_rows(contacts, order, before, p, true), contacts, p,
+               "relaxed rows");
+  // the relaxation scales the steps: each inverse effective mass is omega times plain PGS's (the
+  // same scene with omega 1, from the same draws)
+  auto plain = world_with_contacts(twin_rng, SweepKind::Pgs);
+  plain->prepare_rows();
+  const std::vector<ref::Row> relaxed_rows = rows_of(*world), plain_rows = rows_of(*plain);
+  ASSERT_EQ(relaxed_rows.size(), plain_rows.size());
+  for (size_t k = 0; k < plain_rows.size(); ++k) {
+    EXPECT_NEAR(relaxed_rows[k].inv_dn, omega * plain_rows[k].inv_dn, 1e-6 * relaxed_rows[k].inv_dn)
+        << "row " << k;
+    EXPECT_NEAR(relaxed_rows[k].inv_dt, omega * plain_rows[k].inv_dt, 1e-6 * relaxed_rows[k].inv_dt)
+        << "row " << k;
+  }
+
+  // the relaxed sweeps from the device's state after gravity and the warm start
+  SweepStart s;
+  s.world = std::move(world);
+  s.world->apply_gravity();
+  s.world->warm_start();
+  s.bodies = s.world->particles();
+  s.rows = rows_of(*s.world);
+  s.contacts = contacts;
+  const std::vector<int>& colour_start = s.world->buffers().colour_start;
+  s.world->sweep(1);
+  ref::pgs_sweep(s.rows, colour_start, s.bodies);
+  compare_sweep_state(s, "relaxed pgs 1 sweep");
+  compare_residuals(s, "relaxed pgs 1 sweep");
+  s.world->sweep(4);
+  for (int it = 0; it < 4; ++it) ref::pgs_sweep(s.rows, colour_start, s.bodies);
+  compare_sweep_state(s, "relaxed pgs 5 sweeps");
 }
 
 TEST(ReferenceSweeps, JacobiOneAndFiveIterations) {
