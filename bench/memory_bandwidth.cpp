@@ -75,6 +75,31 @@ BENCHMARK(DeviceLaunch)
     ->Unit(benchmark::kMicrosecond)
     ->UseRealTime();
 
+// what a host wait costs: eight small transfers (64 float4, a type-G zone's particle array) each
+// waited for (the blocking calls of talus::Buffer), against the same eight enqueued without a
+// wait and one finish at the end. On PoCL a wait is a hand-over between the host thread and the
+// device's worker threads (bench/RESULTS.md 2026-11-28 "host waits")
+void DeviceTransfers(benchmark::State& state) {
+  talus::Device& dev = device();
+  const bool blocking = state.range(0) != 0;
+  constexpr int kTransfers = 8, kItemsEach = 64;
+  talus::Buffer<cl_float4> buffer(dev, kItemsEach);
+  std::vector<std::vector<cl_float4>> host(kTransfers, std::vector<cl_float4>(kItemsEach));
+  const size_t bytes = kItemsEach * sizeof(cl_float4);
+  for (auto _ : state) {
+    for (int k = 0; k < kTransfers; ++k) {
+      const cl_bool wait = blocking ? CL_TRUE : CL_FALSE;
+      if (k % 2 == 0)
+        dev.queue().enqueueWriteBuffer(buffer.raw(), wait, 0, bytes, host[k].data());
+      else
+        dev.queue().enqueueReadBuffer(buffer.raw(), wait, 0, bytes, host[k].data());
+    }
+    dev.finish();
+  }
+  state.SetItemsProcessed(int64_t(state.iterations()) * kTransfers);
+}
+BENCHMARK(DeviceTransfers)->Arg(1)->Arg(0)->Unit(benchmark::kMicrosecond)->UseRealTime();
+
 void HostMemcpy(benchmark::State& state) {
   std::vector<char> src(size_t(kItems) * 16, 1), dst(size_t(kItems) * 16);
   for (auto _ : state) {

@@ -84,6 +84,24 @@ class Buffer {
  public:
   Buffer() = default;
   Buffer(Device& dev, size_t count) : dev_(&dev) { resize(count); }
+  // an upload may still be reading the buffer's staging copy: it is waited for before the copy
+  // goes (a buffer is moved, never copied: two owners of one staging copy could not tell)
+  ~Buffer() { wait_for_upload(false); }
+  Buffer(const Buffer&) = delete;
+  Buffer& operator=(const Buffer&) = delete;
+  Buffer(Buffer&& other) noexcept { *this = std::move(other); }
+  Buffer& operator=(Buffer&& other) noexcept {
+    wait_for_upload(false);
+    dev_ = other.dev_;
+    buffer_ = std::move(other.buffer_);
+    count_ = other.count_;
+    capacity_ = other.capacity_;
+    staging_ = std::move(other.staging_);
+    upload_ = std::move(other.upload_);
+    uploading_ = other.uploading_;
+    other.uploading_ = false;
+    return *this;
+  }
 
   size_t size() const { return count_; }
   // the device memory it holds [bytes]: its capacity, which grows ahead of its size
@@ -99,12 +117,21 @@ class Buffer {
       return cl::Buffer(dev_->context(), CL_MEM_READ_WRITE, capacity_ * sizeof(T));
     });
   }
+  // enqueues the write without waiting for it: the data go through the buffer's own staging copy,
+  // which the write reads until the queue reaches it, so the caller's vector is free at once. A
+  // wait is a hand-over between the host and the device's threads on PoCL (about 6 us, several
+  // per type-G step: bench/RESULTS.md 2026-11-28 "host waits"); the in-order queue runs the write
+  // before every later command, and the next upload waits for this one before reusing the copy
   void upload(const std::vector<T>& host) {
     resize(host.size());
     if (host.empty()) return;
+    wait_for_upload(true);
+    staging_.assign(host.begin(), host.end());
     cl_checked("uploading a buffer", [&] {
-      dev_->queue().enqueueWriteBuffer(buffer_, CL_TRUE, 0, host.size() * sizeof(T), host.data());
+      return dev_->queue().enqueueWriteBuffer(buffer_, CL_FALSE, 0, staging_.size() * sizeof(T),
+                                              staging_.data(), nullptr, &upload_);
     });
+    uploading_ = true;
   }
   std::vector<T> download() const { return download(count_); }
   std::vector<T> download(size_t count) const {
@@ -114,6 +141,16 @@ class Buffer {
       dev_->queue().enqueueReadBuffer(buffer_, CL_TRUE, 0, count * sizeof(T), host.data());
     });
     return host;
+  }
+  // enqueues the read of the first `count` elements into `host` without waiting: they are there
+  // after the queue's next wait (Device::finish), and `host` must live until then. Several reads
+  // then one wait cost one hand-over instead of one each (DemWorld::particles)
+  void enqueue_download(std::vector<T>& host, size_t count) const {
+    host.resize(count);
+    if (count == 0) return;
+    cl_checked("downloading a buffer", [&] {
+      return dev_->queue().enqueueReadBuffer(buffer_, CL_FALSE, 0, count * sizeof(T), host.data());
+    });
   }
   T read_one(size_t index) const {
     T value;
@@ -137,10 +174,25 @@ class Buffer {
   }
 
  private:
+  // `report`: a failed write throws; a destructor or a move cannot, and leaves it to the queue's
+  // next call to report
+  void wait_for_upload(bool report) {
+    if (!uploading_) return;
+    uploading_ = false;
+    try {
+      cl_checked("uploading a buffer", [&] { return upload_.wait(); });
+    } catch (const Error&) {
+      if (report) throw;
+    }
+  }
+
   Device* dev_ = nullptr;
   cl::Buffer buffer_;
   size_t count_ = 0;
   size_t capacity_ = 0;
+  std::vector<T> staging_;  // what the last upload writes from
+  cl::Event upload_;        // that write
+  bool uploading_ = false;  // whether it may still be in the queue
 };
 
 // kernel arguments: Buffer<T> binds its cl::Buffer, anything else binds by value

@@ -326,8 +326,13 @@ Particles BucketRowBlock::gather(const std::vector<int>& index, const Buffer<cl_
   launch(dev_, gather_kernel_, n, "bucket_gather");
   // orientations are not gathered: the rows do not need them
   const std::vector<cl_float4> identity(n, to_float4(Vec3::Zero(), 1.0));
-  return particles_from_device(gathered_position_.download(n), gathered_velocity_.download(n),
-                                          gathered_omega_.download(n), identity);
+  // the three arrays read behind one wait
+  std::vector<cl_float4> x, v, w;
+  gathered_position_.enqueue_download(x, n);
+  gathered_velocity_.enqueue_download(v, n);
+  gathered_omega_.enqueue_download(w, n);
+  dev_.finish();
+  return particles_from_device(x, v, w, identity);
 }
 
 void BucketRowBlock::set_rows(const std::vector<TlRow>& rows) {

@@ -252,9 +252,11 @@ void DemWorld::renumber_particles(const Particles& in, const std::vector<int>& n
   std::vector<TlContact> contacts;
   std::vector<int> colours;
   if (had_previous) {
-    offsets = b.owner_offsets[prev].download(old_count + 1);
-    if (b.n_contacts > 0) contacts = b.contacts[prev].download(b.n_contacts);
-    if (carried && b.n_contacts > 0) colours = b.colour_previous.download(b.n_contacts);
+    // read behind one wait
+    b.owner_offsets[prev].enqueue_download(offsets, old_count + 1);
+    if (b.n_contacts > 0) b.contacts[prev].enqueue_download(contacts, b.n_contacts);
+    if (carried && b.n_contacts > 0) b.colour_previous.enqueue_download(colours, b.n_contacts);
+    dev_.finish();
   }
   set_particles(in);
   if (!had_previous) return;
@@ -290,10 +292,13 @@ void DemWorld::renumber_particles(const Particles& in, const std::vector<int>& n
 
 Particles DemWorld::particles() const {
   Particles out;
-  auto x = buffers_.position.download(particle_count_);
-  auto v = buffers_.velocity.download(particle_count_);
-  auto w = buffers_.omega.download(particle_count_);
-  auto q = buffers_.rotation.download(particle_count_);
+  // the four arrays read behind one wait
+  std::vector<cl_float4> x, v, w, q;
+  buffers_.position.enqueue_download(x, particle_count_);
+  buffers_.velocity.enqueue_download(v, particle_count_);
+  buffers_.omega.enqueue_download(w, particle_count_);
+  buffers_.rotation.enqueue_download(q, particle_count_);
+  dev_.finish();
   for (size_t i = 0; i < particle_count_; ++i) {
     out.position.emplace_back(x[i].s[0], x[i].s[1], x[i].s[2]);
     out.radius.push_back(x[i].s[3]);

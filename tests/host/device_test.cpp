@@ -1,5 +1,10 @@
-// host/device: device discovery, program builds from embedded sources, error reporting.
+// host/device: device discovery, program builds from embedded sources, error reporting, the
+// buffers' transfers.
 #include <gtest/gtest.h>
+
+#include <random>
+#include <utility>
+#include <vector>
 
 #include "host/device.hpp"
 #include "host/embedded.hpp"
@@ -30,6 +35,40 @@ TEST(Device, MissingKernelFileIsNamed) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("does_not_exist.cl"), std::string::npos);
   }
+}
+
+// an upload does not wait for its write: the buffer writes from its own copy, so the caller's
+// vector may change (or go) at once; uploads in a row, a move, and reads enqueued behind one wait
+// all see what was uploaded, in order (fresh random data each run)
+TEST(Buffer, UploadsWriteWhatWasGivenThoughTheCallerReusesItsVector) {
+  Device dev;
+  std::mt19937 rng(std::random_device{}());
+  std::uniform_int_distribution<int> value(-1000000, 1000000);
+  constexpr size_t kCount = 10000;
+  std::vector<int> host(kCount), first(kCount), second(kCount);
+  for (int& x : first) x = value(rng);
+  for (int& x : second) x = value(rng);
+  Buffer<int> a(dev, kCount), b(dev, kCount);
+  // the vector handed to the upload is overwritten before anything waits
+  host = first;
+  a.upload(host);
+  host = second;
+  b.upload(host);
+  std::fill(host.begin(), host.end(), 0);
+  EXPECT_EQ(a.download(), first);
+  EXPECT_EQ(b.download(), second);
+  // a second upload to the same buffer (its copy reused) and a move keep the last one's data
+  a.upload(second);
+  a.upload(first);
+  Buffer<int> moved = std::move(a);
+  EXPECT_EQ(moved.download(), first);
+  // two reads enqueued, one wait
+  std::vector<int> x, y;
+  moved.enqueue_download(x, kCount);
+  b.enqueue_download(y, kCount / 2);
+  dev.finish();
+  EXPECT_EQ(x, first);
+  EXPECT_EQ(y, std::vector<int>(second.begin(), second.begin() + kCount / 2));
 }
 
 }  // namespace
