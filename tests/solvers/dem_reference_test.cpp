@@ -782,9 +782,9 @@ struct SweepStart {
   std::vector<int> row_of_contact;
 };
 
-SweepStart sweep_start(std::mt19937_64& rng, SweepKind sweep) {
+SweepStart sweep_start_from(std::unique_ptr<DemWorld> world) {
   SweepStart s;
-  s.world = world_with_contacts(rng, sweep);
+  s.world = std::move(world);
   DemWorld& w = *s.world;
   w.prepare_rows();
   w.apply_gravity();
@@ -795,6 +795,10 @@ SweepStart sweep_start(std::mt19937_64& rng, SweepKind sweep) {
   s.adjacency = ref::adjacency(s.contacts, static_cast<int>(w.size()));
   s.row_of_contact = w.buffers().row_of_contact.download(s.contacts.size());
   return s;
+}
+
+SweepStart sweep_start(std::mt19937_64& rng, SweepKind sweep) {
+  return sweep_start_from(world_with_contacts(rng, sweep));
 }
 
 // tolerances of the sweeps: 1e-4 relative, plus absolute floors. Velocities (~0.5 m/s):
@@ -820,22 +824,25 @@ void compare_residuals(SweepStart& s, const std::string& label) {
   EXPECT_NEAR(device_rms, ref::residual(s.rows, s.bodies, relaxation), 1e-3 * device_rms + 1e-6);
 }
 
+// one PGS sweep on the device and the reference, compared, then four more
+void one_and_five_pgs_sweeps(SweepStart& s, const std::string& label) {
+  const std::vector<int>& colour_start = s.world->buffers().colour_start;
+  s.world->sweep(1);
+  ref::pgs_sweep(s.rows, colour_start, s.bodies);
+  compare_sweep_state(s, label + " 1 sweep");
+  compare_residuals(s, label + " 1 sweep");
+  s.world->sweep(4);
+  for (int it = 0; it < 4; ++it) ref::pgs_sweep(s.rows, colour_start, s.bodies);
+  compare_sweep_state(s, label + " 5 sweeps");
+}
+
 TEST(ReferenceSweeps, PgsOneAndFiveSweeps) {
   uint64_t seed = test::fresh_seed();
   SCOPED_TRACE(test::seed_note(seed));
   std::mt19937_64 rng(seed);
   SweepStart s = sweep_start(rng, SweepKind::Pgs);
-  const std::vector<int>& colour_start = s.world->buffers().colour_start;
   compare_residuals(s, "pgs before sweeps");
-
-  s.world->sweep(1);
-  ref::pgs_sweep(s.rows, colour_start, s.bodies);
-  compare_sweep_state(s, "pgs 1 sweep");
-  compare_residuals(s, "pgs 1 sweep");
-
-  s.world->sweep(4);
-  for (int it = 0; it < 4; ++it) ref::pgs_sweep(s.rows, colour_start, s.bodies);
-  compare_sweep_state(s, "pgs 5 sweeps");
+  one_and_five_pgs_sweeps(s, "pgs");
 
   // the solved impulses go back to their contacts
   s.world->store_impulses();
@@ -882,21 +889,8 @@ TEST(ReferenceSweeps, RelaxedPgsMatchesWithAFreshOmega) {
   }
 
   // the relaxed sweeps from the device's state after gravity and the warm start
-  SweepStart s;
-  s.world = std::move(world);
-  s.world->apply_gravity();
-  s.world->warm_start();
-  s.bodies = s.world->particles();
-  s.rows = rows_of(*s.world);
-  s.contacts = contacts;
-  const std::vector<int>& colour_start = s.world->buffers().colour_start;
-  s.world->sweep(1);
-  ref::pgs_sweep(s.rows, colour_start, s.bodies);
-  compare_sweep_state(s, "relaxed pgs 1 sweep");
-  compare_residuals(s, "relaxed pgs 1 sweep");
-  s.world->sweep(4);
-  for (int it = 0; it < 4; ++it) ref::pgs_sweep(s.rows, colour_start, s.bodies);
-  compare_sweep_state(s, "relaxed pgs 5 sweeps");
+  SweepStart s = sweep_start_from(std::move(world));
+  one_and_five_pgs_sweeps(s, "relaxed pgs");
 }
 
 TEST(ReferenceSweeps, JacobiOneAndFiveIterations) {
