@@ -25,7 +25,8 @@ inline const char* const kPairReachHelp =
 
 // --relaxation of run, bench dig and bench dem (DemSettings::relaxation)
 inline const char* const kRelaxationHelp =
-    "study: the relaxation omega of the particle rows' PGS sweeps, in (0, 2): each row's step is "
+    "study: the relaxation omega of the particle rows' PGS sweeps, in [0.01, 2): each row's step "
+    "is "
     "omega times Gauss-Seidel's (projected SOR; 1 = plain PGS, docs/dem.md \"Relaxation\")";
 
 // a numeric option that must be a finite number: CLI11's range checks let NaN through (every
@@ -60,15 +61,16 @@ inline CLI::Validator signed_number(bool allow_zero) {
 }
 inline CLI::Validator positive_number() { return signed_number(false); }
 
-// a PGS relaxation, 0 < omega < 2 (solvers/dem_settings relaxation_in_range)
+// a PGS relaxation, 0.01 <= omega < 2 (solvers/dem_settings relaxation_in_range)
 inline CLI::Validator relaxation_number() {
   return CLI::Validator(
       [](std::string& text) {
         const std::optional<double> x = finite_number_in(text);
         if (x && relaxation_in_range(*x)) return std::string();
-        return "must be a number in (0, 2), 1 for plain projected Gauss-Seidel; got '" + text + "'";
+        return "must be a number from 0.01 to below 2, 1 for plain projected Gauss-Seidel; got '" +
+               text + "'";
       },
-      "(0, 2)");
+      "[0.01, 2)");
 }
 inline CLI::Validator non_negative_number() { return signed_number(true); }
 

@@ -94,8 +94,8 @@ class Buffer {
     wait_for_upload(false);
     dev_ = other.dev_;
     buffer_ = std::move(other.buffer_);
-    count_ = other.count_;
-    capacity_ = other.capacity_;
+    count_ = std::exchange(other.count_, 0);
+    capacity_ = std::exchange(other.capacity_, 0);
     staging_ = std::move(other.staging_);
     upload_ = std::move(other.upload_);
     uploading_ = other.uploading_;
@@ -145,8 +145,9 @@ class Buffer {
     return host;
   }
   // enqueues the read of the first `count` elements into `host` without waiting: they are there
-  // after the queue's next wait (Device::finish), and `host` must live until then. Several reads
-  // then one wait cost one hand-over instead of one each (DemWorld::particles)
+  // after the queue's next wait, and `host` must live until then, also when an error unwinds the
+  // stack: declare the vectors, then a PendingReads, and end with its wait(). Several reads then
+  // one wait cost one hand-over instead of one each (DemWorld::particles)
   void enqueue_download(std::vector<T>& host, size_t count) const {
     host.resize(count);
     if (count == 0) return;
@@ -195,6 +196,32 @@ class Buffer {
   std::vector<T> staging_;  // what the last upload writes from
   cl::Event upload_;        // that write
   bool uploading_ = false;  // whether it may still be in the queue
+};
+
+// the wait for reads enqueued by Buffer::enqueue_download: wait() at the end; if an error unwinds
+// the stack first, the destructor still waits for the queue, so no read lands in a vector that is
+// gone (declare the vectors before this)
+class PendingReads {
+ public:
+  explicit PendingReads(Device& dev) : dev_(dev) {}
+  PendingReads(const PendingReads&) = delete;
+  PendingReads& operator=(const PendingReads&) = delete;
+  ~PendingReads() {
+    if (waited_) return;
+    try {
+      dev_.finish();
+    } catch (const Error&) {
+      // the error that unwinds the stack is the one to report
+    }
+  }
+  void wait() {
+    waited_ = true;
+    dev_.finish();
+  }
+
+ private:
+  Device& dev_;
+  bool waited_ = false;
 };
 
 // kernel arguments: Buffer<T> binds its cl::Buffer, anything else binds by value

@@ -73,7 +73,8 @@ __kernel void prepare_rows(__global const TlContact* contacts, __global const in
   }
 
   // the inverse effective masses times the relaxation: every projected step of the sweeps is
-  // omega times Gauss-Seidel's (projected SOR; omega = 1 is PGS and the same bits as 1/D)
+  // omega times Gauss-Seidel's (projected SOR; omega = 1 is PGS, the same bits as 1/D where the
+  // division is correctly rounded, as on PoCL)
   float omega_sor = p.relaxation;
   TlRow row;
   row.normal = (float4)(n, rhs);

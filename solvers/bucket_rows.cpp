@@ -328,10 +328,11 @@ Particles BucketRowBlock::gather(const std::vector<int>& index, const Buffer<cl_
   const std::vector<cl_float4> identity(n, to_float4(Vec3::Zero(), 1.0));
   // the three arrays read behind one wait
   std::vector<cl_float4> x, v, w;
+  PendingReads reads(dev_);
   gathered_position_.enqueue_download(x, n);
   gathered_velocity_.enqueue_download(v, n);
   gathered_omega_.enqueue_download(w, n);
-  dev_.finish();
+  reads.wait();
   return particles_from_device(x, v, w, identity);
 }
 

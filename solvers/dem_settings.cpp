@@ -14,14 +14,16 @@ SweepKind parse_sweep(const std::string& text, const std::string& field) {
 
 bool relaxation_in_range(double omega) {
   // projected SOR converges for 0 < omega < 2 on a symmetric positive definite system (the
-  // normal rows'); outside it the sweeps diverge or stand still
-  return omega > 0.0 && omega < 2.0;
+  // normal rows'); outside it the sweeps diverge or stand still. Judged as the float the kernels
+  // get: 1.99999999 is 2.0f
+  return omega >= kMinRelaxation && static_cast<float>(omega) < 2.0f;
 }
 
 void check_relaxation(double omega, const std::string& field) {
   if (!relaxation_in_range(omega))
-    throw InputError(field + ": the relaxation " + message_number(omega) +
-                     " is outside (0, 2); use 1 for plain projected Gauss-Seidel");
+    throw InputError(field + ": the relaxation " + message_number(omega) + " is outside [" +
+                     message_number(kMinRelaxation) +
+                     ", 2); use 1 for plain projected Gauss-Seidel");
 }
 
 }  // namespace talus

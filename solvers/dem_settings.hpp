@@ -71,8 +71,11 @@ struct DemSettings {
   double relaxation = 1.0;
 };
 
-// whether 0 < omega < 2 (where projected SOR can converge); check_relaxation throws InputError
-// naming `field` otherwise
+// the smallest relaxation accepted: below it the sweeps barely move (and far below, the float the
+// device gets is zero or subnormal, which a GPU flushes to zero)
+inline constexpr double kMinRelaxation = 0.01;
+// whether kMinRelaxation <= omega < 2 as the device's float (projected SOR converges in (0, 2));
+// check_relaxation throws InputError naming `field` otherwise
 bool relaxation_in_range(double omega);
 void check_relaxation(double omega, const std::string& field);
 

@@ -109,6 +109,12 @@ void DemWorld::set_geoms(std::vector<StaticGeom> geoms, GeomChange change) {
 }
 
 void DemWorld::update_params() {
+  // the settings a caller may have changed through settings(), checked before the params change
+  check_relaxation(settings_.relaxation, "DemSettings.relaxation");
+  if (settings_.sweep == SweepKind::Jacobi && settings_.relaxation != 1.0)
+    throw InputError(
+        "DemSettings.relaxation: the Jacobi sweep does not use it (its split masses "
+        "are its own); use 1, or the PGS sweep");
   TlStepParams& p = params_;
   p = TlStepParams{};
   p.gravity = to_float4(settings_.gravity, 0.0);
@@ -141,7 +147,6 @@ void DemWorld::update_params() {
   p.geoms = static_cast<int>(geoms_.size());
   p.speculative = static_cast<float>(speculative);
   p.pair_reach = settings_.pair_reach ? 1 : 0;
-  check_relaxation(settings_.relaxation, "DemSettings.relaxation");
   p.relaxation = static_cast<float>(settings_.relaxation);
   p.cohesion = static_cast<float>(kRumpfPerR2 * material_.cohesion);
   if (!sweep_ || sweep_kind_ != settings_.sweep ||
@@ -253,10 +258,11 @@ void DemWorld::renumber_particles(const Particles& in, const std::vector<int>& n
   std::vector<int> colours;
   if (had_previous) {
     // read behind one wait
+    PendingReads reads(dev_);
     b.owner_offsets[prev].enqueue_download(offsets, old_count + 1);
     if (b.n_contacts > 0) b.contacts[prev].enqueue_download(contacts, b.n_contacts);
     if (carried && b.n_contacts > 0) b.colour_previous.enqueue_download(colours, b.n_contacts);
-    dev_.finish();
+    reads.wait();
   }
   set_particles(in);
   if (!had_previous) return;
@@ -294,11 +300,12 @@ Particles DemWorld::particles() const {
   Particles out;
   // the four arrays read behind one wait
   std::vector<cl_float4> x, v, w, q;
+  PendingReads reads(dev_);
   buffers_.position.enqueue_download(x, particle_count_);
   buffers_.velocity.enqueue_download(v, particle_count_);
   buffers_.omega.enqueue_download(w, particle_count_);
   buffers_.rotation.enqueue_download(q, particle_count_);
-  dev_.finish();
+  reads.wait();
   for (size_t i = 0; i < particle_count_; ++i) {
     out.position.emplace_back(x[i].s[0], x[i].s[1], x[i].s[2]);
     out.radius.push_back(x[i].s[3]);

@@ -243,7 +243,7 @@ TEST(CliErrors, StepCountsAndLoadsOutsideTheirRangeAreRefused) {
           << bench << rows << ": " << o.err;
     }
   // the PGS relaxation: a number in (0, 2), refused before any pile is built or folder made
-  for (const char* omega : {"0", "2", "-0.5", "nan", "x"})
+  for (const char* omega : {"0", "0.001", "2", "1.99999999", "-0.5", "nan", "x"})
     for (const char* cmd : {"bench dem --levels D400 --relaxation ", "bench dig --relaxation ",
                             "run --scenario hd27 --out /tmp/talus_cli_relaxation --relaxation "}) {
       const Outcome o = run("", std::string(cmd) + omega);
@@ -251,6 +251,12 @@ TEST(CliErrors, StepCountsAndLoadsOutsideTheirRangeAreRefused) {
       EXPECT_NE(o.err.find("--relaxation"), std::string::npos) << cmd << omega << ": " << o.err;
       EXPECT_FALSE(std::filesystem::exists("/tmp/talus_cli_relaxation")) << cmd << omega;
     }
+  // the Jacobi sweep has no relaxation to take
+  const Outcome jacobi = run(
+      "", "run --scenario hd27 --out /tmp/talus_cli_relaxation --sweep jacobi --relaxation 1.3");
+  EXPECT_EQ(jacobi.code, 2) << jacobi.err;
+  EXPECT_NE(jacobi.err.find("--relaxation"), std::string::npos) << jacobi.err;
+  EXPECT_FALSE(std::filesystem::exists("/tmp/talus_cli_relaxation"));
 }
 
 // a shard that a crash or a hand cut up holds a value no cycle gives: --collect names the file,

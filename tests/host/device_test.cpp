@@ -64,9 +64,10 @@ TEST(Buffer, UploadsWriteWhatWasGivenThoughTheCallerReusesItsVector) {
   EXPECT_EQ(moved.download(), first);
   // two reads enqueued, one wait
   std::vector<int> x, y;
+  PendingReads reads(dev);
   moved.enqueue_download(x, kCount);
   b.enqueue_download(y, kCount / 2);
-  dev.finish();
+  reads.wait();
   EXPECT_EQ(x, first);
   EXPECT_EQ(y, std::vector<int>(second.begin(), second.begin() + kCount / 2));
 }
