@@ -173,10 +173,7 @@ DiggingOptions digging_options(const RunOptions& o) {
   if (o.form_speed >= 0.0) options.pile.form_speed = o.form_speed;
   options.pile.hold_face = o.hold_face;
   options.sweep = parse_sweep(o.sweep, "--sweep");
-  if (options.sweep == SweepKind::Jacobi && o.relaxation != 1.0)
-    throw InputError(
-        "--relaxation: the Jacobi sweep does not use it (its split masses are its "
-        "own); leave it at 1 with --sweep jacobi");
+  check_relaxation(o.relaxation, options.sweep, "--relaxation");
   options.pile_cache.enabled = o.pile_cache;
   options.pile_cache.note = [quiet = o.quiet](const std::string& line) {
     if (!quiet) std::cerr << "talus run: " << line << "\n";

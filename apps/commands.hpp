@@ -26,8 +26,7 @@ inline const char* const kPairReachHelp =
 // --relaxation of run, bench dig and bench dem (DemSettings::relaxation)
 inline const char* const kRelaxationHelp =
     "study: the relaxation omega of the particle rows' PGS sweeps, in [0.01, 2): each row's step "
-    "is "
-    "omega times Gauss-Seidel's (projected SOR; 1 = plain PGS, docs/dem.md \"Relaxation\")";
+    "is omega times Gauss-Seidel's (projected SOR; 1 = plain PGS, docs/dem.md \"Relaxation\")";
 
 // a numeric option that must be a finite number: CLI11's range checks let NaN through (every
 // comparison with it is false), and a NaN timestep or rolling resistance would run silently
@@ -60,6 +59,7 @@ inline CLI::Validator signed_number(bool allow_zero) {
       allow_zero ? "NON-NEGATIVE" : "POSITIVE");
 }
 inline CLI::Validator positive_number() { return signed_number(false); }
+inline CLI::Validator non_negative_number() { return signed_number(true); }
 
 // a PGS relaxation, 0.01 <= omega < 2 (solvers/dem_settings relaxation_in_range)
 inline CLI::Validator relaxation_number() {
@@ -72,7 +72,6 @@ inline CLI::Validator relaxation_number() {
       },
       "[0.01, 2)");
 }
-inline CLI::Validator non_negative_number() { return signed_number(true); }
 
 // the contact coefficients a study may ask for (Coulomb friction, rolling resistance μ_r): 0 to 2,
 // beyond which a grain neither slides nor rolls any less (the gravel: 0.3 and 0.02; talus's former

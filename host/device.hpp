@@ -119,7 +119,7 @@ class Buffer {
   }
   // enqueues the write without waiting for it: the data go through the buffer's own staging copy,
   // which the write reads until the queue reaches it, so the caller's vector is free at once. A
-  // wait is a hand-over between the host and the device's threads on PoCL (about 6 us, several
+  // wait is a hand-over between the host and the device's threads on PoCL (about 10 us, several
   // per type-G step: bench/RESULTS.md 2026-11-28 "host waits"); the in-order queue runs the write
   // before every later command, and the next upload waits for this one before reusing the copy.
   // The copy stays until then: the host holds each uploaded array twice (the particle arrays: 64 B

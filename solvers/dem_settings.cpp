@@ -19,11 +19,15 @@ bool relaxation_in_range(double omega) {
   return omega >= kMinRelaxation && static_cast<float>(omega) < 2.0f;
 }
 
-void check_relaxation(double omega, const std::string& field) {
+void check_relaxation(double omega, SweepKind sweep, const std::string& field) {
   if (!relaxation_in_range(omega))
     throw InputError(field + ": the relaxation " + message_number(omega) + " is outside [" +
                      message_number(kMinRelaxation) +
                      ", 2); use 1 for plain projected Gauss-Seidel");
+  if (sweep == SweepKind::Jacobi && omega != 1.0)
+    throw InputError(field +
+                     ": the Jacobi sweep does not use a relaxation (its split masses are its "
+                     "own); use 1, or the PGS sweep");
 }
 
 }  // namespace talus

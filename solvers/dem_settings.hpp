@@ -74,9 +74,10 @@ struct DemSettings {
 // the smallest relaxation accepted: below it the sweeps barely move (and far below, the float the
 // device gets is zero or subnormal, which a GPU flushes to zero)
 inline constexpr double kMinRelaxation = 0.01;
-// whether kMinRelaxation <= omega < 2 as the device's float (projected SOR converges in (0, 2));
-// check_relaxation throws InputError naming `field` otherwise
+// whether kMinRelaxation <= omega < 2 as the device's float (projected SOR converges in (0, 2))
 bool relaxation_in_range(double omega);
-void check_relaxation(double omega, const std::string& field);
+// throws InputError naming `field` unless omega is in range, and unless it is 1 with the Jacobi
+// sweep, which does not use it (its split masses are its own)
+void check_relaxation(double omega, SweepKind sweep, const std::string& field);
 
 }  // namespace talus

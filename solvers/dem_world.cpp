@@ -110,11 +110,7 @@ void DemWorld::set_geoms(std::vector<StaticGeom> geoms, GeomChange change) {
 
 void DemWorld::update_params() {
   // the settings a caller may have changed through settings(), checked before the params change
-  check_relaxation(settings_.relaxation, "DemSettings.relaxation");
-  if (settings_.sweep == SweepKind::Jacobi && settings_.relaxation != 1.0)
-    throw InputError(
-        "DemSettings.relaxation: the Jacobi sweep does not use it (its split masses "
-        "are its own); use 1, or the PGS sweep");
+  check_relaxation(settings_.relaxation, settings_.sweep, "DemSettings.relaxation");
   TlStepParams& p = params_;
   p = TlStepParams{};
   p.gravity = to_float4(settings_.gravity, 0.0);
