@@ -5,6 +5,8 @@
 // the bucket's twist changes with every row through its articulated 6x6 mobility W (the vehicle
 // seen from the bucket), which is what makes the coupling strong.
 // Double-precision twins: solvers/bucket_rows.cpp (reference namespace).
+// Built after solver.cl in one program (solvers/contact_sweep.hpp kSolverProgram): the fused sweep
+// of kinematic tools at the end calls its pgs_colours_in_group.
 
 // the candidates' state before the step, for the host's rows: centre and radius, velocity and
 // inverse mass, angular velocity and inverse inertia
@@ -76,6 +78,15 @@ void bucket_chunk_store_particles(int count, __global float4* velocity, __global
   barrier(CLK_GLOBAL_MEM_FENCE | CLK_LOCAL_MEM_FENCE);
 }
 
+// one row's starting impulses on its particle (w: inverse mass and inertia)
+void bucket_row_warm_start(TlRow row, float4* velocity, float4* omega) {
+  float3 P = ROW_IMPULSE_N(row) * row.normal.xyz + row.impulse_t.xyz;
+  float4 va = *velocity;
+  float4 wa = *omega;
+  *velocity = (float4)(va.xyz - va.w * P, va.w);
+  *omega = (float4)(wa.xyz - wa.w * (cross(row.arm_a.xyz, P) + row.impulse_r.xyz), wa.w);
+}
+
 // warm start: each particle receives the impulses its bucket rows start from (the bucket's
 // share is already in its twist: the vehicle was solved with their wrench). A chain: a particle
 // may touch the bucket more than once. Launched as one work-group.
@@ -91,14 +102,12 @@ __kernel void bucket_warm_start(__global const TlRow* rows, int n_rows, __global
     // one work-item applies the chunk's rows in order
     if (get_local_id(0) == 0) {
       for (int k = 0; k < count; ++k) {
-        TlRow row = chunk_rows[k];
         int s = chunk_slot[k];
-        float3 P = ROW_IMPULSE_N(row) * row.normal.xyz + row.impulse_t.xyz;
         float4 va = chunk_velocity[s];
         float4 wa = chunk_omega[s];
-        chunk_velocity[s] = (float4)(va.xyz - va.w * P, va.w);
-        chunk_omega[s] =
-            (float4)(wa.xyz - wa.w * (cross(row.arm_a.xyz, P) + row.impulse_r.xyz), wa.w);
+        bucket_row_warm_start(chunk_rows[k], &va, &wa);
+        chunk_velocity[s] = va;
+        chunk_omega[s] = wa;
       }
     }
     barrier(CLK_LOCAL_MEM_FENCE);
@@ -249,5 +258,89 @@ __kernel void bucket_sweep(__global TlRow* rows, int n_rows, __global float4* ve
   if (k == 0) {
     bucket->velocity = (float4)(vb, 0.0f);
     bucket->omega = (float4)(wb, 0.0f);
+  }
+}
+
+// Kinematic tools (mobility W = 0: the type-G bucket, the cutting blade, the shear ring): the
+// particles cannot move the tool, so a row changes its particle alone and the rows of different
+// particles do not depend on one another. The serial walk above is then only a walk per particle:
+// each particle's rows (of every kinematic tool, in the walk's order: tool by tool, row by row)
+// are a group, and a work-item per group walks them with bucket_row_solve, W and G zero and the
+// tool's twist as given (the serial walk adds W's zero products to it). The particle's arithmetic
+// is the serial walk's, so the results are its bits (up to the sign of a zero velocity), with as
+// many work-items as particles touch a tool (solvers/kinematic_tool_rows).
+//   rows: grouped by particle, group g is [group_start[g], group_start[g + 1]);
+//   row_tool: each row's tool, an index into tools (their twists; their mobility is not read)
+
+// walks group g: its particle's state in registers, each row against its tool's twist
+void kinematic_group_sweep(int g, __global TlRow* rows, __global const int* group_start,
+                           __global const int* row_tool, __global const TlBucketBody* tools,
+                           __global float4* velocity, __global float4* omega) {
+  int begin = group_start[g];
+  int end = group_start[g + 1];
+  int a = rows[begin].a;
+  float4 va = velocity[a];
+  float4 wa = omega[a];
+  // what the tool's mobility and the rows' couplings are for a kinematic tool
+  float W[36];
+  float G[TL_COUPLING_FLOATS];
+  for (int i = 0; i < 36; ++i) W[i] = 0.0f;
+  for (int i = 0; i < TL_COUPLING_FLOATS; ++i) G[i] = 0.0f;
+  for (int r = begin; r < end; ++r) {
+    TlRow row = rows[r];
+    float3 vb = tools[row_tool[r]].velocity.xyz;
+    float3 wb = tools[row_tool[r]].omega.xyz;
+    bucket_row_solve(&row, &va, &wa, W, G, &vb, &wb);
+    rows[r].impulse_t = row.impulse_t;
+    rows[r].impulse_r = row.impulse_r;
+  }
+  velocity[a] = va;
+  omega[a] = wa;
+}
+
+// the warm start of the kinematic tools' rows, a work-item per particle
+__kernel void kinematic_tool_warm_start(__global const TlRow* rows,
+                                        __global const int* group_start, int groups,
+                                        __global float4* velocity, __global float4* omega) {
+  int g = get_global_id(0);
+  if (g >= groups) return;
+  int begin = group_start[g];
+  int end = group_start[g + 1];
+  int a = rows[begin].a;
+  float4 va = velocity[a];
+  float4 wa = omega[a];
+  for (int r = begin; r < end; ++r) bucket_row_warm_start(rows[r], &va, &wa);
+  velocity[a] = va;
+  omega[a] = wa;
+}
+
+// one sweep over the kinematic tools' rows, a work-item per particle
+__kernel void kinematic_tool_sweep(__global TlRow* rows, __global const int* group_start,
+                                   int groups, __global const int* row_tool,
+                                   __global const TlBucketBody* tools, __global float4* velocity,
+                                   __global float4* omega) {
+  int g = get_global_id(0);
+  if (g >= groups) return;
+  kinematic_group_sweep(g, rows, group_start, row_tool, tools, velocity, omega);
+}
+
+// `iterations` sweeps of a small system in one work-group, each over the particle rows' colours
+// (kernels/solver.cl pgs_sweeps_one_group) and then the kinematic tools' rows: the bits of a
+// launch per colour and a kinematic_tool_sweep launch per sweep, in one launch instead of
+// (colours + 1) x iterations (the type-G step: 2 x iterations launches before, issue 14)
+__kernel void pgs_sweeps_one_group_tools(__global TlRow* rows, __global const int* colour_start,
+                                         int colours, int iterations, __global float4* velocity,
+                                         __global float4* omega, __global TlRow* tool_rows,
+                                         __global const int* group_start, int groups,
+                                         __global const int* row_tool,
+                                         __global const TlBucketBody* tools) {
+  int lid = get_local_id(0);
+  int size = get_local_size(0);
+  for (int it = 0; it < iterations; ++it) {
+    pgs_colours_in_group(rows, colour_start, colours, velocity, omega);
+    for (int g = lid; g < groups; g += size)
+      kinematic_group_sweep(g, tool_rows, group_start, row_tool, tools, velocity, omega);
+    // the tools' changes seen by the whole group before the next sweep's colours
+    barrier(CLK_GLOBAL_MEM_FENCE);
   }
 }

@@ -234,24 +234,29 @@ __kernel void pgs_colour(__global TlRow* rows, int begin, int end, __global floa
   pgs_row(rows, k, velocity, omega);
 }
 
-// `iterations` PGS sweeps over every colour in one work-group, a barrier between colours: for a
-// system whose colours are too small to fill the device, where a launch per colour costs more
-// than its rows (the type-G zone, D400; solvers/pgs_sweep.cpp). A colour's rows share no dynamic
-// body and each is solved by pgs_row, so the result is that of pgs_colour's launches bit for
-// bit, whichever work-item takes a row
+// one PGS sweep over every colour by one work-group, a barrier between colours: a colour's rows
+// share no dynamic body and each is solved by pgs_row, so the result is that of pgs_colour's
+// launches bit for bit, whichever work-item takes a row
+void pgs_colours_in_group(__global TlRow* rows, __global const int* colour_start, int colours,
+                          __global float4* velocity, __global float4* omega) {
+  int lid = get_local_id(0);
+  int size = get_local_size(0);
+  for (int k = 0; k < colours; ++k) {
+    int end = colour_start[k + 1];
+    for (int r = colour_start[k] + lid; r < end; r += size) pgs_row(rows, r, velocity, omega);
+    // the colour's velocities seen by the whole group before the next colour reads them
+    barrier(CLK_GLOBAL_MEM_FENCE);
+  }
+}
+
+// `iterations` PGS sweeps in one work-group: for a system whose colours are too small to fill
+// the device, where a launch per colour costs more than its rows (the type-G zone, D400;
+// solvers/pgs_sweep.cpp). kernels/bucket.cl pgs_sweeps_one_group_tools adds kinematic tools' rows
 __kernel void pgs_sweeps_one_group(__global TlRow* rows, __global const int* colour_start,
                                    int colours, int iterations, __global float4* velocity,
                                    __global float4* omega) {
-  int lid = get_local_id(0);
-  int size = get_local_size(0);
-  for (int it = 0; it < iterations; ++it) {
-    for (int k = 0; k < colours; ++k) {
-      int end = colour_start[k + 1];
-      for (int r = colour_start[k] + lid; r < end; r += size) pgs_row(rows, r, velocity, omega);
-      // the colour's velocities seen by the whole group before the next colour reads them
-      barrier(CLK_GLOBAL_MEM_FENCE);
-    }
-  }
+  for (int it = 0; it < iterations; ++it)
+    pgs_colours_in_group(rows, colour_start, colours, velocity, omega);
 }
 
 // projected Jacobi with mass splitting (Tonge 2012): every row against the same velocities,

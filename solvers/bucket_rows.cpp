@@ -7,6 +7,7 @@
 
 #include "host/error.hpp"
 #include "solvers/contact_law.hpp"
+#include "solvers/contact_sweep.hpp"
 #include "solvers/dem_world.hpp"
 
 namespace talus {
@@ -307,7 +308,7 @@ BucketRowBlock::BucketRowBlock(Device& dev, size_t chunk)
       gathered_velocity_(dev, 1),
       gathered_omega_(dev, 1),
       chunk_(chunk > 0 ? chunk : (dev.is_gpu() ? kWorkGroupSize : 1)) {
-  const cl::Program& program = dev.program({"contact_law.cl", "bucket.cl"});
+  const cl::Program& program = dev.program(kSolverProgram);
   gather_kernel_ = dev.kernel(program, "bucket_gather");
   warm_kernel_ = dev.kernel(program, "bucket_warm_start");
   sweep_kernel_ = dev.kernel(program, "bucket_sweep");

@@ -8,19 +8,30 @@
 #include "host/device.hpp"
 #include "solvers/dem_buffers.hpp"
 #include "solvers/dem_settings.hpp"
+#include "solvers/kinematic_tool_rows.hpp"
 
 namespace talus {
 
 // the kernel files of the contact rows and sweeps, in order: the shared helpers, the contact law
-// (normal, friction and rolling projections), then the rows, sweeps and residual. One list, so
-// every user builds the same program once (Device caches it by its files)
-inline const std::vector<std::string> kSolverProgram = {"dem_common.cl", "contact_law.cl", "solver.cl"};
+// (normal, friction and rolling projections), then the rows, sweeps and residual, then the rows
+// against the bucket and tools (whose fused sweep calls the particle sweeps). One list, so every
+// user builds the same program once (Device caches it by its files)
+inline const std::vector<std::string> kSolverProgram = {"dem_common.cl", "contact_law.cl",
+                                                        "solver.cl", "bucket.cl"};
 
 class ContactSweep {
  public:
   virtual ~ContactSweep() = default;
   // runs `iterations` sweeps over all rows, updating impulses and body velocities in place
   virtual void iterate(DemBuffers& b, int iterations) = 0;
+  // `iterations` sweeps, each over the particle rows and then the kinematic tools' rows (the
+  // coupled order of ToolWorld); a strategy may fuse them (PGS: one launch for a small system)
+  virtual void iterate_with_tools(DemBuffers& b, int iterations, KinematicToolRows& tools) {
+    for (int it = 0; it < iterations; ++it) {
+      if (b.n_contacts > 0) iterate(b, 1);
+      tools.sweep(b.velocity, b.omega);
+    }
+  }
   virtual const char* name() const = 0;
 };
 

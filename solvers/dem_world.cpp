@@ -649,6 +649,10 @@ void DemWorld::sweep_fixed(int iterations) {
   if (buffers_.n_contacts > 0) sweep_->iterate(buffers_, iterations);
 }
 
+void DemWorld::sweep_fixed_with_tools(int iterations, KinematicToolRows& tools) {
+  sweep_->iterate_with_tools(buffers_, iterations, tools);
+}
+
 void DemWorld::store_impulses() {
   DemBuffers& b = buffers_;
   set_args(k_store_, b.rows, b.n_contacts, b.contacts[b.current]);

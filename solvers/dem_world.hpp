@@ -108,6 +108,9 @@ class DemWorld {
   int sweep(int iterations);
   // exactly `iterations` sweeps over the particle rows, whatever the tolerance says
   void sweep_fixed(int iterations);
+  // exactly `iterations` sweeps, each over the particle rows and then the kinematic tools' rows
+  // (solvers/kinematic_tool_rows; one launch for a small PGS system)
+  void sweep_fixed_with_tools(int iterations, KinematicToolRows& tools);
   void store_impulses();
   void integrate();
 

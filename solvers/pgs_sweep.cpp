@@ -9,7 +9,7 @@ namespace talus {
 
 namespace {
 
-// the work-group of pgs_sweeps_one_group: as many work-items as the kernel allows on the
+// the work-group of pgs_sweeps_one_group(_tools): as many work-items as the kernel allows on the
 // device, at most this many (a colour of a small system has tens to hundreds of rows)
 constexpr size_t kOneGroupSize = 256;
 
@@ -19,10 +19,9 @@ class PgsSweep : public ContactSweep {
     const cl::Program& program = dev.program(kSolverProgram);
     kernel_ = dev.kernel(program, "pgs_colour");
     one_group_ = dev.kernel(program, "pgs_sweeps_one_group");
-    group_size_ =
-        std::min(kOneGroupSize, cl_checked("querying the sweep's work-group size", [&] {
-                   return one_group_.getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(dev.device());
-                 }));
+    one_group_tools_ = dev.kernel(program, "pgs_sweeps_one_group_tools");
+    group_size_ = group_size(one_group_);
+    tools_group_size_ = group_size(one_group_tools_);
   }
   const char* name() const override { return "pgs"; }
 
@@ -36,22 +35,52 @@ class PgsSweep : public ContactSweep {
       return;
     }
     // one launch per colour and sweep, all on the in-order queue without host waits
+    for (int it = 0; it < iterations; ++it) sweep_colours(b, colours);
+  }
+
+  void iterate_with_tools(DemBuffers& b, int iterations, KinematicToolRows& tools) override {
+    // the step's colours; none when it has no particle rows (only tool rows)
+    const int colours = b.n_contacts > 0 ? static_cast<int>(b.colour_start.size()) - 1 : 0;
+    if (iterations <= 0 || (colours <= 0 && tools.groups() == 0)) return;
+    // a small system: the sweeps and the tools' rows in one launch (the same bits)
+    const int particle_rows = colours > 0 ? b.colour_start.back() : 0;
+    if (particle_rows + tools.rows() <= one_group_rows_) {
+      set_args(one_group_tools_, b.rows, b.colour_start_dev, std::max(colours, 0), iterations,
+               b.velocity, b.omega, tools.row_buffer(), tools.group_start(), tools.groups(),
+               tools.row_tool(), tools.tool_bodies());
+      launch_group(dev_, one_group_tools_, tools_group_size_, "pgs_sweeps_one_group_tools");
+      return;
+    }
     for (int it = 0; it < iterations; ++it) {
-      for (int k = 0; k < colours; ++k) {
-        int begin = b.colour_start[k];
-        int end = b.colour_start[k + 1];
-        if (end == begin) continue;
-        set_args(kernel_, b.rows, begin, end, b.velocity, b.omega);
-        launch(dev_, kernel_, static_cast<size_t>(end - begin), "pgs_colour");
-      }
+      sweep_colours(b, colours);
+      tools.sweep(b.velocity, b.omega);
     }
   }
 
  private:
+  // one sweep: a launch per colour
+  void sweep_colours(DemBuffers& b, int colours) {
+    for (int k = 0; k < colours; ++k) {
+      int begin = b.colour_start[k];
+      int end = b.colour_start[k + 1];
+      if (end == begin) continue;
+      set_args(kernel_, b.rows, begin, end, b.velocity, b.omega);
+      launch(dev_, kernel_, static_cast<size_t>(end - begin), "pgs_colour");
+    }
+  }
+
+  // a one-group kernel's work-group: as many work-items as the device allows it, at most
+  // kOneGroupSize
+  size_t group_size(const cl::Kernel& kernel) const {
+    return std::min(kOneGroupSize, cl_checked("querying the sweep's work-group size", [&] {
+                      return kernel.getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(dev_.device());
+                    }));
+  }
+
   Device& dev_;
   int one_group_rows_;
-  cl::Kernel kernel_, one_group_;
-  size_t group_size_ = 1;
+  cl::Kernel kernel_, one_group_, one_group_tools_;
+  size_t group_size_ = 1, tools_group_size_ = 1;
 };
 
 }  // namespace

@@ -41,8 +41,9 @@ struct ToolWorld::Side {
   ToolLoad load;
 };
 
-ToolWorld::ToolWorld(Device& dev, DemWorld& dem, std::vector<Tool> tools, const embree::Device& embree)
-    : dev_(dev), dem_(dem) {
+ToolWorld::ToolWorld(Device& dev, DemWorld& dem, std::vector<Tool> tools,
+                     const embree::Device& embree)
+    : dev_(dev), dem_(dem), kinematic_(std::make_unique<KinematicToolRows>(dev)) {
   for (size_t i = 0; i < tools.size(); ++i) {
     const Tool& t = tools[i];
     const std::string field = "tool " + std::to_string(i);
@@ -145,6 +146,15 @@ void ToolWorld::step() {
   const StepParams params = from_device(dem_.params());
   const double r_max = dem_.max_radius();
 
+  // kinematic tools only (the type-G bucket, the blade, the ring): their rows are solved a
+  // particle at a time inside the particle sweeps (solvers/kinematic_tool_rows, the serial walk's
+  // bits); a loaded tool moves with its rows, so they are one chain per tool (BucketRowBlock)
+  const bool kinematic = std::all_of(sides_.begin(), sides_.end(), [](const auto& side) {
+    return side->tool.mobility.isZero(0.0);
+  });
+  std::vector<std::vector<TlRow>> kinematic_rows;
+  std::vector<BucketBody> kinematic_bodies;
+
   // each tool: candidates near it, their contacts, rows warm-started from last step's impulses
   for (auto& side : sides_) {
     Tool& t = side->tool;
@@ -198,9 +208,15 @@ void ToolWorld::step() {
       d.a = side->candidates[r.a];
       device_rows.push_back(d);
     }
-    side->block.set_rows(device_rows);
-    side->block.set_bucket(body);
+    if (kinematic) {
+      kinematic_rows.push_back(std::move(device_rows));
+      kinematic_bodies.push_back(body);
+    } else {
+      side->block.set_rows(device_rows);
+      side->block.set_bucket(body);
+    }
   }
+  if (kinematic) kinematic_->set(kinematic_rows, kinematic_bodies);
 
   // velocities: gravity, warm starts, then every sweep over the particle rows and each tool's
   // (each a stage of a profiled run, as in the coupled type-D step: solvers/split_solver)
@@ -209,24 +225,37 @@ void ToolWorld::step() {
     StageScope stage(dev, "warm_start");
     dem_.apply_gravity();
     dem_.warm_start();
-    if (dem_.settings().warm_start)
-      for (auto& side : sides_)
-        side->block.warm_start(dem_.buffers().velocity, dem_.buffers().omega);
-  }
-  for (int it = 0; it < dem_.settings().iterations; ++it) {
-    {
-      StageScope stage(dev, "particle_sweeps");
-      dem_.sweep_fixed(1);
+    if (dem_.settings().warm_start) {
+      if (kinematic)
+        kinematic_->warm_start(dem_.buffers().velocity, dem_.buffers().omega);
+      else
+        for (auto& side : sides_)
+          side->block.warm_start(dem_.buffers().velocity, dem_.buffers().omega);
     }
-    StageScope stage(dev, "bucket_rows");
-    for (auto& side : sides_) side->block.sweep(dem_.buffers().velocity, dem_.buffers().omega);
+  }
+  if (kinematic) {
+    // the tools' rows inside the particle sweeps (their stage)
+    StageScope stage(dev, "particle_sweeps");
+    dem_.sweep_fixed_with_tools(dem_.settings().iterations, *kinematic_);
+  } else {
+    for (int it = 0; it < dem_.settings().iterations; ++it) {
+      {
+        StageScope stage(dev, "particle_sweeps");
+        dem_.sweep_fixed(1);
+      }
+      StageScope stage(dev, "bucket_rows");
+      for (auto& side : sides_) side->block.sweep(dem_.buffers().velocity, dem_.buffers().omega);
+    }
   }
 
   // the tools' loads and (loaded tools) their new velocities; impulses kept for the warm start
-  for (auto& side : sides_) {
+  const std::vector<std::vector<TlRow>> kinematic_solved =
+      kinematic ? kinematic_->solved() : std::vector<std::vector<TlRow>>();
+  for (size_t i = 0; i < sides_.size(); ++i) {
+    Side* side = sides_[i].get();
     Tool& t = side->tool;
     if (!side->rows.empty()) {
-      const std::vector<TlRow> solved = side->block.rows();
+      const std::vector<TlRow> solved = kinematic ? kinematic_solved[i] : side->block.rows();
       for (size_t k = 0; k < side->rows.size(); ++k) {
         const ContactRow r = from_device(solved[k]);
         side->rows[k].impulse_n = r.impulse_n;

@@ -15,18 +15,23 @@
 //     the coupling is as strong as the bucket's. A loaded tool translates only: W's angular rows
 //     must be zero and it has no prescribed turn (a platen held level by its frame, a blade on
 //     rails); only a kinematic tool turns.
-// Each tool is swept serially after the particle rows, one after another in index order, so a
-// step is deterministic like every other.
+// Each tool is swept after the particle rows, one after another in index order, so a step is
+// deterministic like every other. When every tool is kinematic, the particles' rows against them
+// do not depend on one another across particles: they are solved a particle at a time (each
+// particle's rows in that same order) inside the particle sweeps' launch
+// (solvers/kinematic_tool_rows), with the serial walk's results; a loaded tool's rows stay one
+// chain per tool, after every sweep.
 #pragma once
 #include <memory>
 #include <vector>
 
 #include "host/device.hpp"
-#include "solvers/bucket_rows.hpp"
-#include "solvers/dem_world.hpp"
 #include "solvers/bucket_contacts.hpp"
+#include "solvers/bucket_rows.hpp"
 #include "solvers/bucket_selection.hpp"
+#include "solvers/dem_world.hpp"
 #include "solvers/embree.hpp"
+#include "solvers/kinematic_tool_rows.hpp"
 #include "vehicle/bucket_mesh.hpp"
 
 namespace talus {
@@ -92,6 +97,8 @@ class ToolWorld {
   Device& dev_;
   DemWorld& dem_;
   std::vector<std::unique_ptr<Side>> sides_;
+  // the rows of every tool when all are kinematic, solved a particle at a time
+  std::unique_ptr<KinematicToolRows> kinematic_;
 };
 
 }  // namespace talus

@@ -8,6 +8,7 @@
 
 #include <cstdio>
 #include <cstring>
+#include <limits>
 
 #include "host/error.hpp"
 #include "terrain/soil_sample.hpp"
@@ -202,6 +203,44 @@ TEST(ToolWorld, TwoRunsAreBitIdentical) {
   ASSERT_EQ(a.size(), c.size());
   EXPECT_EQ(std::memcmp(a.data(), c.data(), a.size() * sizeof(float)), 0) << "renumbered in place";
   EXPECT_EQ(la, lc) << "renumbered in place";
+}
+
+TEST(ToolWorld, KinematicToolRowsGiveTheSameBitsInOneLaunchAsLaunchedPerSweep) {
+  // a blade pushed through a bed: its rows solved inside the one-group sweep launch
+  // (DemSettings::one_group_rows above the rows) and with a launch per colour and a tool launch
+  // per sweep (one_group_rows 0) end in the same particles and the same load
+  auto run = [](int one_group_rows, std::vector<float>& state, Vec6& load) {
+    Device dev;
+    Bed b = make_bed(dev, 0.0, 11);
+    b.dem->settings().one_group_rows = one_group_rows;
+    std::vector<StaticGeom> geoms = b.dem->geoms();
+    geoms.push_back(StaticGeom::plane(Vec3::Zero(), Vec3::UnitZ()));
+    b.dem->set_geoms(geoms);
+    Tool blade;
+    add_box(blade.mesh, Vec3(0, 0, 0.3), Vec3(0.02, 0.35, 0.3));
+    blade.position = Vec3(-0.35, 0, 0.1);
+    blade.velocity = Vec3(0.5, 0, 0);
+    ToolWorld tools(dev, *b.dem, {blade});
+    int rows = 0;
+    for (int k = 0; k < 40; ++k) {
+      tools.step();
+      rows += tools.load(0).contacts;
+    }
+    state.clear();
+    for (const cl_float4& v : b.dem->buffers().velocity.download(b.dem->size()))
+      for (int c = 0; c < 4; ++c) state.push_back(v.s[c]);
+    load = tools.load(0).wrench;
+    return rows;
+  };
+  std::vector<float> a, b;
+  Vec6 la, lb;
+  const int rows = run(std::numeric_limits<int>::max(), a, la);
+  run(0, b, lb);
+  ASSERT_EQ(a.size(), b.size());
+  EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(float)), 0);
+  EXPECT_EQ(la, lb);
+  EXPECT_GT(std::abs(la.x()), 0.0);  // the blade did meet the grains
+  std::printf("[ measured ] %d blade rows over 40 steps: the same bits either way\n", rows);
 }
 
 }  // namespace
