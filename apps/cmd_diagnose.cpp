@@ -18,6 +18,7 @@
 #include "io/plot.hpp"
 #include "sim2real/diagnose.hpp"
 #include "sim2real/report.hpp"
+#include "terrain/pile.hpp"
 
 namespace talus::app {
 
@@ -78,7 +79,8 @@ void diagnose_command(const DiagnoseArgs& a) {
                        ec.message() + ")");
   }
   const bool piles = std::any_of(runs.begin(), runs.end(), [](const MeasuredRun& r) { return measured_scenario(r).pile; });
-  std::unique_ptr<Device> device = piles ? std::make_unique<Device>() : nullptr;
+  std::unique_ptr<Device> device =
+      piles ? std::make_unique<Device>(device_choice_for(level_preset(a.fidelity))) : nullptr;
 
   const Diagnosis d = diagnose(runs, options, device.get(), [&](const std::string& line) {
     if (!a.quiet) std::cerr << "talus diagnose: " << line << "\n";

@@ -341,7 +341,7 @@ Simulation::Simulation(const SimulationOptions& options) : impl_(std::make_uniqu
     dig_options.pile_cache.note = [](const std::string& line) {
       std::cerr << "talus: " << line << "\n";
     };
-    m.device = std::make_unique<Device>();
+    m.device = std::make_unique<Device>(device_choice_for(m.preset));
     Progress progress("pile " + m.preset.name, 1.5 * dig_options.pile.max_time, options.progress);
     if (options.loading_cycle) {
       // the cycle's pile, placed and scanned as `talus sweep` does

@@ -63,6 +63,17 @@ DeviceChoice device_choice_from_env() {
   return choice;
 }
 
+void list_pocl_in_thread_device() {
+  // overwrite 0: a user's POCL_DEVICES wins
+  setenv("POCL_DEVICES", "pthread basic", 0);
+}
+
+bool runs_in_calling_thread(const std::string& platform, const std::string& device) {
+  // PoCL names its devices after the driver: "basic-<cpu>" runs commands in the thread that
+  // flushes or waits for them, "pthread-<cpu>" in a pool of worker threads
+  return contains(platform, "Portable Computing Language") && lower(device).rfind("basic", 0) == 0;
+}
+
 Device::Device(const DeviceChoice& choice) {
   check_pocl_cache_dir();
   std::vector<cl::Platform> platforms;
@@ -96,6 +107,11 @@ Device::Device(const DeviceChoice& choice) {
       candidates.push_back({p, d, (d.getInfo<CL_DEVICE_TYPE>() & CL_DEVICE_TYPE_GPU) != 0});
     }
   }
+  // GPUs first; among the CPUs, the in-thread ones first or last as the choice prefers
+  std::stable_partition(candidates.begin(), candidates.end(), [&](const Candidate& c) {
+    return runs_in_calling_thread(c.platform.getInfo<CL_PLATFORM_NAME>(),
+                                  c.device.getInfo<CL_DEVICE_NAME>()) == choice.in_host_thread;
+  });
   std::stable_partition(candidates.begin(), candidates.end(), [](const Candidate& c) { return c.gpu; });
   if (candidates.empty()) {
     if (seen.empty()) throw Error(kInstallHint);

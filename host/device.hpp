@@ -22,10 +22,25 @@ class StageTimes;
 struct DeviceChoice {
   std::string platform;
   std::string device;
+  // among the CPU devices that match, prefer one that runs the kernels in the calling thread
+  // (PoCL's `basic`) to one that hands every command to worker threads (PoCL's `pthread`, else
+  // the default): a system of a few hundred particles spends more in the hand-overs than in its
+  // kernels (HD27-G200 0.66 of the time, the same bits; bench/RESULTS.md 2026-11-28 "in the host
+  // thread"). PoCL lists `basic` only where POCL_DEVICES names it (list_pocl_in_thread_device);
+  // without one this changes nothing. GPUs still come first
+  bool in_host_thread = false;
 };
 
 // reads TALUS_DEVICE ("platform-substring:device-substring", either part may be empty)
 DeviceChoice device_choice_from_env();
+
+// has PoCL list its in-thread device (`basic`) beside its threaded one (`pthread`), by setting
+// POCL_DEVICES="pthread basic" unless the user set POCL_DEVICES. Takes effect only before the
+// process's first OpenCL call (PoCL reads it once): the command-line tool calls it first thing
+void list_pocl_in_thread_device();
+
+// is `device` of `platform` one that runs kernels in the calling thread (PoCL's `basic`)?
+bool runs_in_calling_thread(const std::string& platform, const std::string& device);
 
 // runs an OpenCL C++-binding call; converts cl::Error into talus::Error naming `what`
 template <class F>

@@ -299,9 +299,9 @@ void kinematic_group_sweep(int g, __global TlRow* rows, __global const int* grou
 }
 
 // the warm start of the kinematic tools' rows, a work-item per particle
-__kernel void kinematic_tool_warm_start(__global const TlRow* rows,
-                                        __global const int* group_start, int groups,
-                                        __global float4* velocity, __global float4* omega) {
+__kernel void kinematic_tool_warm_start(__global const TlRow* rows, __global const int* group_start,
+                                        int groups, __global float4* velocity,
+                                        __global float4* omega) {
   int g = get_global_id(0);
   if (g >= groups) return;
   int begin = group_start[g];

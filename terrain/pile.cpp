@@ -128,6 +128,20 @@ bool is_multiscale(const FidelityPreset& preset) {
   return find_multiscale_preset(preset.name) != nullptr;
 }
 
+DeviceChoice device_choice_for(const FidelityPreset& preset) {
+  DeviceChoice choice = device_choice_from_env();
+  choice.in_host_thread = is_multiscale(preset) && preset.paper_particles <= kInHostThreadParticles;
+  return choice;
+}
+
+DeviceChoice device_choice_for(const std::vector<const FidelityPreset*>& presets) {
+  DeviceChoice choice = device_choice_from_env();
+  choice.in_host_thread = !presets.empty();
+  for (const FidelityPreset* p : presets)
+    choice.in_host_thread = choice.in_host_thread && device_choice_for(*p).in_host_thread;
+  return choice;
+}
+
 const FidelityPreset& fidelity_preset(const std::string& name) {
   std::string known;
   for (auto& p : fidelity_presets()) {

@@ -79,6 +79,19 @@ const std::vector<FidelityPreset>& multiscale_presets();
 const FidelityPreset* find_multiscale_preset(const std::string& name);
 // is the level the multiscale terrain's (a type-G preset)?
 bool is_multiscale(const FidelityPreset& preset);
+// the device a run of this level steps on: TALUS_DEVICE's choice, preferring a CPU device that
+// runs the kernels in the calling thread (DeviceChoice::in_host_thread) for a type-G level of at
+// most kInHostThreadParticles particles in paper Table 3 (G400, G200), whose zone's steps are
+// mostly hand-overs between threads on PoCL's threaded device (bench/RESULTS.md 2026-11-28 "in
+// the host thread"). Type D keeps the default device: its piles are cached under the device's
+// name (terrain/pile_cache), and D400 (800) was not measured beyond the noise
+DeviceChoice device_choice_for(const FidelityPreset& preset);
+// the largest zone, in paper Table 3's particles, stepped in the calling thread: G200 (480; 245
+// here) ran in 0.66 of the time, G100 (3,500; 1,774 here) in 1.16 (the threads win from there on)
+constexpr int kInHostThreadParticles = 1000;
+// for what runs several levels on one device (talus sweep): in the calling thread only if every
+// level would be
+DeviceChoice device_choice_for(const std::vector<const FidelityPreset*>& presets);
 
 // the container: ground, side walls, rear wall (open front)
 std::vector<StaticGeom> pile_container(const PileProfile& profile);

@@ -13,12 +13,13 @@ namespace {
 
 // HD27 at D400 for 0.2 s from dig_start: level, particles, real-time factor, ms per step and
 // the stages (name -> ms per step), the particle sweeps among them
-// `talus bench dig ARGS --quiet --json FILE`, its JSON (null when it failed)
-nlohmann::json bench_dig(const std::string& args, const std::string& file) {
+// `ENV talus bench dig ARGS --quiet --json FILE`, its JSON (null when it failed)
+nlohmann::json bench_dig(const std::string& args, const std::string& file,
+                         const std::string& env = "") {
   const auto json = std::filesystem::temp_directory_path() / file;
   std::filesystem::remove(json);
   const test::Outcome o =
-      test::run_talus("", "bench dig " + args + " --quiet --json " + json.string());
+      test::run_talus(env, "bench dig " + args + " --quiet --json " + json.string());
   EXPECT_EQ(o.code, 0) << o.err;
   if (o.code != 0) return nullptr;
   std::ifstream in(json);
@@ -58,10 +59,31 @@ TEST(CmdBench, DigAtATypeGLevelChargesTheTerrainsStages) {
   EXPECT_EQ(j.at("level"), "G400");
   EXPECT_GT(j.at("particles").get<double>(), 0.0);
   const auto& stages = j.at("stages");
-  for (const char* name : {"zone_excavation", "spawn_merge", "avalanche", "direct_solve",
-                           "particle_sweeps", "bucket_rows"})
+  for (const char* name :
+       {"zone_excavation", "spawn_merge", "avalanche", "direct_solve", "particle_sweeps"})
     EXPECT_TRUE(stages.contains(name)) << name;
+  // the kinematic bucket's rows are solved inside the particle sweeps (solvers/kinematic_tool_rows)
+  EXPECT_FALSE(stages.contains("bucket_rows"));
   expect_stages_add_up(j);
+}
+
+// a small type-G level steps in the calling thread (PoCL's basic device, which the tool lists
+// itself unless POCL_DEVICES says otherwise; terrain/pile device_choice_for), and PoCL's
+// threaded device digs the same bits
+TEST(CmdBench, ASmallTypeGLevelStepsInTheCallingThreadWithTheSameBits) {
+  const std::string args = "--scenario hd27 --level G400 --seconds 2";
+  const nlohmann::json own = bench_dig(args, "talus_bench_dig_own.json", "env -u POCL_DEVICES");
+  const nlohmann::json threads =
+      bench_dig(args, "talus_bench_dig_threads.json", "POCL_DEVICES=pthread");
+  ASSERT_FALSE(own.is_null());
+  ASSERT_FALSE(threads.is_null());
+  const std::string device = own.at("device").get<std::string>();
+  if (device.find("Portable Computing Language") == std::string::npos)
+    GTEST_SKIP() << "not PoCL: " << device;
+  EXPECT_NE(device.find("basic"), std::string::npos) << device;
+  EXPECT_NE(threads.at("device").get<std::string>().find("pthread"), std::string::npos);
+  EXPECT_EQ(own.at("loaded_mass_kg").get<double>(), threads.at("loaded_mass_kg").get<double>());
+  EXPECT_GT(own.at("loaded_mass_kg").get<double>(), 0.0);
 }
 
 // talus bench dem --plot draws the levels' throughput against particle size

@@ -28,6 +28,46 @@ TEST(Device, UnknownDeviceNameGivesAClearError) {
   }
 }
 
+// PoCL's in-thread device is known by its driver's name, and only PoCL's
+TEST(Device, PoclsInThreadDeviceIsKnownByItsName) {
+  const std::string pocl = "Portable Computing Language";
+  EXPECT_TRUE(runs_in_calling_thread(pocl, "basic-skylake-avx512-Intel(R) Xeon(R) Processor"));
+  EXPECT_FALSE(runs_in_calling_thread(pocl, "pthread-skylake-avx512-Intel(R) Xeon(R) Processor"));
+  EXPECT_FALSE(runs_in_calling_thread("NVIDIA CUDA", "basic"));
+}
+
+// the preference for the calling thread picks an in-thread CPU device exactly when one is listed
+// and no GPU is (PoCL lists `basic` where POCL_DEVICES names it), and otherwise the default one
+TEST(Device, APreferenceForTheCallingThreadTakesAnInThreadDeviceWhereOneIsListed) {
+  bool gpu = false, in_thread = false, threaded = false;
+  std::vector<cl::Platform> platforms;
+  cl::Platform::get(&platforms);
+  for (const cl::Platform& p : platforms) {
+    std::vector<cl::Device> devices;
+    p.getDevices(CL_DEVICE_TYPE_ALL, &devices);
+    for (const cl::Device& d : devices) {
+      gpu = gpu || (d.getInfo<CL_DEVICE_TYPE>() & CL_DEVICE_TYPE_GPU) != 0;
+      const bool here =
+          runs_in_calling_thread(p.getInfo<CL_PLATFORM_NAME>(), d.getInfo<CL_DEVICE_NAME>());
+      in_thread = in_thread || here;
+      threaded = threaded || !here;
+    }
+  }
+  DeviceChoice choice;
+  choice.in_host_thread = true;
+  const Device preferred(choice);
+  const Device usual;
+  const bool took = preferred.description().find("basic") != std::string::npos;
+  EXPECT_EQ(took, in_thread && !gpu) << preferred.description();
+  // without the preference the in-thread device is the default only where nothing else is listed
+  if (threaded) {
+    EXPECT_EQ(usual.description().find("basic"), std::string::npos) << usual.description();
+  }
+  if (!in_thread || gpu) {
+    EXPECT_EQ(preferred.description(), usual.description());
+  }
+}
+
 TEST(Device, MissingKernelFileIsNamed) {
   try {
     embedded_source("does_not_exist.cl");
