@@ -245,7 +245,7 @@ void add_bench_dig(CLI::App& bench) {
     const FidelityPreset& preset = level_preset(opt->level);
     check_dig_seconds(scenario, opt->seconds);
     if (!opt->json.empty()) check_writable(opt->json, "--json");
-    Device dev(device_choice_for(preset));
+    Device dev(run_device_choice(preset));
     DiggingOptions options;
     options.pile.seed = opt->seed;
     options.sweep_tolerance = opt->sweep_tolerance;

@@ -69,7 +69,7 @@ void add_cut_command(CLI::App& app, const std::string& command_line) {
     start_output_folder(opt->out);
     check_output_file(opt->json, "--json");
     const auto t0 = std::chrono::steady_clock::now();
-    Device dev;
+    Device dev(run_device_choice(level));
     Progress progress("cut " + level.name, 0.0, !opt->quiet);
     const BulkSoil soil;
     const CuttingResult r = multiscale ? run_multiscale_cutting_test(dev, level, c, soil, &progress)

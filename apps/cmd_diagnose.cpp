@@ -80,7 +80,7 @@ void diagnose_command(const DiagnoseArgs& a) {
   }
   const bool piles = std::any_of(runs.begin(), runs.end(), [](const MeasuredRun& r) { return measured_scenario(r).pile; });
   std::unique_ptr<Device> device =
-      piles ? std::make_unique<Device>(device_choice_for(level_preset(a.fidelity))) : nullptr;
+      piles ? std::make_unique<Device>(run_device_choice(level_preset(a.fidelity))) : nullptr;
 
   const Diagnosis d = diagnose(runs, options, device.get(), [&](const std::string& line) {
     if (!a.quiet) std::cerr << "talus diagnose: " << line << "\n";

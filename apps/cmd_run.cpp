@@ -337,7 +337,7 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
   start_output_folder(o.out);
   const std::filesystem::path dir(o.out);
   const auto start = std::chrono::steady_clock::now();
-  Device dev(device_choice_for(preset));
+  Device dev(run_device_choice(preset));
   if (!o.quiet)
     std::cerr << "talus run: " << sc.name << " at " << preset.name << " (D "
               << preset.diameter * 1e3 << " mm, h " << preset.dt * 1e3 << " ms, "

@@ -286,7 +286,7 @@ void sweep(const SweepOptions& o) {
   // --shard K/N: one share, written for a later --collect
   if (!o.shard.empty()) {
     const auto [k, n] = parse_shard(o.shard);
-    Device dev(device_choice_for(presets));
+    Device dev(run_device_choice(presets));
     for (const auto* p : presets) {
       const auto results = run_share(dev, o, *p, k, n, !o.quiet);
       write_file_atomically((std::filesystem::path(o.out) / p->name / ("shard-" + std::to_string(k) + ".csv")).string(),
@@ -297,7 +297,7 @@ void sweep(const SweepOptions& o) {
 
   // MPI ranks (one rank when run without mpirun)
   MpiSession mpi;
-  Device dev(device_choice_for(presets));
+  Device dev(run_device_choice(presets));
   if (mpi.rank() == 0 && !o.quiet)
     std::cerr << "talus sweep: " << o.samples << " cycles per level on " << mpi.size() << " rank(s), " << dev.description()
               << "\n";

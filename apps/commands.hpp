@@ -7,15 +7,28 @@
 #include <stdexcept>
 #include <string>
 
+#include "host/device.hpp"
 #include "host/error.hpp"
 #include "host/files.hpp"
 #include "solvers/dem_settings.hpp"
+#include "terrain/pile.hpp"
 
 namespace talus::app {
 
 // exit codes (sysexits-like): 0 success, 1 runtime failure, 2 bad usage or bad input
 inline constexpr int kExitFailure = 1;
 inline constexpr int kExitUsage = 2;
+
+// the device choice of a run at these levels (terrain/pile device_choice_for), with PoCL's
+// in-thread device listed where the choice prefers it: the tool sets POCL_DEVICES only then, just
+// before the run makes its Device (its first OpenCL call), so every other run keeps PoCL's own
+// list of drivers (host/device.hpp list_pocl_in_thread_device)
+template <class Levels>
+DeviceChoice run_device_choice(const Levels& levels) {
+  const DeviceChoice choice = device_choice_for(levels);
+  if (choice.in_host_thread) list_pocl_in_thread_device();
+  return choice;
+}
 
 // --pair-reach of run, bench dig and bench dem (DemSettings::pair_reach)
 inline const char* const kPairReachHelp =

@@ -3,7 +3,6 @@
 #include <string>
 
 #include "apps/commands.hpp"
-#include "host/device.hpp"
 #include "host/error.hpp"
 #include "host/interrupt.hpp"
 #include "host/version.hpp"
@@ -11,9 +10,6 @@
 int main(int argc, char** argv) {
   // SIGINT and SIGTERM stop a command between steps, not mid-write (host/interrupt.hpp)
   talus::watch_interrupts();
-  // PoCL's in-thread CPU device listed beside its threaded one, before any OpenCL call, for the
-  // small type-G levels (terrain/pile device_choice_for); a user's POCL_DEVICES wins
-  talus::list_pocl_in_thread_device();
   CLI::App app{"talus: nonsmooth DEM and multibody simulation of a wheel loader digging in gravel"};
   app.require_subcommand(1);
   app.set_version_flag("--version", std::string("talus ") + talus::talus_version() + " (" +

@@ -69,9 +69,24 @@ void list_pocl_in_thread_device() {
 }
 
 bool runs_in_calling_thread(const std::string& platform, const std::string& device) {
-  // PoCL names its devices after the driver: "basic-<cpu>" runs commands in the thread that
-  // flushes or waits for them, "pthread-<cpu>" in a pool of worker threads
-  return contains(platform, "Portable Computing Language") && lower(device).rfind("basic", 0) == 0;
+  // PoCL names its devices after the driver: "basic-<cpu>" (PoCL 5: "cpu-minimal-<cpu>") runs
+  // commands in the thread that flushes or waits for them, "pthread-<cpu>" ("cpu-<cpu>") in a
+  // pool of worker threads
+  const std::string name = lower(device);
+  return contains(platform, "Portable Computing Language") &&
+         (name.rfind("basic", 0) == 0 || name.rfind("cpu-minimal", 0) == 0);
+}
+
+std::vector<size_t> candidate_order(const std::vector<DeviceKind>& kinds, bool in_host_thread) {
+  std::vector<size_t> order(kinds.size());
+  for (size_t k = 0; k < order.size(); ++k) order[k] = k;
+  // GPUs first; among the rest the preferred kind of CPU device, each in listing order
+  auto rank = [&](size_t k) {
+    return kinds[k].gpu ? 0 : (kinds[k].in_thread == in_host_thread ? 1 : 2);
+  };
+  std::stable_sort(order.begin(), order.end(),
+                   [&](size_t a, size_t b) { return rank(a) < rank(b); });
+  return order;
 }
 
 Device::Device(const DeviceChoice& choice) {
@@ -84,11 +99,11 @@ Device::Device(const DeviceChoice& choice) {
   }
   if (platforms.empty()) throw Error(kInstallHint);
 
-  // candidates: every device of every matching platform, GPUs first, then CPUs, in listing order
+  // candidates: every device of every matching platform, taken in candidate_order
   struct Candidate {
     cl::Platform platform;
     cl::Device device;
-    bool gpu;
+    DeviceKind kind;
   };
   std::vector<Candidate> candidates;
   std::string seen;
@@ -104,15 +119,13 @@ Device::Device(const DeviceChoice& choice) {
       std::string dname = d.getInfo<CL_DEVICE_NAME>();
       seen += "\n  " + pname + " : " + dname;
       if (!contains(pname, choice.platform) || !contains(dname, choice.device)) continue;
-      candidates.push_back({p, d, (d.getInfo<CL_DEVICE_TYPE>() & CL_DEVICE_TYPE_GPU) != 0});
+      candidates.push_back({p,
+                            d,
+                            {(d.getInfo<CL_DEVICE_TYPE>() & CL_DEVICE_TYPE_GPU) != 0,
+                             runs_in_calling_thread(pname, dname)}});
     }
   }
-  // GPUs first; among the CPUs, the in-thread ones first or last as the choice prefers
-  std::stable_partition(candidates.begin(), candidates.end(), [&](const Candidate& c) {
-    return runs_in_calling_thread(c.platform.getInfo<CL_PLATFORM_NAME>(),
-                                  c.device.getInfo<CL_DEVICE_NAME>()) == choice.in_host_thread;
-  });
-  std::stable_partition(candidates.begin(), candidates.end(), [](const Candidate& c) { return c.gpu; });
+
   if (candidates.empty()) {
     if (seen.empty()) throw Error(kInstallHint);
     throw Error("no OpenCL device matches TALUS_DEVICE / DeviceChoice (platform '" + choice.platform +
@@ -120,9 +133,12 @@ Device::Device(const DeviceChoice& choice) {
                 "\nfix: set TALUS_DEVICE=platform-substring:device-substring, or unset it");
   }
 
-  const Candidate& c = candidates.front();
+  std::vector<DeviceKind> kinds;
+  kinds.reserve(candidates.size());
+  for (const Candidate& k : candidates) kinds.push_back(k.kind);
+  const Candidate& c = candidates[candidate_order(kinds, choice.in_host_thread).front()];
   device_ = c.device;
-  is_gpu_ = c.gpu;
+  is_gpu_ = c.kind.gpu;
   cl_checked("creating the context and queue", [&] {
     context_ = cl::Context(device_);
     queue_ = cl::CommandQueue(context_, device_);

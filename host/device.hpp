@@ -35,12 +35,25 @@ struct DeviceChoice {
 DeviceChoice device_choice_from_env();
 
 // has PoCL list its in-thread device (`basic`) beside its threaded one (`pthread`), by setting
-// POCL_DEVICES="pthread basic" unless the user set POCL_DEVICES. Takes effect only before the
-// process's first OpenCL call (PoCL reads it once): the command-line tool calls it first thing
+// POCL_DEVICES="pthread basic" unless the user set POCL_DEVICES. That list replaces PoCL's own
+// (a GPU PoCL drives would no longer be listed), and it takes effect only before the process's
+// first OpenCL call (PoCL reads it once): the command-line tool calls it only for a run whose
+// choice prefers the calling thread, just before it makes the Device
 void list_pocl_in_thread_device();
 
-// is `device` of `platform` one that runs kernels in the calling thread (PoCL's `basic`)?
+// is `device` of `platform` one that runs kernels in the calling thread? PoCL's `basic`
+// ("basic-<cpu>", named `cpu-minimal` from PoCL 5)
 bool runs_in_calling_thread(const std::string& platform, const std::string& device);
+
+// what the device choice orders candidates by
+struct DeviceKind {
+  bool gpu = false;
+  bool in_thread = false;  // runs kernels in the calling thread
+};
+// the order in which the candidates are taken (indices into `kinds`, the first is used): GPUs
+// first; among the others, those running in the calling thread first where `in_host_thread`,
+// else last; otherwise in listing order
+std::vector<size_t> candidate_order(const std::vector<DeviceKind>& kinds, bool in_host_thread);
 
 // runs an OpenCL C++-binding call; converts cl::Error into talus::Error naming `what`
 template <class F>

@@ -51,8 +51,16 @@ class PgsSweep : public ContactSweep {
       launch_group(dev_, one_group_tools_, tools_group_size_, "pgs_sweeps_one_group_tools");
       return;
     }
+    // each sweep: the particle rows (in one work-group while they alone are small enough), then
+    // the tools' rows across the device
+    const bool one_group = colours > 0 && particle_rows <= one_group_rows_;
     for (int it = 0; it < iterations; ++it) {
-      sweep_colours(b, colours);
+      if (one_group) {
+        set_args(one_group_, b.rows, b.colour_start_dev, colours, 1, b.velocity, b.omega);
+        launch_group(dev_, one_group_, group_size_, "pgs_sweeps_one_group");
+      } else {
+        sweep_colours(b, colours);
+      }
       tools.sweep(b.velocity, b.omega);
     }
   }
