@@ -25,7 +25,7 @@ inline constexpr int kExitUsage = 2;
 // list of drivers (host/device.hpp list_pocl_in_thread_device)
 template <class Levels>
 DeviceChoice run_device_choice(const Levels& levels) {
-  const DeviceChoice choice = device_choice_for(levels);
+  DeviceChoice choice = device_choice_for(levels);
   if (choice.in_host_thread) list_pocl_in_thread_device();
   return choice;
 }
