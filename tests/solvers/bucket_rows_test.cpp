@@ -10,6 +10,7 @@
 #include <random>
 
 #include "solvers/dem_world.hpp"
+#include "tests/solvers/bucket_test_util.hpp"
 #include "tests/solvers/dem_test_util.hpp"
 
 namespace talus {
@@ -29,48 +30,24 @@ struct RandomCase {
 };
 
 RandomCase random_case(std::mt19937_64& rng, int n_particles) {
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  auto sym = [&](double a) { return a * (2.0 * u(rng) - 1.0); };
-  auto unit = [&]() {
-    Vec3 v(sym(1), sym(1), sym(1));
-    while (v.norm() < 0.1) v = Vec3(sym(1), sym(1), sym(1));
-    return Vec3(v.normalized());
-  };
+  test::Draws d{rng};
   RandomCase c;
-  c.com = test::as_float(Vec3(sym(2.0), sym(2.0), 1.0 + u(rng)));
+  c.com = test::as_float(Vec3(d.sym(2.0), d.sym(2.0), 1.0 + d.uniform()));
   for (int i = 0; i < n_particles; ++i) {
-    const double r = test::as_float(0.05 + 0.15 * u(rng));
-    c.particles.add(test::as_float(c.com + Vec3(sym(1.5), sym(1.5), sym(1.0))), r, 2590.0);
-    c.particles.velocity.back() = test::as_float(Vec3(sym(2), sym(2), sym(2)));
-    c.particles.omega.back() = test::as_float(Vec3(sym(5), sym(5), sym(5)));
-    c.particles.inv_mass.back() = test::as_float(c.particles.inv_mass.back());
-    c.particles.inv_inertia.back() = test::as_float(c.particles.inv_inertia.back());
-    const int k = 1 + static_cast<int>(u(rng) * 3);
-    for (int j = 0; j < k; ++j) {
-      BucketContact bc;
-      bc.particle = i;
-      bc.normal = unit();
-      bc.gap = r * (-0.10 + 0.15 * u(rng));
-      const Vec3 centre = c.particles.position[i];
-      bc.point = centre + bc.normal * (r + 0.5 * bc.gap);
-      bc.arm_particle = bc.point - centre;
-      c.contacts.push_back(bc);
-    }
+    test::add_random_particle(c.particles, d, c.com);
+    const int k = 1 + static_cast<int>(d.uniform() * 3);
+    for (int j = 0; j < k; ++j) c.contacts.push_back(test::random_contact(c.particles, i, d));
   }
   // W = B B^T / m_ref + a floor: symmetric positive definite, entries of a 1-10 t body
   Mat6 B;
   for (int i = 0; i < 6; ++i)
-    for (int j = 0; j < 6; ++j) B(i, j) = sym(1.0);
+    for (int j = 0; j < 6; ++j) B(i, j) = d.sym(1.0);
   c.bucket.mobility = (B * B.transpose() + 0.1 * Mat6::Identity()) / 3000.0;
   // the device holds floats: the reference starts from exactly those
   c.bucket = from_device(to_device(c.bucket));
-  c.bucket.velocity = test::as_float(Vec3(sym(1), sym(1), sym(1)));
-  c.bucket.omega = test::as_float(Vec3(sym(0.5), sym(0.5), sym(0.5)));
-  c.params.dt = test::as_float(0.005);
-  c.params.young = 1.0e8;
-  c.params.poisson = test::as_float(0.3);
-  c.params.damping_tau = test::as_float(0.01);
-  c.params.overlap_floor_rel = test::as_float(1e-4);
+  c.bucket.velocity = test::as_float(Vec3(d.sym(1), d.sym(1), d.sym(1)));
+  c.bucket.omega = test::as_float(Vec3(d.sym(0.5), d.sym(0.5), d.sym(0.5)));
+  c.params = test::bucket_test_params();
   return c;
 }
 

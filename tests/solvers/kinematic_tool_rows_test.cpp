@@ -11,6 +11,7 @@
 #include <random>
 
 #include "host/error.hpp"
+#include "tests/solvers/bucket_test_util.hpp"
 #include "tests/solvers/dem_test_util.hpp"
 
 namespace talus {
@@ -30,54 +31,28 @@ struct RandomCase {
 };
 
 RandomCase random_case(std::mt19937_64& rng, int n_particles, int n_tools) {
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  auto sym = [&](double a) { return a * (2.0 * u(rng) - 1.0); };
-  auto unit = [&]() {
-    Vec3 v(sym(1), sym(1), sym(1));
-    while (v.norm() < 0.1) v = Vec3(sym(1), sym(1), sym(1));
-    return Vec3(v.normalized());
-  };
+  test::Draws d{rng};
   RandomCase c;
-  for (int i = 0; i < n_particles; ++i) {
-    const double r = test::as_float(0.05 + 0.15 * u(rng));
-    c.particles.add(test::as_float(Vec3(sym(1.5), sym(1.5), 1.0 + sym(1.0))), r, 2590.0);
-    c.particles.velocity.back() = test::as_float(Vec3(sym(2), sym(2), sym(2)));
-    c.particles.omega.back() = test::as_float(Vec3(sym(5), sym(5), sym(5)));
-    c.particles.inv_mass.back() = test::as_float(c.particles.inv_mass.back());
-    c.particles.inv_inertia.back() = test::as_float(c.particles.inv_inertia.back());
-  }
-  reference::StepParams params;
-  params.dt = test::as_float(0.005);
-  params.young = 1.0e8;
-  params.poisson = test::as_float(0.3);
-  params.damping_tau = test::as_float(0.01);
-  params.overlap_floor_rel = test::as_float(1e-4);
+  for (int i = 0; i < n_particles; ++i) test::add_random_particle(c.particles, d, Vec3(0, 0, 1));
+  const reference::StepParams params = test::bucket_test_params();
   for (int t = 0; t < n_tools; ++t) {
     BucketBody tool;
-    tool.velocity = test::as_float(Vec3(sym(1), sym(1), sym(1)));
-    tool.omega = test::as_float(Vec3(sym(0.5), sym(0.5), sym(0.5)));
-    const Vec3 origin = test::as_float(Vec3(sym(2.0), sym(2.0), 1.0 + u(rng)));
+    tool.velocity = test::as_float(Vec3(d.sym(1), d.sym(1), d.sym(1)));
+    tool.omega = test::as_float(Vec3(d.sym(0.5), d.sym(0.5), d.sym(0.5)));
+    const Vec3 origin = test::as_float(Vec3(d.sym(2.0), d.sym(2.0), 1.0 + d.uniform()));
     std::vector<BucketContact> contacts;
     std::vector<BucketImpulse> previous;
     for (int i = 0; i < n_particles; ++i) {
-      const int k = static_cast<int>(u(rng) * 4);  // 0 to 3 contacts
+      const int k = static_cast<int>(d.uniform() * 4);  // 0 to 3 contacts
       for (int j = 0; j < k; ++j) {
-        const double r = c.particles.radius[i];
-        BucketContact bc;
-        bc.particle = i;
-        bc.normal = unit();
-        bc.gap = r * (-0.10 + 0.15 * u(rng));
-        const Vec3 centre = c.particles.position[i];
-        bc.point = centre + bc.normal * (r + 0.5 * bc.gap);
-        bc.arm_particle = bc.point - centre;
-        contacts.push_back(bc);
-        if (u(rng) < 0.5) {
+        contacts.push_back(test::random_contact(c.particles, i, d));
+        if (d.uniform() < 0.5) {
           BucketImpulse b;
           b.particle = i;
-          b.normal = bc.normal;
-          b.impulse_n = 5.0 * u(rng);
-          b.impulse_t = 0.5 * Vec3(u(rng), u(rng), u(rng));
-          b.impulse_r = 0.05 * Vec3(u(rng), u(rng), u(rng));
+          b.normal = contacts.back().normal;
+          b.impulse_n = 5.0 * d.uniform();
+          b.impulse_t = 0.5 * Vec3(d.uniform(), d.uniform(), d.uniform());
+          b.impulse_r = 0.05 * Vec3(d.uniform(), d.uniform(), d.uniform());
           previous.push_back(b);
         }
       }

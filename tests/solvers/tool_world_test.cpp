@@ -45,6 +45,31 @@ Bed make_bed(Device& dev, double z0, unsigned seed) {
   return b;
 }
 
+// the bed's walls with a floor at z = 0 under it
+void add_floor(Bed& b) {
+  std::vector<StaticGeom> geoms = b.dem->geoms();
+  geoms.push_back(StaticGeom::plane(Vec3::Zero(), Vec3::UnitZ()));
+  b.dem->set_geoms(geoms);
+}
+
+// a kinematic blade 0.04 m thick across the bed, 0.6 m high, pushed along x at 0.5 m/s from its
+// -x side
+Tool blade() {
+  Tool t;
+  add_box(t.mesh, Vec3(0, 0, 0.3), Vec3(0.02, 0.35, 0.3));
+  t.position = Vec3(-0.35, 0, 0.1);
+  t.velocity = Vec3(0.5, 0, 0);
+  return t;
+}
+
+// every float of the particles' velocities (inverse masses included), as the device holds them
+std::vector<float> velocity_floats(DemWorld& dem) {
+  std::vector<float> out;
+  for (const cl_float4& v : dem.buffers().velocity.download(dem.size()))
+    for (int c = 0; c < 4; ++c) out.push_back(v.s[c]);
+  return out;
+}
+
 TEST(ToolWorld, AKinematicPlateCarriesTheWeightOfTheGrainsOnIt) {
   // the floor is a tool (a box whose top face is at z = 0), so all the weight goes through it
   Device dev;
@@ -167,14 +192,8 @@ TEST(ToolWorld, TwoRunsAreBitIdentical) {
   auto run = [](std::vector<float>& state, Vec6& load, bool renumbered) {
     Device dev;
     Bed b = make_bed(dev, 0.0, 7);
-    std::vector<StaticGeom> geoms = b.dem->geoms();
-    geoms.push_back(StaticGeom::plane(Vec3::Zero(), Vec3::UnitZ()));
-    b.dem->set_geoms(geoms);
-    Tool blade;
-    add_box(blade.mesh, Vec3(0, 0, 0.3), Vec3(0.02, 0.35, 0.3));
-    blade.position = Vec3(-0.35, 0, 0.1);
-    blade.velocity = Vec3(0.5, 0, 0);
-    ToolWorld tools(dev, *b.dem, {blade});
+    add_floor(b);
+    ToolWorld tools(dev, *b.dem, {blade()});
     for (int k = 0; k < 60; ++k) {
       tools.step();
       if (renumbered && k == 30) {
@@ -186,9 +205,7 @@ TEST(ToolWorld, TwoRunsAreBitIdentical) {
         tools.renumber_particles(same);
       }
     }
-    state.clear();
-    for (const cl_float4& v : b.dem->buffers().velocity.download(b.dem->size()))
-      for (int c = 0; c < 4; ++c) state.push_back(v.s[c]);
+    state = velocity_floats(*b.dem);
     load = tools.load(0).wrench;
   };
   std::vector<float> a, b, c;
@@ -218,23 +235,15 @@ TEST(ToolWorld, KinematicToolRowsGiveTheSameBitsInOneLaunchAsLaunchedPerSweep) {
     Device dev;
     Bed b = make_bed(dev, 0.0, 11);
     b.dem->settings().one_group_rows = one_group_rows;
-    std::vector<StaticGeom> geoms = b.dem->geoms();
-    geoms.push_back(StaticGeom::plane(Vec3::Zero(), Vec3::UnitZ()));
-    b.dem->set_geoms(geoms);
-    Tool blade;
-    add_box(blade.mesh, Vec3(0, 0, 0.3), Vec3(0.02, 0.35, 0.3));
-    blade.position = Vec3(-0.35, 0, 0.1);
-    blade.velocity = Vec3(0.5, 0, 0);
-    ToolWorld tools(dev, *b.dem, {blade});
+    add_floor(b);
+    ToolWorld tools(dev, *b.dem, {blade()});
     int rows = 0;
     for (int k = 0; k < 40; ++k) {
       tools.step();
       rows += tools.load(0).contacts;
       most_particle_rows = std::max(most_particle_rows, b.dem->stats().contacts);
     }
-    state.clear();
-    for (const cl_float4& v : b.dem->buffers().velocity.download(b.dem->size()))
-      for (int c = 0; c < 4; ++c) state.push_back(v.s[c]);
+    state = velocity_floats(*b.dem);
     load = tools.load(0).wrench;
     return rows;
   };
