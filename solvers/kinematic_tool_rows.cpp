@@ -1,7 +1,6 @@
 #include "solvers/kinematic_tool_rows.hpp"
 
 #include <algorithm>
-#include <numeric>
 #include <string>
 
 #include "host/error.hpp"
@@ -26,41 +25,33 @@ void KinematicToolRows::set(const std::vector<std::vector<TlRow>>& tool_rows,
       throw InputError("tool " + std::to_string(t) +
                        ": a tool with a non-zero mobility is not kinematic; its rows move it, so "
                        "they are solved in one chain (BucketRowBlock)");
-  // the serial walk's order: tool by tool, row by row
-  tool_of_row_.clear();
-  row_of_row_.clear();
+  // the serial walk's order: tool by tool, row by row, each row by its (tool, row) place
+  struct Place {
+    int tool, row;
+  };
+  std::vector<Place> walk;
   tool_sizes_.clear();
-  std::vector<TlRow> walk;
   for (size_t t = 0; t < tool_rows.size(); ++t) {
     tool_sizes_.push_back(tool_rows[t].size());
-    for (size_t k = 0; k < tool_rows[t].size(); ++k) {
-      walk.push_back(tool_rows[t][k]);
-      tool_of_row_.push_back(static_cast<int>(t));
-      row_of_row_.push_back(static_cast<int>(k));
-    }
+    for (size_t k = 0; k < tool_rows[t].size(); ++k)
+      walk.push_back({static_cast<int>(t), static_cast<int>(k)});
   }
   // grouped by particle, each group in the walk's order (a stable sort)
-  std::vector<size_t> order(walk.size());
-  std::iota(order.begin(), order.end(), size_t{0});
-  std::stable_sort(order.begin(), order.end(),
-                   [&](size_t x, size_t y) { return walk[x].a < walk[y].a; });
+  const auto particle = [&](const Place& x) { return tool_rows[x.tool][x.row].a; };
+  std::stable_sort(walk.begin(), walk.end(),
+                   [&](const Place& x, const Place& y) { return particle(x) < particle(y); });
   std::vector<TlRow> grouped;
-  std::vector<int> row_tool, start, tool_of_row, row_of_row;
+  std::vector<int> start;
   grouped.reserve(walk.size());
-  row_tool.reserve(walk.size());
-  tool_of_row.reserve(walk.size());
-  row_of_row.reserve(walk.size());
-  for (size_t k = 0; k < order.size(); ++k) {
-    const size_t i = order[k];
-    if (k == 0 || walk[i].a != grouped.back().a) start.push_back(static_cast<int>(k));
-    grouped.push_back(walk[i]);
-    row_tool.push_back(tool_of_row_[i]);
-    tool_of_row.push_back(tool_of_row_[i]);
-    row_of_row.push_back(row_of_row_[i]);
+  tool_of_row_.clear();
+  row_of_row_.clear();
+  for (size_t k = 0; k < walk.size(); ++k) {
+    if (k == 0 || particle(walk[k]) != grouped.back().a) start.push_back(static_cast<int>(k));
+    grouped.push_back(tool_rows[walk[k].tool][walk[k].row]);
+    tool_of_row_.push_back(walk[k].tool);
+    row_of_row_.push_back(walk[k].row);
   }
   start.push_back(static_cast<int>(grouped.size()));
-  tool_of_row_ = std::move(tool_of_row);
-  row_of_row_ = std::move(row_of_row);
   groups_ = static_cast<int>(start.size()) - 1;
   if (grouped.empty()) return;
   std::vector<TlBucketBody> bodies;
@@ -68,7 +59,7 @@ void KinematicToolRows::set(const std::vector<std::vector<TlRow>>& tool_rows,
   for (const BucketBody& b : tools) bodies.push_back(to_device(b));
   rows_.upload(grouped);
   group_start_.upload(start);
-  row_tool_.upload(row_tool);
+  row_tool_.upload(tool_of_row_);
   tools_.upload(bodies);
 }
 

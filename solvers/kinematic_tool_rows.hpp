@@ -51,7 +51,8 @@ class KinematicToolRows {
   Buffer<int> group_start_, row_tool_;
   Buffer<TlBucketBody> tools_;
   int groups_ = 0;
-  // the grouped row k came from row row_of_row_[k] of tool tool_of_row_[k]
+  // the grouped row k came from row row_of_row_[k] of tool tool_of_row_[k] (the device's
+  // row_tool holds tool_of_row_ too)
   std::vector<int> tool_of_row_, row_of_row_;
   std::vector<size_t> tool_sizes_;
   cl::Kernel warm_kernel_, sweep_kernel_;
