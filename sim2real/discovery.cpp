@@ -188,9 +188,12 @@ RegressionData regression_data(const DiscoveryTarget& target,
       force[j] = vehicle::lag_step(force[j - 1], m[force_channel][j], t[j] - t[j - 1]);
       power[j] = vehicle::lag_step(power[j - 1], m[Channel::power][j], t[j] - t[j - 1]);
     }
-    for (std::size_t j = kRateHalfWindow; j + kRateHalfWindow < n; ++j) {
+    // every sample's features, and for an actuator what its speed limit takes off the command
+    // (the baseline's speed is clip(u), the correction's target u + Δu)
+    std::vector<std::vector<double>> phi(n, std::vector<double>(features.size()));
+    std::vector<double> clipped(n, 0.0);
+    for (std::size_t j = 0; j < n; ++j) {
       CorrectionInputs in;
-      double y = 0.0;
       if (target.kind == CorrectionKind::actuator) {
         // the command from the operator's inputs; the state as measured
         in.a = command(t[j]);
@@ -199,28 +202,51 @@ RegressionData regression_data(const DiscoveryTarget& target,
               std::max(t[j] - vehicle::kCorrectionDelays[d], command.points().front().first));
         in.force = force[j];
         in.power = power[j];
-        if (target.target == "drive") {
-          y = m[Channel::v_drive][j] - s[Channel::v_drive][j];
-        } else {
-          const Channel stroke = target.target == "lift" ? Channel::d_lift : Channel::d_tilt;
-          y = central_rate(t, m[stroke], j) - central_rate(t, s[stroke], j);
-        }
-        // on the command's scale: the baseline's speed is clip(u), the correction's target u + Δu
-        y += std::clamp(in.a, -limit, limit) - in.a;
+        clipped[j] = std::clamp(in.a, -limit, limit) - in.a;
       } else {
         // the simulated reading stands for the truth the sensor distorts
-        const std::size_t c = channel_column(target.target);
-        const std::vector<double>& truth = s.columns[c];
+        const std::vector<double>& truth = s.columns[channel_column(target.target)];
         in.a = truth[j];
         in.rate = (truth[j] - value_at(t, truth, t[j] - vehicle::kRateSpan)) / vehicle::kRateSpan;
         in.force = s[Channel::f_lift][j];
         in.power = s[Channel::power][j];
         for (std::size_t d = 0; d < vehicle::kCorrectionDelays.size(); ++d)
           in.a_delayed[d] = value_at(t, truth, t[j] - vehicle::kCorrectionDelays[d]);
-        y = m.columns[c][j] - truth[j];
+      }
+      for (std::size_t k = 0; k < features.size(); ++k) phi[j][k] = features[k].value(in);
+    }
+    // a cylinder's residual is a central difference of strokes, the mean of its speed over the
+    // window: its features are the same window's means (trapezoidal), so a correction that jumps
+    // as the command crosses zero is fitted to the ramp the difference makes of it, not to a jump
+    // the data cannot show (until 2026-11-28 the features were taken at the window's centre, and a
+    // lift dead band δ sign(u) was fitted as a polynomial in u, whose smooth onset matched that
+    // ramp better). The drive's speed and a sensor's reading are samples: their features too
+    const bool windowed = target.kind == CorrectionKind::actuator && target.target != "drive";
+    const auto window_mean = [&](std::size_t j, const auto& value) {
+      if (!windowed) return value(j);
+      double sum = 0.0;
+      for (std::size_t i = j - kRateHalfWindow; i < j + kRateHalfWindow; ++i)
+        sum += 0.5 * (t[i + 1] - t[i]) * (value(i) + value(i + 1));
+      return sum / (t[j + kRateHalfWindow] - t[j - kRateHalfWindow]);
+    };
+    for (std::size_t j = kRateHalfWindow; j + kRateHalfWindow < n; ++j) {
+      double y = 0.0;
+      if (target.kind == CorrectionKind::actuator) {
+        if (target.target == "drive") {
+          y = m[Channel::v_drive][j] - s[Channel::v_drive][j];
+        } else {
+          const Channel stroke = target.target == "lift" ? Channel::d_lift : Channel::d_tilt;
+          y = central_rate(t, m[stroke], j) - central_rate(t, s[stroke], j);
+        }
+        // on the command's scale
+        y += window_mean(j, [&](std::size_t i) { return clipped[i]; });
+      } else {
+        y = m.columns[channel_column(target.target)][j] -
+            s.columns[channel_column(target.target)][j];
       }
       std::vector<double> row(features.size());
-      for (std::size_t k = 0; k < features.size(); ++k) row[k] = features[k].value(in);
+      for (std::size_t k = 0; k < features.size(); ++k)
+        row[k] = window_mean(j, [&](std::size_t i) { return phi[i][k]; });
       rows.push_back(std::move(row));
       ys.push_back(y);
       data.fold.push_back(std::min(kFolds - 1, static_cast<int>(kFolds * (t[j] - t0) / span)));
@@ -237,23 +263,74 @@ RegressionData regression_data(const DiscoveryTarget& target,
   return data;
 }
 
-std::vector<std::vector<Eigen::Index>> elimination_path(const Eigen::MatrixXd& x,
-                                                        const Eigen::VectorXd& y) {
-  const Eigen::Index p = x.cols();
-  // features scaled to unit RMS, so the ridge treats them alike (a feature zero throughout stays
-  // out)
-  Eigen::VectorXd scale(p);
-  std::vector<Eigen::Index> support;
-  for (Eigen::Index k = 0; k < p; ++k) {
+namespace {
+
+// the normal equations of the features scaled to unit RMS (so the ridge treats them alike), and
+// the features that are not zero throughout (the others stay out of every model)
+struct ScaledGram {
+  Eigen::MatrixXd g;
+  Eigen::VectorXd b;
+  double yy = 0.0;
+  std::vector<Eigen::Index> usable;
+};
+ScaledGram scaled_gram(const Eigen::MatrixXd& x, const Eigen::VectorXd& y) {
+  ScaledGram out;
+  Eigen::VectorXd scale(x.cols());
+  for (Eigen::Index k = 0; k < x.cols(); ++k) {
     scale[k] = std::sqrt(x.col(k).squaredNorm() /
                          static_cast<double>(std::max<Eigen::Index>(1, x.rows())));
-    if (scale[k] > 0.0) support.push_back(k);
+    if (scale[k] > 0.0) out.usable.push_back(k);
     if (!(scale[k] > 0.0)) scale[k] = 1.0;
   }
   const Eigen::MatrixXd z = x * scale.cwiseInverse().asDiagonal();
-  const Eigen::MatrixXd g = z.transpose() * z;
-  const Eigen::VectorXd b = z.transpose() * y;
-  const double yy = y.squaredNorm();
+  out.g = z.transpose() * z;
+  out.b = z.transpose() * y;
+  out.yy = y.squaredNorm();
+  return out;
+}
+
+// a support of fixed size improved one exchange at a time: while replacing one of its terms by a
+// feature outside it lowers the residual, the best such exchange is made. Backward elimination
+// can drop the right term early, while a group of nearly equal features (sign(u) and the dead
+// bands clip(u, ±δ₀) under commands held beyond δ₀) shares its weight, and end on a member that
+// fits worse (measured: a sign(u) truth kept as clip(u, ±0.02 m/s), which widened its delay
+// term's interval to 17 % of its value); the exchange restores the one that fits best
+void exchange_terms(const ScaledGram& gram, std::vector<Eigen::Index>& support) {
+  double best = rss_on(gram.g, gram.b, gram.yy, support);
+  // each exchange lowers the residual, so none repeats; the bound only guards against rounding
+  for (std::size_t round = 0; round < gram.usable.size() * support.size(); ++round) {
+    std::size_t at = 0;
+    Eigen::Index with = -1;
+    double least = best;
+    for (std::size_t i = 0; i < support.size(); ++i)
+      for (Eigen::Index j : gram.usable) {
+        if (std::find(support.begin(), support.end(), j) != support.end()) continue;
+        std::vector<Eigen::Index> trial = support;
+        trial[i] = j;
+        const double rss = rss_on(gram.g, gram.b, gram.yy, trial);
+        // a gain beyond rounding (a relative 1e-12 of the residual)
+        if (rss < least - 1e-12 * best) {
+          least = rss;
+          at = i;
+          with = j;
+        }
+      }
+    if (with < 0) break;
+    support[at] = with;
+    best = least;
+  }
+  std::sort(support.begin(), support.end());
+}
+
+}  // namespace
+
+std::vector<std::vector<Eigen::Index>> elimination_path(const Eigen::MatrixXd& x,
+                                                        const Eigen::VectorXd& y) {
+  const ScaledGram gram = scaled_gram(x, y);
+  const Eigen::MatrixXd& g = gram.g;
+  const Eigen::VectorXd& b = gram.b;
+  const double yy = gram.yy;
+  std::vector<Eigen::Index> support = gram.usable;
   // drop, one at a time, the term whose loss raises the residual least
   std::vector<std::vector<Eigen::Index>> path(support.size() + 1);
   path[support.size()] = support;
@@ -299,6 +376,7 @@ DiscoveredCorrection fit_correction(const DiscoveryTarget& target, const Regress
   const auto path = elimination_path(x, y);
   if (static_cast<std::size_t>(terms) >= path.size()) return out;
   std::vector<Eigen::Index> support = path[terms];
+  exchange_terms(scaled_gram(x, y), support);
   Eigen::VectorXd c, half;
   while (!support.empty()) {
     const Eigen::MatrixXd a = x(Eigen::all, support);

@@ -9,7 +9,9 @@
 //     ±kRateHalfWindow samples of the stroke, or the drive's speed reading; a sensor: the
 //     measured reading minus the simulated one) and the dictionary's features, evaluated from the
 //     measured state for an actuator (its command from the operator's inputs) and from the
-//     simulated readings for a sensor (the simulation stands for the truth the sensor distorts)
+//     simulated readings for a sensor (the simulation stands for the truth the sensor distorts);
+//     a cylinder's features are their means over the central difference's window, as its
+//     residual is the mean of a speed over that window
 //  2. sparse regression by sequential thresholding one term at a time (backward elimination):
 //     least squares on all features (scaled to unit RMS), then repeatedly the term whose removal
 //     raises the residual least is dropped, giving one model per number of terms. Removing one
@@ -19,7 +21,8 @@
 //     instead of keeping them all with large cancelling coefficients
 //  3. the sparsity by blocked cross-validation: each run cut into kFolds contiguous blocks, each
 //     block predicted by the path fitted on the others; the fewest terms whose held-out error is
-//     within kOneSeRule of the least, at most kMaxTerms
+//     within kOneSeRule of the least, at most kMaxTerms; that many terms from the path, then
+//     improved by exchanging one term for one outside while that lowers the residual
 //  4. the coefficients' 95 % intervals from ordinary least squares on the support, the variance
 //     inflated for the residual's autocorrelation (by its integrated autocorrelation time τ,
 //     n_eff = n / τ: integrated_autocorrelation_time in sim2real/residuals.hpp)

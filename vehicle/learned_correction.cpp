@@ -19,6 +19,15 @@ constexpr double kSignRampSpeed = 1e-3;
 
 double ramp_sign(double a) { return std::clamp(a / kSignRampSpeed, -1.0, 1.0); }
 
+// the widths of the dead-band features clip(u, ±δ₀) [m/s]: a valve's dead band is a few to about
+// twenty percent of its spool stroke, 0.01-0.04 m/s of the wa320's fastest cylinder (0.218 m/s,
+// data/machines/wa320.json), on a doubling ladder so any width between lies near one of them.
+// Beside sign(u) they say how the loss fades as the command crosses zero: a command inside the
+// band moves nothing (Δu = −u), one beyond it loses δ (Δu = −δ sign u)
+constexpr double kDeadBandNarrow = 0.01;
+constexpr double kDeadBandMedium = 0.02;
+constexpr double kDeadBandWide = 0.04;
+
 // the entries both dictionaries share, written once: the offset and the delayed differences
 const CorrectionFeature kOne{"one", "1", "1", [](const CorrectionInputs&) { return 1.0; }};
 const CorrectionFeature kDelay01{"delay_01", "{a}(t−0.1 s) − {a}", "{a}",
@@ -28,18 +37,24 @@ const CorrectionFeature kDelay02{"delay_02", "{a}(t−0.2 s) − {a}", "{a}",
 const CorrectionFeature kDelay04{"delay_04", "{a}(t−0.4 s) − {a}", "{a}",
                                  [](const CorrectionInputs& x) { return x.a_delayed[2] - x.a; }};
 
-// the actuator dictionary: offsets, the command and its sign and square (dead bands, speed-
-// dependent losses), the force alone and with the command (leakage with pressure, friction), the
-// power, delayed differences (a lag) and a force-scaled one (a delay that grows with load). Not
-// the actuator's own achieved speed: the regression would learn the tautology "the correction is
-// the measured speed minus the command", which in the simulation feeds the previous speed back as
-// the command and stalls the actuator
+// the actuator dictionary: offsets, the command and its sign and square (speed-dependent losses),
+// the command clipped at three widths (dead bands), the force alone and with the command (leakage
+// with pressure, friction), the power, delayed differences (a lag) and a force-scaled one (a delay
+// that grows with load). Not the actuator's own achieved speed: the regression would learn the
+// tautology "the correction is the measured speed minus the command", which in the simulation feeds
+// the previous speed back as the command and stalls the actuator
 const std::vector<CorrectionFeature> kActuatorFeatures = {
     kOne,
     {"command", "{a}", "{a}", [](const CorrectionInputs& x) { return x.a; }},
     {"sign_command", "sign({a})", "1", [](const CorrectionInputs& x) { return ramp_sign(x.a); }},
     {"command_squared", "{a}·|{a}|", "{a}^2",
      [](const CorrectionInputs& x) { return x.a * std::abs(x.a); }},
+    {"dead_band_001", "clip({a}, ±0.01 m/s)", "{a}",
+     [](const CorrectionInputs& x) { return std::clamp(x.a, -kDeadBandNarrow, kDeadBandNarrow); }},
+    {"dead_band_002", "clip({a}, ±0.02 m/s)", "{a}",
+     [](const CorrectionInputs& x) { return std::clamp(x.a, -kDeadBandMedium, kDeadBandMedium); }},
+    {"dead_band_004", "clip({a}, ±0.04 m/s)", "{a}",
+     [](const CorrectionInputs& x) { return std::clamp(x.a, -kDeadBandWide, kDeadBandWide); }},
     {"force", "{F}", "N", [](const CorrectionInputs& x) { return x.force; }},
     {"force_sign_command", "{F}·sign({a})", "N",
      [](const CorrectionInputs& x) { return x.force * ramp_sign(x.a); }},
