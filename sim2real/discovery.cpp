@@ -322,11 +322,8 @@ void exchange_terms(const ScaledGram& gram, std::vector<Eigen::Index>& support) 
   std::sort(support.begin(), support.end());
 }
 
-}  // namespace
-
-std::vector<std::vector<Eigen::Index>> elimination_path(const Eigen::MatrixXd& x,
-                                                        const Eigen::VectorXd& y) {
-  const ScaledGram gram = scaled_gram(x, y);
+// the backward-elimination path (elimination_path) from the normal equations
+std::vector<std::vector<Eigen::Index>> path_of(const ScaledGram& gram) {
   const Eigen::MatrixXd& g = gram.g;
   const Eigen::VectorXd& b = gram.b;
   const double yy = gram.yy;
@@ -352,6 +349,13 @@ std::vector<std::vector<Eigen::Index>> elimination_path(const Eigen::MatrixXd& x
   return path;
 }
 
+}  // namespace
+
+std::vector<std::vector<Eigen::Index>> elimination_path(const Eigen::MatrixXd& x,
+                                                        const Eigen::VectorXd& y) {
+  return path_of(scaled_gram(x, y));
+}
+
 DiscoveredCorrection fit_correction(const DiscoveryTarget& target, const RegressionData& data) {
   DiscoveredCorrection out;
   out.target = target;
@@ -373,10 +377,11 @@ DiscoveredCorrection fit_correction(const DiscoveryTarget& target, const Regress
 
   // ordinary least squares on the support, with 95 % intervals inflated for autocorrelation; a
   // term whose interval holds zero is dropped (the least significant first) and the rest refitted
-  const auto path = elimination_path(x, y);
+  const ScaledGram gram = scaled_gram(x, y);
+  const auto path = path_of(gram);
   if (static_cast<std::size_t>(terms) >= path.size()) return out;
   std::vector<Eigen::Index> support = path[terms];
-  exchange_terms(scaled_gram(x, y), support);
+  exchange_terms(gram, support);
   Eigen::VectorXd c, half;
   while (!support.empty()) {
     const Eigen::MatrixXd a = x(Eigen::all, support);

@@ -30,8 +30,7 @@ class PgsSweep : public ContactSweep {
     if (colours <= 0 || iterations <= 0) return;
     // a small system: every sweep's colours in one launch, one work-group (the same bits)
     if (b.colour_start.back() <= one_group_rows_) {
-      set_args(one_group_, b.rows, b.colour_start_dev, colours, iterations, b.velocity, b.omega);
-      launch_group(dev_, one_group_, group_size_, "pgs_sweeps_one_group");
+      sweeps_in_one_group(b, colours, iterations);
       return;
     }
     // one launch per colour and sweep, all on the in-order queue without host waits
@@ -56,8 +55,7 @@ class PgsSweep : public ContactSweep {
     const bool one_group = colours > 0 && particle_rows <= one_group_rows_;
     for (int it = 0; it < iterations; ++it) {
       if (one_group) {
-        set_args(one_group_, b.rows, b.colour_start_dev, colours, 1, b.velocity, b.omega);
-        launch_group(dev_, one_group_, group_size_, "pgs_sweeps_one_group");
+        sweeps_in_one_group(b, colours, 1);
       } else {
         sweep_colours(b, colours);
       }
@@ -66,6 +64,12 @@ class PgsSweep : public ContactSweep {
   }
 
  private:
+  // `sweeps` sweeps of every colour in one launch of one work-group
+  void sweeps_in_one_group(DemBuffers& b, int colours, int sweeps) {
+    set_args(one_group_, b.rows, b.colour_start_dev, colours, sweeps, b.velocity, b.omega);
+    launch_group(dev_, one_group_, group_size_, "pgs_sweeps_one_group");
+  }
+
   // one sweep: a launch per colour
   void sweep_colours(DemBuffers& b, int colours) {
     for (int k = 0; k < colours; ++k) {

@@ -19,14 +19,16 @@ constexpr double kSignRampSpeed = 1e-3;
 
 double ramp_sign(double a) { return std::clamp(a / kSignRampSpeed, -1.0, 1.0); }
 
-// the widths of the dead-band features clip(u, ±δ₀) [m/s]: a valve's dead band is a few to about
-// twenty percent of its spool stroke, 0.01-0.04 m/s of the wa320's fastest cylinder (0.218 m/s,
-// data/machines/wa320.json), on a doubling ladder so any width between lies near one of them.
-// Beside sign(u) they say how the loss fades as the command crosses zero: a command inside the
-// band moves nothing (Δu = −u), one beyond it loses δ (Δu = −δ sign u)
-constexpr double kDeadBandNarrow = 0.01;
-constexpr double kDeadBandMedium = 0.02;
-constexpr double kDeadBandWide = 0.04;
+// a dead-band feature clip(u, ±δ₀), its width δ₀ given in mm/s. The dictionary's widths: a valve's
+// dead band is a few to about twenty percent of its spool stroke, 10-40 mm/s of the wa320's fastest
+// cylinder (218 mm/s, data/machines/wa320.json), on a doubling ladder (10, 20, 40) so any width
+// between lies near one of them. Beside sign(u) they say how the loss fades as the command crosses
+// zero: a command inside the band moves nothing (Δu = −u), one beyond it loses δ (Δu = −δ sign u)
+template <int kWidthMillimetresPerSecond>
+double dead_band(const CorrectionInputs& x) {
+  constexpr double width = kWidthMillimetresPerSecond * 1e-3;  // m/s
+  return std::clamp(x.a, -width, width);
+}
 
 // the entries both dictionaries share, written once: the offset and the delayed differences
 const CorrectionFeature kOne{"one", "1", "1", [](const CorrectionInputs&) { return 1.0; }};
@@ -49,12 +51,9 @@ const std::vector<CorrectionFeature> kActuatorFeatures = {
     {"sign_command", "sign({a})", "1", [](const CorrectionInputs& x) { return ramp_sign(x.a); }},
     {"command_squared", "{a}·|{a}|", "{a}^2",
      [](const CorrectionInputs& x) { return x.a * std::abs(x.a); }},
-    {"dead_band_001", "clip({a}, ±0.01 m/s)", "{a}",
-     [](const CorrectionInputs& x) { return std::clamp(x.a, -kDeadBandNarrow, kDeadBandNarrow); }},
-    {"dead_band_002", "clip({a}, ±0.02 m/s)", "{a}",
-     [](const CorrectionInputs& x) { return std::clamp(x.a, -kDeadBandMedium, kDeadBandMedium); }},
-    {"dead_band_004", "clip({a}, ±0.04 m/s)", "{a}",
-     [](const CorrectionInputs& x) { return std::clamp(x.a, -kDeadBandWide, kDeadBandWide); }},
+    {"dead_band_001", "clip({a}, ±0.01 m/s)", "{a}", dead_band<10>},
+    {"dead_band_002", "clip({a}, ±0.02 m/s)", "{a}", dead_band<20>},
+    {"dead_band_004", "clip({a}, ±0.04 m/s)", "{a}", dead_band<40>},
     {"force", "{F}", "N", [](const CorrectionInputs& x) { return x.force; }},
     {"force_sign_command", "{F}·sign({a})", "N",
      [](const CorrectionInputs& x) { return x.force * ramp_sign(x.a); }},
