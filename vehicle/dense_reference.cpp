@@ -107,7 +107,7 @@ McpResult solve_dense_reference(const BoundedMcp& problem, const DenseReferenceO
     r.converged = converged;
     if (!converged || !p.has_friction()) break;
     const double change = apply_friction_bounds(p, r.lambda);
-    if (change <= options.friction_tolerance * friction_bound_scale(p)) break;
+    if (change <= options.friction_tolerance * friction_bound_scale(p, p.hi)) break;
     r.converged = false;  // bounds moved: another pass must confirm
   }
   r.factorisations = r.iterations;

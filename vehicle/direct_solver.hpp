@@ -2,11 +2,15 @@
 // is factorised with CHOLMOD (simplicial LDLᵀ), and bounded rows (motor force ranges, range limits,
 // contact normals, box-linearised friction) are settled by a primal active-set method:
 //   - rows in the working set W sit at a bound; in the matrix they are replaced by identity rows
-//     and columns, so the sparsity pattern never changes and the symbolic analysis is reused;
+//     and columns, and the factor holds only A_FF's pattern (the free rows' couplings): each free
+//     set has its own symbolic analysis, kept for the free sets met since A's pattern last changed
+//     (the least recently used dropped beyond a few dozen), so a machine whose contacts come and go
+//     factorises a seventh of the full pattern's work without analysing every step;
 //   - each iteration solves for the free rows, steps towards that solution until the first free
 //     row meets a bound (which joins W), or, at the full step, releases the clamped row whose
 //     multiplier w = Aλ - b has the most wrong sign; no wrong sign left means optimal;
-//   - every active-set change is one numeric refactorisation on the same pattern.
+//   - every active-set change is one numeric factorisation (none when the free set's kept factor
+//     was made of the same values).
 // Warm starting from the previous step's impulses and active set makes most steps take one or two
 // factorisations. The factor of the final active set stays available for mobility queries
 // (solve_free), which is how the bucket's effective mobility is derived.
@@ -41,7 +45,8 @@ class DirectSolver {
   // (clamped rows do not respond: the linearisation of the MCP around its solution)
   Eigen::MatrixXd solve_free(const Eigen::MatrixXd& rhs) const;
 
-  // symbolic analyses done so far (a new one only when the sparsity pattern changes)
+  // symbolic analyses done so far (a new one for a free set not kept, and all anew when A's
+  // pattern changes)
   int analyses() const;
 
  private:

@@ -30,24 +30,25 @@ void check_mcp(const BoundedMcp& p) {
   }
 }
 
-double apply_friction_bounds(BoundedMcp& p, const Eigen::VectorXd& lambda) {
+double apply_friction_bounds(const BoundedMcp& p, const Eigen::VectorXd& lambda,
+                             Eigen::VectorXd& lo, Eigen::VectorXd& hi) {
   double change = 0.0;
   for (int i = 0; i < static_cast<int>(p.normal.size()); ++i) {
     const int k = p.normal[i];
     if (k < 0) continue;
     // box-linearised Coulomb: |λ_t| <= μ λ_n, with the current normal impulse
     const double bound = p.mu[i] * std::max(lambda[k], 0.0);
-    change = std::max(change, std::abs(bound - p.hi[i]));
-    p.lo[i] = -bound;
-    p.hi[i] = bound;
+    change = std::max(change, std::abs(bound - hi[i]));
+    lo[i] = -bound;
+    hi[i] = bound;
   }
   return change;
 }
 
-double friction_bound_scale(const BoundedMcp& p) {
+double friction_bound_scale(const BoundedMcp& p, const Eigen::VectorXd& hi) {
   double s = 1.0;
   for (int i = 0; i < static_cast<int>(p.normal.size()); ++i) {
-    if (p.normal[i] >= 0) s = std::max(s, 1.0 + std::abs(p.hi[i]));
+    if (p.normal[i] >= 0) s = std::max(s, 1.0 + std::abs(hi[i]));
   }
   return s;
 }

@@ -47,11 +47,18 @@ void check_mcp(const BoundedMcp& p);
 // generous
 inline constexpr int kMaxFrictionPasses = 1000;
 
-// set the bounds of friction rows from the normal impulses in lambda; returns the largest change
-double apply_friction_bounds(BoundedMcp& p, const Eigen::VectorXd& lambda);
+// set the bounds lo, hi of p's friction rows from the normal impulses in lambda (the other rows'
+// untouched); returns the largest change. The solvers keep the bounds apart from the problem, so a
+// friction pass does not copy its matrix
+double apply_friction_bounds(const BoundedMcp& p, const Eigen::VectorXd& lambda,
+                             Eigen::VectorXd& lo, Eigen::VectorXd& hi);
+// the same on the problem's own bounds
+inline double apply_friction_bounds(BoundedMcp& p, const Eigen::VectorXd& lambda) {
+  return apply_friction_bounds(p, lambda, p.lo, p.hi);
+}
 
-// 1 + the largest friction bound: the scale for the friction fixed-point tolerance
-double friction_bound_scale(const BoundedMcp& p);
+// 1 + the largest friction bound in hi: the scale for the friction fixed-point tolerance
+double friction_bound_scale(const BoundedMcp& p, const Eigen::VectorXd& hi);
 
 // natural-map residual |λ - clamp(λ - w, lo, hi)|∞ with w = Aλ - b: zero exactly at a solution
 // (friction rows use the bounds that the normal impulses in lambda give)
