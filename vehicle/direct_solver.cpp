@@ -21,7 +21,14 @@ struct DirectSolver::Impl {
   // whole pattern with the clamped entries set to zero (the former way) did the work of every row:
   // on HD27-G400's 135 rows with 62 clamped, 117 kflop a factorisation for 13 (measured with
   // CHOLMOD's own count), 87 µs against 17 µs plus 25 µs for a new analysis
+  // owns its CHOLMOD objects through Impl (forget_analyses, the eviction): moved, never copied
   struct Analysis {
+    Analysis() = default;
+    Analysis(const Analysis&) = delete;
+    Analysis& operator=(const Analysis&) = delete;
+    Analysis(Analysis&&) = default;
+    Analysis& operator=(Analysis&&) = default;
+    ~Analysis() = default;
     std::vector<char> free;            // 1 where the row is free
     std::vector<int> source;           // per stored entry: its index in lower_value, -1: identity
     cholmod_sparse* matrix = nullptr;  // stype -1, values refilled per factorisation
@@ -61,6 +68,7 @@ struct DirectSolver::Impl {
   std::vector<char> free_rows;
 
   Impl() {
+    kept.reserve(kKeptAnalyses);  // so adding one never reallocates (nor throws with it unowned)
     cholmod_start(&common);
     // small systems: simplicial LDLᵀ, no messages on stderr (status is checked here)
     common.supernodal = CHOLMOD_SIMPLICIAL;
@@ -129,6 +137,8 @@ struct DirectSolver::Impl {
         return kept[k];
       }
     }
+    // no current factor until the new one is made: an analysis that throws leaves none to misuse
+    current = -1;
     if (kept.size() >= kKeptAnalyses) {
       const auto oldest = std::min_element(
           kept.begin(), kept.end(),
