@@ -86,6 +86,12 @@ int visit_contacts(int i, int write, int limit, __global const float4* position,
           if (j <= i || (fixed_i && velocity[j].w == 0.0f)) continue;
           float4 pj = position[j];
           float3 d = pj.xyz - xi;
+          // farther apart than the widest margin any pair can have (contact_margin's, with the
+          // full speculative reach): no contact, rejected on the squared distance before the root,
+          // the division and the velocities' loads. The 1e-4 slack is far above float rounding,
+          // so the test below still decides every pair it could accept: the same contacts
+          float widest = ri + pj.w + p.margin_rel * min(ri, pj.w) + p.speculative;
+          if (dot(d, d) > 1.0001f * widest * widest) continue;
           float dist = length(d);
           float gap = dist - ri - pj.w;
           float3 n = dist > 0.0f ? d / dist : (float3)(0.0f, 0.0f, 1.0f);
