@@ -355,19 +355,30 @@ __kernel void row_residual(__global const TlRow* rows, int n_rows, __global cons
   residual[k] = rn * rn + rt * rt + rr * rr;
 }
 
-// the sum of each block of `block` consecutive values, one work-item a block, in index order: the
-// host reads one float per block instead of one per row (at D50 the download of 1.9 M residuals
-// and their sum on the host were 17 % of a GPU step, bench/RESULTS.md). A plain loop and no
-// work-group reduction: the order of the sum is fixed by `block` alone, whatever the device, and
-// PoCL pays for barriers (a local-memory tree cost the CPU a third more than this)
-__kernel void sum_blocks(__global const float* values, int n, int block, __global float* sums) {
+// each block of `block` consecutive rows: the sum of their squared residuals and the number of
+// rows that act (a normal impulse, or a residual: a step of the projection would move them), one
+// work-item a block, in index order. The RMS divides by the rows that act, not by every row: a
+// speculative row whose pair stays apart holds no impulse and has no residual, and counted it
+// would make the same tolerance looser the more such rows a step has (the fastest grain's reach
+// against each pair's own, docs/dem.md). The host reads two floats per block instead of one per row
+// (at D50 the download of 1.9 M residuals and their sum on the host were 17 % of a GPU step,
+// bench/RESULTS.md). A plain loop and no work-group reduction: the order of the sum is fixed by
+// `block` alone, whatever the device, and PoCL pays for barriers (a local-memory tree cost the CPU
+// a third more than this)
+__kernel void sum_residual_blocks(__global const float* residual, __global const TlRow* rows, int n,
+                                  int block, __global float2* sums) {
   int g = get_global_id(0);
   int begin = g * block;
   if (begin >= n) return;
   int end = min(begin + block, n);
   float s = 0.0f;
-  for (int i = begin; i < end; ++i) s += values[i];
-  sums[g] = s;
+  float acting = 0.0f;
+  for (int i = begin; i < end; ++i) {
+    float r = residual[i];
+    s += r;
+    if (r > 0.0f || ROW_IMPULSE_N(rows[i]) != 0.0f) acting += 1.0f;
+  }
+  sums[g] = (float2)(s, acting);
 }
 
 // copies the solved impulses back to the contacts for the next step's warm start

@@ -99,9 +99,10 @@ struct DemBuffers {
   // rows and the Jacobi impulse changes
   Buffer<TlRow> rows;
   Buffer<cl_float4> delta_lin, delta_ang;
-  // each row's squared residual, and their sums in blocks (DemWorld::residual)
+  // each row's squared residual, and per block their sum and the number of rows that act
+  // (DemWorld::residual)
   Buffer<float> residual;
-  Buffer<float> residual_block_sums;
+  Buffer<cl_float2> residual_block_sums;
 
   // the lowest index of a particle with a non-finite state (INT_MAX: none), checked every step
   Buffer<int> first_non_finite;

@@ -627,10 +627,15 @@ std::vector<double> row_residuals(const std::vector<Row>& rows, const Particles&
 }
 
 double residual(const std::vector<Row>& rows, const Particles& bodies, double relaxation) {
-  if (rows.empty()) return 0.0;
+  // the squared residuals' sum over the rows that act (a normal impulse or a residual)
+  const std::vector<double> r = row_residuals(rows, bodies, relaxation);
   double sum = 0.0;
-  for (double r : row_residuals(rows, bodies, relaxation)) sum += r;
-  return std::sqrt(sum / static_cast<double>(rows.size()));
+  size_t acting = 0;
+  for (size_t k = 0; k < rows.size(); ++k) {
+    sum += r[k];
+    if (r[k] > 0.0 || rows[k].impulse_n != 0.0) ++acting;
+  }
+  return acting > 0 ? std::sqrt(sum / static_cast<double>(acting)) : 0.0;
 }
 
 void store_impulses(const std::vector<Row>& rows, std::vector<Contact>& contacts) {

@@ -144,7 +144,8 @@ void jacobi_iteration(std::vector<Row>& rows, const Adjacency& adjacency,
 // Gauss-Seidel's step for rows made with `relaxation` (StepParams::relaxation)
 std::vector<double> row_residuals(const std::vector<Row>& rows, const Particles& bodies,
                                   double relaxation);
-// DemWorld::residual: the RMS of the row residuals [m/s]
+// DemWorld::residual: the RMS of the row residuals over the rows that act (a normal impulse or a
+// residual) [m/s]
 double residual(const std::vector<Row>& rows, const Particles& bodies, double relaxation);
 
 // kernels/solver.cl store_impulses: the rows' impulses back into their contacts

@@ -19,8 +19,9 @@ constexpr double kMaxGridCells = 64.0e6;
 // host round trip (a wait for the queue), which cost D400 steps as much as their sweeps; rounds
 // after the last contact is coloured change nothing, so at most this many minus one are spare
 constexpr int kColourRoundsPerCheck = 4;
-// rows whose squared residuals one work-item of sum_blocks adds up: the host downloads
-// n_rows / 256 floats (7,500 at D50) instead of n_rows, and the sum's order depends on this alone
+// rows whose squared residuals one work-item of sum_residual_blocks adds up: the host downloads
+// 2 n_rows / 256 floats (15,000 at D50) instead of n_rows, and the sum's order depends on this
+// alone
 constexpr int kResidualBlock = 256;
 }  // namespace
 
@@ -85,7 +86,7 @@ DemWorld::DemWorld(Device& dev, const Material& material, const DemSettings& set
   k_store_ = dev.kernel(solver, "store_impulses");
   k_integrate_ = dev.kernel(solver, "integrate");
   k_residual_ = dev.kernel(solver, "row_residual");
-  k_sum_blocks_ = dev.kernel(solver, "sum_blocks");
+  k_sum_blocks_ = dev.kernel(solver, "sum_residual_blocks");
   k_first_non_finite_ = dev.kernel(solver, "first_non_finite");
 
   set_geoms(geoms_);
@@ -669,18 +670,23 @@ double DemWorld::residual() {
   DemBuffers& b = buffers_;
   int nc = b.n_contacts;
   if (nc == 0) return 0.0;
-  // each row's squared residual, summed in blocks on the device, the blocks' sums here
+  // each row's squared residual, summed with the rows that act in blocks on the device, the
+  // blocks' sums here
   const int blocks = (nc + kResidualBlock - 1) / kResidualBlock;
   b.residual.resize(nc);
   b.residual_block_sums.resize(blocks);
   set_args(k_residual_, b.rows, nc, b.velocity, b.omega, params_.relaxation, b.residual);
   launch(dev_, k_residual_, nc, "row_residual");
-  set_args(k_sum_blocks_, b.residual, nc, kResidualBlock, b.residual_block_sums);
-  launch(dev_, k_sum_blocks_, blocks, "sum_blocks");
+  set_args(k_sum_blocks_, b.residual, b.rows, nc, kResidualBlock, b.residual_block_sums);
+  launch(dev_, k_sum_blocks_, blocks, "sum_residual_blocks");
   auto sums = b.residual_block_sums.download(blocks);
-  double sum = 0.0;
-  for (float x : sums) sum += x;
-  return std::sqrt(sum / nc);
+  double sum = 0.0, acting = 0.0;
+  for (const cl_float2& x : sums) {
+    sum += x.s[0];
+    acting += x.s[1];
+  }
+  // the RMS over the rows that act (kernels/solver.cl sum_residual_blocks); none: converged
+  return acting > 0.0 ? std::sqrt(sum / acting) : 0.0;
 }
 
 void DemWorld::step() { step_impl(nullptr); }

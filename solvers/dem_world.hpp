@@ -114,8 +114,9 @@ class DemWorld {
   void store_impulses();
   void integrate();
 
-  // RMS of the row residuals (kernels/solver.cl row_residual) [m/s]: summed in blocks of
-  // kResidualBlock rows on the device (sum_blocks), the blocks' sums on the host in double
+  // RMS of the row residuals (kernels/solver.cl row_residual) over the rows that act (an impulse or
+  // a residual; a speculative row whose pair stays apart has neither) [m/s]: summed in blocks of
+  // kResidualBlock rows on the device (sum_residual_blocks), the blocks' sums on the host in double
   double residual();
   // one step that records the residual after every sweep (diagnostics, convergence tables)
   std::vector<double> step_recording_residuals();

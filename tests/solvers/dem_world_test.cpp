@@ -444,5 +444,40 @@ TEST(DemWorld, ToleranceStopsTheSweepsEarly) {
   EXPECT_LT(world.stats().residual, tolerance);
 }
 
+// the RMS residual divides by the rows that act (an impulse or a residual), not by every row: a
+// bed at rest with the fastest grain's speculative reach holds rows whose pairs stay apart, and
+// counted they would make the same tolerance looser the more of them a step has (docs/dem.md)
+TEST(DemWorld, TheResidualCountsOnlyTheRowsThatAct) {
+  Device dev;
+  Scene scene = small_bed();
+  // a speculative reach 2 h v_max of a fifth of a grain's radius
+  scene.settings.max_speed = 0.2 * scene.particles.radius[0] / (2.0 * scene.settings.dt);
+  DemWorld world(dev, scene.material, scene.settings, scene.bounds, scene.geoms);
+  world.set_particles(scene.particles);
+  for (int i = 0; i < 150; ++i) world.step();
+  // a step's rows after a few sweeps, their residuals, and what acts
+  world.begin_step();
+  world.apply_gravity();
+  world.warm_start();
+  world.sweep_fixed(5);
+  const double rms = world.residual();
+  const DemBuffers& b = world.buffers();
+  const std::vector<float> squared = b.residual.download(b.n_contacts);
+  const std::vector<TlRow> rows = b.rows.download(b.n_contacts);
+  double sum = 0.0;
+  int acting = 0;
+  for (size_t k = 0; k < rows.size(); ++k) {
+    sum += squared[k];
+    // the normal impulse is impulse_t.w (kernels/dem_types.h ROW_IMPULSE_N)
+    if (squared[k] > 0.0f || rows[k].impulse_t.s[3] != 0.0f) ++acting;
+  }
+  std::printf("[ measured ] %zu rows, %d act; RMS over them %.3e m/s, over all %.3e m/s\n",
+              rows.size(), acting, rms, std::sqrt(sum / static_cast<double>(rows.size())));
+  // the bed has rows that do not act (else this test could not tell the two apart)
+  EXPECT_LT(acting, static_cast<int>(rows.size()) * 9 / 10);
+  EXPECT_GT(acting, 0);
+  EXPECT_NEAR(rms, std::sqrt(sum / acting), 1e-5 * rms);
+}
+
 }  // namespace
 }  // namespace talus
