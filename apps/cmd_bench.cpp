@@ -42,14 +42,18 @@ std::vector<std::string> split(const std::string& s, char sep) {
 // relaxation), registered, applied and reported in one place
 struct SolverStudy {
   int one_group_rows = kPgsOneGroupRows;
-  bool pair_reach = false;
+  // the reach's default is the command's: bench dig digs (DiggingOptions), bench dem settles a bed
+  // (DemSettings, as the piles are)
+  bool pair_reach;
   double relaxation = 1.0;
+
+  explicit SolverStudy(bool default_pair_reach) : pair_reach(default_pair_reach) {}
 
   void add_flags(CLI::App& cmd) {
     cmd.add_option("--one-group-rows", one_group_rows, kOneGroupRowsHelp)
         ->check(CLI::NonNegativeNumber)
         ->capture_default_str();
-    cmd.add_flag("--pair-reach", pair_reach, kPairReachHelp);
+    add_reach_option(cmd, pair_reach);
     cmd.add_option("--relaxation", relaxation, kRelaxationHelp)
         ->check(relaxation_number())
         ->capture_default_str();
@@ -205,7 +209,7 @@ void add_bench_dig(CLI::App& bench) {
     bool quiet = false;
     bool pile_cache = true;  // the pile through the pile cache (--no-pile-cache)
     double sweep_tolerance = kDigSweepTolerance;  // [m/s] DiggingOptions::sweep_tolerance
-    SolverStudy study;
+    SolverStudy study{DiggingOptions{}.pair_reach};
   };
   auto opt = std::make_shared<Options>();
   auto* dig = bench.add_subcommand("dig",
@@ -362,7 +366,7 @@ void add_bench_command(CLI::App& app) {
     double settle_dt = 0.0;      // 0: the scene's own (terrain/scenes.cpp)
     int settle_iterations = 0;
     unsigned settle_seed = LatticeBox{}.seed;
-    SolverStudy study;
+    SolverStudy study{DemSettings{}.pair_reach};
     bool quiet = false;
   };
   auto opt = std::make_shared<Options>();

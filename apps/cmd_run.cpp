@@ -497,7 +497,7 @@ void add_run_command(CLI::App& app, const std::string& command_line) {
       ->capture_default_str()
       // a residual above 1 m/s is no convergence at all (the bucket moves at about 1 m/s)
       ->check(number_in(0.0, 1.0, "m/s", true));
-  cmd->add_flag("--pair-reach", opts->pair_reach, kPairReachHelp);
+  add_reach_option(*cmd, opts->pair_reach);
   cmd->add_option("--relaxation", opts->relaxation, kRelaxationHelp)
       ->check(relaxation_number())
       ->capture_default_str();

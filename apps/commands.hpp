@@ -3,6 +3,7 @@
 #pragma once
 #include <CLI/CLI.hpp>
 #include <cmath>
+#include <map>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -30,11 +31,20 @@ DeviceChoice run_device_choice(const Levels& levels) {
   return choice;
 }
 
-// --pair-reach of run, bench dig and bench dem (DemSettings::pair_reach)
-inline const char* const kPairReachHelp =
-    "study: each particle pair's own speculative reach, 2 h times its closing speed, instead of "
-    "the fastest particle's for every pair (fewer rows in a bed at rest; not yet the default, "
-    "docs/dem.md)";
+// --reach of run, bench dig and bench dem (DemSettings::pair_reach): "pair" or "fastest", the
+// default the caller's (digs: each pair's since 2026-11-29; bench dem: the fastest's, as piles)
+inline CLI::Option* add_reach_option(CLI::App& cmd, bool& pair_reach) {
+  return cmd
+      .add_option("--reach", pair_reach,
+                  "speculative reach of particle pairs: 'pair' (each pair's own, 2 h times its "
+                  "closing speed + |g| h: no speculative rows in a bed at rest) or 'fastest' (the "
+                  "fastest particle's, 2 h v_max, for every pair; docs/dem.md)")
+      ->transform(
+          CLI::CheckedTransformer(std::map<std::string, bool>{{"pair", true}, {"fastest", false}})
+              .description(""))
+      ->type_name("pair|fastest")
+      ->default_str(pair_reach ? "pair" : "fastest");
+}
 
 // --relaxation of run, bench dig and bench dem (DemSettings::relaxation)
 inline const char* const kRelaxationHelp =

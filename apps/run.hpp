@@ -32,8 +32,9 @@ struct RunOptions {
   double damping_time = 0.0;
   // end a step's sweeps once the particle rows' RMS residual is below this [m/s]; 0: N_it always
   double sweep_tolerance = kDigSweepTolerance;
-  // each particle pair's own speculative reach (DemSettings::pair_reach; study, not the default)
-  bool pair_reach = false;
+  // each particle pair's own speculative reach (DemSettings::pair_reach; --reach), the digs'
+  // default (DiggingOptions::pair_reach)
+  bool pair_reach = DiggingOptions{}.pair_reach;
   // the relaxation of the particle rows' PGS sweeps (DemSettings::relaxation; study)
   double relaxation = 1.0;
   bool residuals = false;

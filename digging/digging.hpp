@@ -45,8 +45,9 @@ struct DiggingOptions {
   // type D and the type-G zone alike): the same bits, a device-dependent speed
   int one_group_rows = kPgsOneGroupRows;
   // each particle pair's own speculative reach instead of the fastest particle's (DemSettings::
-  // pair_reach; type D and the type-G zone alike). Not yet the default (docs/dem.md)
-  bool pair_reach = false;
+  // pair_reach; type D and the type-G zone alike). The default since 2026-11-29: the same sweeps
+  // and fills within the piles' scatter with 30-45 % fewer rows (docs/dem.md "Speculative reach")
+  bool pair_reach = true;
   // the relaxation omega of the particle rows' PGS sweeps (DemSettings::relaxation; type D and the
   // type-G zone alike; the pile is settled with its own settings)
   double relaxation = 1.0;

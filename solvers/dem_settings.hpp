@@ -61,8 +61,9 @@ struct DemSettings {
   double max_speed = 0.0;
   // false: every pair within 2 h max_speed gets a speculative row (the fastest particle's reach,
   // also for grains at rest side by side); true: each pair's own, 2 h (its closing speed + |g| h)
-  // and at most that, so a bed at rest makes no speculative rows (kernels/narrowphase.cl). Not yet
-  // the default: docs/dem.md "Speculative reach" has what it was measured on
+  // and at most that, so a bed at rest makes no speculative rows (kernels/narrowphase.cl). Digs
+  // set it (DiggingOptions::pair_reach); piles and the DEM's own benchmarks keep the fastest's
+  // (docs/dem.md "Speculative reach" has what each was measured on)
   bool pair_reach = false;
   // the relaxation omega of the PGS sweeps over particle rows: each row's projected step is omega
   // times Gauss-Seidel's (projected successive over-relaxation), which leaves the solution where

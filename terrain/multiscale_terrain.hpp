@@ -59,7 +59,7 @@ struct MultiscaleOptions {
   double front_margin = 2.0;              // voxels ahead of the toe [m] (VoxelTerrainOptions)
   double max_particle_speed = 4.0;        // [m/s] DemSettings::max_speed of the zone's particles
   int one_group_rows = kPgsOneGroupRows;  // DemSettings::one_group_rows of the zone's sweeps
-  bool pair_reach = false;                // DemSettings::pair_reach of the zone's particles
+  bool pair_reach = true;                 // DemSettings::pair_reach of the zone's particles (digs')
   double relaxation = 1.0;                // DemSettings::relaxation of the zone's sweeps
   unsigned seed = 1;                      // of the particles' sizes
 };
