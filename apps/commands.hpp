@@ -34,14 +34,14 @@ DeviceChoice run_device_choice(const Levels& levels) {
 // --reach of run, bench dig and bench dem (DemSettings::pair_reach): "pair" or "fastest", the
 // default the caller's (digs: each pair's since 2026-11-29; bench dem: the fastest's, as piles)
 inline CLI::Option* add_reach_option(CLI::App& cmd, bool& pair_reach) {
+  // the words alone (a bool option with a transformer also took 0 and 1)
   return cmd
-      .add_option("--reach", pair_reach,
-                  "speculative reach of particle pairs: 'pair' (each pair's own, 2 h times its "
-                  "closing speed + |g| h: no speculative rows in a bed at rest) or 'fastest' (the "
-                  "fastest particle's, 2 h v_max, for every pair; docs/dem.md)")
-      ->transform(
-          CLI::CheckedTransformer(std::map<std::string, bool>{{"pair", true}, {"fastest", false}})
-              .description(""))
+      .add_option_function<std::string>(
+          "--reach", [&pair_reach](const std::string& reach) { pair_reach = reach == "pair"; },
+          "speculative reach of particle pairs: 'pair' (each pair's own, 2 h times its closing "
+          "speed + |g| h: no speculative rows in a bed at rest) or 'fastest' (the fastest "
+          "particle's, 2 h v_max, for every pair; docs/dem.md)")
+      ->check(CLI::IsMember({"pair", "fastest"}).description(""))
       ->type_name("pair|fastest")
       ->default_str(pair_reach ? "pair" : "fastest");
 }
