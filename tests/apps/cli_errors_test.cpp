@@ -257,6 +257,17 @@ TEST(CliErrors, StepCountsAndLoadsOutsideTheirRangeAreRefused) {
   EXPECT_EQ(jacobi.code, 2) << jacobi.err;
   EXPECT_NE(jacobi.err.find("--relaxation"), std::string::npos) << jacobi.err;
   EXPECT_FALSE(std::filesystem::exists("/tmp/talus_cli_relaxation"));
+  // the speculative reach takes its two words alone: a bool's 0/1 or a typo is refused, naming
+  // the flag and the words it takes, before any folder is made
+  for (const char* reach : {"1", "0", "bogus", "Pair"})
+    for (const char* cmd : {"bench dem --levels D400 --reach ", "bench dig --reach ",
+                            "run --scenario hd27 --out /tmp/talus_cli_reach --reach "}) {
+      const Outcome o = run("", std::string(cmd) + reach);
+      EXPECT_EQ(o.code, 2) << cmd << reach << ": " << o.err;
+      EXPECT_NE(o.err.find("--reach"), std::string::npos) << cmd << reach << ": " << o.err;
+      EXPECT_NE(o.err.find("{pair,fastest}"), std::string::npos) << cmd << reach << ": " << o.err;
+      EXPECT_FALSE(std::filesystem::exists("/tmp/talus_cli_reach")) << cmd << reach;
+    }
 }
 
 // a shard that a crash or a hand cut up holds a value no cycle gives: --collect names the file,
