@@ -6,6 +6,12 @@
 // geometry bins): every geometry within a cell of the column, in index order, so the contacts
 // are those of a loop over all of them, without testing the hundreds of voxel columns of the
 // multiscale terrain (issue 14) against every particle.
+// The count pass keeps each particle's first `slots` partners (the other particle, or the static
+// geometry as TL_STATIC_BODY) in its slots of `partners`; the write pass then writes a particle
+// whose contacts all fit from that list alone, recomputing each contact with the same functions
+// (the same bits), and visits the cells and the geometry again only for a particle with more
+// (slots = 0: every particle visited twice, as before the slots). At the type-G levels the second
+// visit was half of the narrow phase (issue 14).
 
 // the margin below which a pair becomes a (possibly speculative) contact: the relative margin
 // plus the speculative reach, the fastest particle's 2 h v_max for every pair, or (pair_reach)
@@ -53,15 +59,42 @@ void emit_contact(__global TlContact* out, int a, int b, float3 n, float gap, fl
   *out = c;
 }
 
+// the gap of particles at xi (radius ri) and pj (radius pj.w) and the normal from i to j
+float pair_gap(float3 xi, float ri, float4 pj, float3* n) {
+  float3 d = pj.xyz - xi;
+  float dist = length(d);
+  *n = dist > 0.0f ? d / dist : (float3)(0.0f, 0.0f, 1.0f);
+  return dist - ri - pj.w;
+}
+
+// writes the contact of particles i and j (j > i)
+void emit_pair(__global TlContact* out, int i, int j, float ri, float rj, float3 n, float gap,
+               const TlStepParams p, __global const int* prev_offsets,
+               __global const TlContact* prev, int has_prev) {
+  float reduced = ri * rj / (ri + rj);
+  emit_contact(out, i, j, n, gap, n * (ri + 0.5f * gap), -n * (rj + 0.5f * gap), reduced, p,
+               prev_offsets, prev, has_prev);
+}
+
+// writes the contact of particle i with static geometry g
+void emit_static(__global TlContact* out, int i, int g, float ri, float3 n, float gap,
+                 const TlStepParams p, __global const int* prev_offsets,
+                 __global const TlContact* prev, int has_prev) {
+  emit_contact(out, i, TL_STATIC_BODY(g), n, gap, n * (ri + 0.5f * gap), (float3)(0.0f), ri, p,
+               prev_offsets, prev, has_prev);
+}
+
 // visits particle i's contacts; writes them when `write` is set, returns their number
 // write mode stops at `limit` contacts (the count pass's number), so a pair that rounds
-// differently between the passes can never write into the next particle's slots
+// differently between the passes can never write into the next particle's slots; count mode
+// keeps the first `slots` partners in `partners`
 int visit_contacts(int i, int write, int limit, __global const float4* position,
                    __global const float4* velocity, __global const int* cell_start,
                    __global const int* cell_particles, __global const TlGeom* geoms,
                    __global const int* geom_column_start, __global const int* geom_column_list,
                    const TlStepParams p, __global TlContact* out, __global const int* prev_offsets,
-                   __global const TlContact* prev, int has_prev) {
+                   __global const TlContact* prev, int has_prev, __global int* partners,
+                   int slots) {
   float4 pi = position[i];
   float3 xi = pi.xyz;
   float ri = pi.w;
@@ -92,17 +125,15 @@ int visit_contacts(int i, int write, int limit, __global const float4* position,
           // so the test below still decides every pair it could accept: the same contacts
           float widest = ri + pj.w + p.margin_rel * min(ri, pj.w) + p.speculative;
           if (dot(d, d) > 1.0001f * widest * widest) continue;
-          float dist = length(d);
-          float gap = dist - ri - pj.w;
-          float3 n = dist > 0.0f ? d / dist : (float3)(0.0f, 0.0f, 1.0f);
+          float3 n;
+          float gap = pair_gap(xi, ri, pj, &n);
           float closing = dot(velocity[i].xyz - velocity[j].xyz, n);
           if (gap >= contact_margin(ri, pj.w, closing, p)) continue;
           if (write && count >= limit) return count;
-          if (write) {
-            float reduced = ri * pj.w / (ri + pj.w);
-            emit_contact(out + count, i, j, n, gap, n * (ri + 0.5f * gap), -n * (pj.w + 0.5f * gap),
-                         reduced, p, prev_offsets, prev, has_prev);
-          }
+          if (write)
+            emit_pair(out + count, i, j, ri, pj.w, n, gap, p, prev_offsets, prev, has_prev);
+          else if (count < slots)
+            partners[count] = j;
           ++count;
         }
       }
@@ -118,8 +149,9 @@ int visit_contacts(int i, int write, int limit, __global const float4* position,
     if (gap >= contact_margin(ri, ri, dot(velocity[i].xyz, n), p)) continue;
     if (write && count >= limit) return count;
     if (write)
-      emit_contact(out + count, i, TL_STATIC_BODY(g), n, gap, n * (ri + 0.5f * gap),
-                   (float3)(0.0f), ri, p, prev_offsets, prev, has_prev);
+      emit_static(out + count, i, g, ri, n, gap, p, prev_offsets, prev, has_prev);
+    else if (count < slots)
+      partners[count] = TL_STATIC_BODY(g);
     ++count;
   }
   return count;
@@ -130,12 +162,13 @@ __kernel void contact_count(__global const float4* position, __global const floa
                             __global const TlGeom* geoms, __global const int* geom_column_start,
                             __global const int* geom_column_list, __global int* counts,
                             __global TlContact* unused_out, __global const int* prev_offsets,
-                            __global const TlContact* prev, const TlStepParams p) {
+                            __global const TlContact* prev, const TlStepParams p,
+                            __global int* partners, int slots) {
   int i = get_global_id(0);
   if (i >= p.particles) return;
-  counts[i] =
-      visit_contacts(i, 0, 0, position, velocity, cell_start, cell_particles, geoms,
-                     geom_column_start, geom_column_list, p, unused_out, prev_offsets, prev, 0);
+  counts[i] = visit_contacts(i, 0, 0, position, velocity, cell_start, cell_particles, geoms,
+                             geom_column_start, geom_column_list, p, unused_out, prev_offsets, prev,
+                             0, partners + (size_t)i * slots, slots);
 }
 
 __kernel void contact_write(__global const float4* position, __global const float4* velocity,
@@ -143,12 +176,34 @@ __kernel void contact_write(__global const float4* position, __global const floa
                             __global const TlGeom* geoms, __global const int* geom_column_start,
                             __global const int* geom_column_list, __global const int* offsets,
                             __global TlContact* contacts, __global const int* prev_offsets,
-                            __global const TlContact* prev, const TlStepParams p, int has_prev) {
+                            __global const TlContact* prev, const TlStepParams p, int has_prev,
+                            __global const int* partners, int slots) {
   int i = get_global_id(0);
   if (i >= p.particles) return;
-  visit_contacts(i, 1, offsets[i + 1] - offsets[i], position, velocity, cell_start, cell_particles,
-                 geoms, geom_column_start, geom_column_list, p, contacts + offsets[i], prev_offsets,
-                 prev, has_prev);
+  int count = offsets[i + 1] - offsets[i];
+  __global TlContact* out = contacts + offsets[i];
+  // more contacts than slots: visit the cells and the geometry again
+  if (count > slots) {
+    visit_contacts(i, 1, count, position, velocity, cell_start, cell_particles, geoms,
+                   geom_column_start, geom_column_list, p, out, prev_offsets, prev, has_prev, 0, 0);
+    return;
+  }
+  // every partner is in the slots, in the visit's order: each contact recomputed as it found it
+  float4 pi = position[i];
+  __global const int* mine = partners + (size_t)i * slots;
+  for (int k = 0; k < count; ++k) {
+    int b = mine[k];
+    float3 n;
+    if (b >= 0) {
+      float4 pj = position[b];
+      float gap = pair_gap(pi.xyz, pi.w, pj, &n);
+      emit_pair(out + k, i, b, pi.w, pj.w, n, gap, p, prev_offsets, prev, has_prev);
+    } else {
+      int g = TL_STATIC_BODY(b);  // the map is its own inverse: the geometry's index
+      float gap = sphere_geom(pi.xyz, pi.w, geoms + g, &n);
+      emit_static(out + k, i, g, pi.w, n, gap, p, prev_offsets, prev, has_prev);
+    }
+  }
 }
 
 // contacts per body (both sides), for the body -> contact adjacency

@@ -18,6 +18,7 @@ DemBuffers::DemBuffers(Device& dev)
       cell_fill(dev, 1),
       cell_particles(dev, 1),
       contact_counts(dev, 1),
+      contact_partners(dev, 1),
       owner_offsets{Buffer<int>(dev, 1), Buffer<int>(dev, 1)},
       contacts{Buffer<TlContact>(dev, 1), Buffer<TlContact>(dev, 1)},
       degree(dev, 1),

@@ -33,6 +33,7 @@ struct DemBuffers {
                           cell_fill.bytes(),
                           cell_particles.bytes(),
                           contact_counts.bytes(),
+                          contact_partners.bytes(),
                           owner_offsets[0].bytes(),
                           owner_offsets[1].bytes(),
                           contacts[0].bytes(),
@@ -72,6 +73,9 @@ struct DemBuffers {
 
   // narrow phase: per-particle counts, owner offsets and contacts; [current] and [previous]
   Buffer<int> contact_counts;
+  // each particle's first DemSettings::narrow_phase_slots partners found by the count pass (the
+  // other particle, or TL_STATIC_BODY(geometry)), which the write pass writes from
+  Buffer<int> contact_partners;
   std::array<Buffer<int>, 2> owner_offsets;
   std::array<Buffer<TlContact>, 2> contacts;
   int current = 0;          // which of the pairs above is this step's

@@ -35,6 +35,13 @@ inline bool carry_colours_after(int colours, int fresh_colours) {
 // loss at 30,370; bench/RESULTS.md, 2026-11-27)
 inline constexpr int kPgsOneGroupRows = 4096;
 
+// partners per particle the narrow phase's count pass keeps for its write pass
+// (DemSettings::narrow_phase_slots; measured in docs/dem.md "Narrow phase")
+inline constexpr int kNarrowPhaseSlots = 12;
+// more slots than a particle can own contacts only cost memory (a sphere touches at most 12 of its
+// size; speculative rows add a few tens)
+inline constexpr int kMaxNarrowPhaseSlots = 256;
+
 struct DemSettings {
   double dt = 1.0e-3;       // timestep h [s]
   int iterations = 50;      // sweeps per step (upper bound when tolerance > 0)
@@ -70,6 +77,12 @@ struct DemSettings {
   // it is and changes how fast the sweeps reach it; 1 is plain PGS. In (0, 2). The Jacobi sweeps
   // (their own split masses) and the bucket's rows do not use it (docs/dem.md "Relaxation")
   double relaxation = 1.0;
+  // the partners of each particle the narrow phase's count pass keeps for its write pass [per
+  // particle, 4 bytes each]: a particle with at most this many contacts it owns is written from
+  // them, one with more is visited again (the same contacts and bits either way; 0: every
+  // particle visited twice). 12 held every particle of the piles and digs measured (they own at
+  // most 9-11; docs/dem.md "Narrow phase")
+  int narrow_phase_slots = kNarrowPhaseSlots;
 };
 
 // the smallest relaxation accepted: below it the sweeps barely move (and far below, the float the

@@ -112,6 +112,11 @@ void DemWorld::set_geoms(std::vector<StaticGeom> geoms, GeomChange change) {
 void DemWorld::update_params() {
   // the settings a caller may have changed through settings(), checked before the params change
   check_relaxation(settings_.relaxation, settings_.sweep, "DemSettings.relaxation");
+  if (settings_.narrow_phase_slots < 0 || settings_.narrow_phase_slots > kMaxNarrowPhaseSlots)
+    throw InputError(
+        "DemSettings.narrow_phase_slots: " + std::to_string(settings_.narrow_phase_slots) +
+        " is outside 0-" + std::to_string(kMaxNarrowPhaseSlots) + "; use " +
+        std::to_string(kNarrowPhaseSlots) + " (the default)");
   TlStepParams& p = params_;
   p = TlStepParams{};
   p.gravity = to_float4(settings_.gravity, 0.0);
@@ -486,9 +491,11 @@ void DemWorld::narrow_phase() {
     b.owner_offsets[prev].resize(n + 1);
     b.owner_offsets[prev].fill(0);
   }
+  const int slots = settings_.narrow_phase_slots;
+  b.contact_partners.resize(std::max<size_t>(n * static_cast<size_t>(slots), 1));
   set_args(k_contact_count_, b.position, b.velocity, b.cell_start, b.cell_particles, b.geoms,
            b.geom_column_start, b.geom_column_list, b.contact_counts, b.contacts[cur],
-           b.owner_offsets[prev], b.contacts[prev], p);
+           b.owner_offsets[prev], b.contacts[prev], p, b.contact_partners, slots);
   launch(dev_, k_contact_count_, n, "contact_count");
   scan_.exclusive(b.contact_counts, b.owner_offsets[cur], n);
   b.n_contacts = b.owner_offsets[cur].read_one(n);
@@ -496,7 +503,8 @@ void DemWorld::narrow_phase() {
   set_args(k_contact_write_, b.position, b.velocity, b.cell_start, b.cell_particles, b.geoms,
            b.geom_column_start, b.geom_column_list, b.owner_offsets[cur], b.contacts[cur],
            b.owner_offsets[prev], b.contacts[prev], p,
-           b.has_previous ? TL_MATCH_PAIRS | (b.static_previous ? TL_MATCH_STATIC : 0) : 0);
+           b.has_previous ? TL_MATCH_PAIRS | (b.static_previous ? TL_MATCH_STATIC : 0) : 0,
+           b.contact_partners, slots);
   launch(dev_, k_contact_write_, n, "contact_write");
 }
 
