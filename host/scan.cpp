@@ -1,10 +1,12 @@
 #include "host/scan.hpp"
 
+#include "kernels/common.h"
+
 namespace talus {
 
 namespace {
-// must equal SCAN_BLOCK in kernels/scan.cl
-constexpr size_t kScanBlock = 256;
+// the items one work-group scans (kernels/common.h)
+constexpr size_t kScanBlockItems = size_t{TL_SCAN_GROUP} * TL_SCAN_ITEMS;
 }
 
 DeviceScan::DeviceScan(Device& dev) : dev_(dev) {
@@ -21,7 +23,7 @@ void DeviceScan::exclusive(const Buffer<int>& in, Buffer<int>& out, size_t n) {
 
 void DeviceScan::scan_level(const cl::Buffer& in, const cl::Buffer& out, size_t n_in, size_t n_out,
                             size_t level) {
-  size_t blocks = (n_out + kScanBlock - 1) / kScanBlock;
+  size_t blocks = (n_out + kScanBlockItems - 1) / kScanBlockItems;
   while (sums_.size() <= level) sums_.emplace_back(dev_, 1);
   while (offsets_.size() <= level) offsets_.emplace_back(dev_, 1);
   Buffer<int>& sums = sums_[level];
@@ -32,8 +34,8 @@ void DeviceScan::scan_level(const cl::Buffer& in, const cl::Buffer& out, size_t 
     blocks_.setArg(2, sums.raw());
     blocks_.setArg(3, static_cast<int>(n_in));
     blocks_.setArg(4, static_cast<int>(n_out));
-    return dev_.queue().enqueueNDRangeKernel(blocks_, cl::NullRange, cl::NDRange(blocks * kScanBlock),
-                                             cl::NDRange(kScanBlock));
+    return dev_.queue().enqueueNDRangeKernel(
+        blocks_, cl::NullRange, cl::NDRange(blocks * TL_SCAN_GROUP), cl::NDRange(TL_SCAN_GROUP));
   });
   if (blocks == 1) return;
   // scan the block totals, then add each block's offset to its items
@@ -44,8 +46,8 @@ void DeviceScan::scan_level(const cl::Buffer& in, const cl::Buffer& out, size_t 
     add_.setArg(0, out);
     add_.setArg(1, offs.raw());
     add_.setArg(2, static_cast<int>(n_out));
-    return dev_.queue().enqueueNDRangeKernel(add_, cl::NullRange, cl::NDRange(blocks * kScanBlock),
-                                             cl::NDRange(kScanBlock));
+    return dev_.queue().enqueueNDRangeKernel(
+        add_, cl::NullRange, cl::NDRange(blocks * TL_SCAN_GROUP), cl::NDRange(TL_SCAN_GROUP));
   });
 }
 

@@ -22,4 +22,9 @@ typedef cl_uint tl_uint;
 typedef cl_ulong tl_ulong;
 #endif
 
+// the prefix sum's work-group size and the items each of its work-items scans in sequence
+// (kernels/scan.cl, host/scan.cpp): a block is their product
+#define TL_SCAN_GROUP 256
+#define TL_SCAN_ITEMS 8
+
 #endif

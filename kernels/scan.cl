@@ -1,31 +1,60 @@
-// Exclusive prefix sum of ints, in blocks of SCAN_BLOCK work-items (host/scan.cpp drives the
-// levels). Integer sums are exact, so the result does not depend on the work-group size.
-#define SCAN_BLOCK 256
+// Exclusive prefix sum of ints, in blocks of TL_SCAN_GROUP x TL_SCAN_ITEMS items (kernels/common.h;
+// host/scan.cpp drives the levels). Integer sums are exact, so the result does not depend on the
+// block size. Each work-item scans TL_SCAN_ITEMS items in sequence and the group scans the
+// work-items' sums: eight items a work-item made the barriers of the group's scan (16 a block)
+// an eighth as many per item, and the blocks an eighth as many, where a CPU device paid a loop
+// over the group for each barrier (the G200 cell grid's scan, bench/RESULTS.md 2026-11-29).
+#define SCAN_BLOCK_ITEMS (TL_SCAN_GROUP * TL_SCAN_ITEMS)
 
-// each work-group scans its block in local memory (Hillis-Steele) and writes the block total
+// each work-group scans its block in local memory and writes the block's total
 // items at or past n_in read as zero, so scanning n_in + 1 items leaves the total at out[n_in]
 __kernel void scan_blocks(__global const int* in, __global int* out, __global int* block_sums,
                           int n_in, int n_out) {
-  __local int tmp[SCAN_BLOCK];
+  __local int items[SCAN_BLOCK_ITEMS];
+  __local int sums[TL_SCAN_GROUP];
   int lid = get_local_id(0);
-  int gid = get_global_id(0);
-  int value = gid < n_in ? in[gid] : 0;
-  tmp[lid] = value;
+  int block = get_group_id(0) * SCAN_BLOCK_ITEMS;
+  // the block into local memory, neighbouring work-items reading neighbouring items
+  for (int k = 0; k < TL_SCAN_ITEMS; ++k) {
+    int i = k * TL_SCAN_GROUP + lid;
+    items[i] = block + i < n_in ? in[block + i] : 0;
+  }
   barrier(CLK_LOCAL_MEM_FENCE);
-  // inclusive scan by doubling offsets
-  for (int offset = 1; offset < SCAN_BLOCK; offset <<= 1) {
-    int add = lid >= offset ? tmp[lid - offset] : 0;
+  // each work-item's run of TL_SCAN_ITEMS: its sum
+  int first = lid * TL_SCAN_ITEMS;
+  int own = 0;
+  for (int k = 0; k < TL_SCAN_ITEMS; ++k) own += items[first + k];
+  sums[lid] = own;
+  barrier(CLK_LOCAL_MEM_FENCE);
+  // inclusive scan of the runs' sums by doubling offsets (Hillis-Steele)
+  for (int offset = 1; offset < TL_SCAN_GROUP; offset <<= 1) {
+    int add = lid >= offset ? sums[lid - offset] : 0;
     barrier(CLK_LOCAL_MEM_FENCE);
-    tmp[lid] += add;
+    sums[lid] += add;
     barrier(CLK_LOCAL_MEM_FENCE);
   }
-  // exclusive result, and the block's total from the last item
-  if (gid < n_out) out[gid] = tmp[lid] - value;
-  if (lid == SCAN_BLOCK - 1) block_sums[get_group_id(0)] = tmp[lid];
+  // the run's exclusive results in place, from the sum of the runs before it
+  int running = sums[lid] - own;
+  for (int k = 0; k < TL_SCAN_ITEMS; ++k) {
+    int value = items[first + k];
+    items[first + k] = running;
+    running += value;
+  }
+  if (lid == TL_SCAN_GROUP - 1) block_sums[get_group_id(0)] = sums[lid];
+  barrier(CLK_LOCAL_MEM_FENCE);
+  // the block out, as it came in
+  for (int k = 0; k < TL_SCAN_ITEMS; ++k) {
+    int i = k * TL_SCAN_GROUP + lid;
+    if (block + i < n_out) out[block + i] = items[i];
+  }
 }
 
 // adds each block's scanned offset to its items
 __kernel void scan_add_offsets(__global int* out, __global const int* block_offsets, int n) {
-  int gid = get_global_id(0);
-  if (gid < n) out[gid] += block_offsets[get_group_id(0)];
+  int block = get_group_id(0) * SCAN_BLOCK_ITEMS;
+  int offset = block_offsets[get_group_id(0)];
+  for (int k = 0; k < TL_SCAN_ITEMS; ++k) {
+    int i = block + k * TL_SCAN_GROUP + get_local_id(0);
+    if (i < n) out[i] += offset;
+  }
 }
