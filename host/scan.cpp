@@ -1,5 +1,8 @@
 #include "host/scan.hpp"
 
+#include <string>
+
+#include "host/error.hpp"
 #include "kernels/common.h"
 
 namespace talus {
@@ -13,6 +16,16 @@ DeviceScan::DeviceScan(Device& dev) : dev_(dev) {
   const cl::Program& program = dev.program({"scan.cl"});
   blocks_ = dev.kernel(program, "scan_blocks");
   add_ = dev.kernel(program, "scan_add_offsets");
+  // the kernels scan in groups of exactly TL_SCAN_GROUP work-items
+  for (const cl::Kernel* k : {&blocks_, &add_}) {
+    const size_t most = cl_checked("querying the scan's work-group size", [&] {
+      return k->getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(dev.device());
+    });
+    if (most < TL_SCAN_GROUP)
+      throw Error("the prefix sum needs work-groups of " + std::to_string(TL_SCAN_GROUP) +
+                  " work-items and the device " + dev.description() + " allows " +
+                  std::to_string(most) + " for it; lower TL_SCAN_GROUP in kernels/common.h");
+  }
 }
 
 void DeviceScan::exclusive(const Buffer<int>& in, Buffer<int>& out, size_t n) {

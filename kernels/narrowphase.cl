@@ -10,8 +10,8 @@
 // geometry as TL_STATIC_BODY) in its slots of `partners`; the write pass then writes a particle
 // whose contacts all fit from that list alone, recomputing each contact with the same functions
 // (the same bits), and visits the cells and the geometry again only for a particle with more
-// (slots = 0: every particle visited twice, as before the slots). At the type-G levels the second
-// visit was half of the narrow phase (issue 14).
+// (slots = 0: every particle with a contact visited twice, as before). At the type-G levels the
+// second visit was half of the narrow phase (issue 14).
 
 // the margin below which a pair becomes a (possibly speculative) contact: the relative margin
 // plus the speculative reach, the fastest particle's 2 h v_max for every pair, or (pair_reach)

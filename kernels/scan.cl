@@ -5,25 +5,28 @@
 // an eighth as many per item, and the blocks an eighth as many, where a CPU device paid a loop
 // over the group for each barrier (the G200 cell grid's scan, bench/RESULTS.md 2026-11-29).
 #define SCAN_BLOCK_ITEMS (TL_SCAN_GROUP * TL_SCAN_ITEMS)
+// a block's item i in local memory, one int of padding after every 32: a work-item's run of 8
+// (stride 8 across the group) would otherwise meet in 4 of a GPU's 32 banks
+#define SCAN_SLOT(i) ((i) + ((i) >> 5))
 
 // each work-group scans its block in local memory and writes the block's total
 // items at or past n_in read as zero, so scanning n_in + 1 items leaves the total at out[n_in]
 __kernel void scan_blocks(__global const int* in, __global int* out, __global int* block_sums,
                           int n_in, int n_out) {
-  __local int items[SCAN_BLOCK_ITEMS];
+  __local int items[SCAN_SLOT(SCAN_BLOCK_ITEMS)];
   __local int sums[TL_SCAN_GROUP];
   int lid = get_local_id(0);
   int block = get_group_id(0) * SCAN_BLOCK_ITEMS;
   // the block into local memory, neighbouring work-items reading neighbouring items
   for (int k = 0; k < TL_SCAN_ITEMS; ++k) {
     int i = k * TL_SCAN_GROUP + lid;
-    items[i] = block + i < n_in ? in[block + i] : 0;
+    items[SCAN_SLOT(i)] = block + i < n_in ? in[block + i] : 0;
   }
   barrier(CLK_LOCAL_MEM_FENCE);
   // each work-item's run of TL_SCAN_ITEMS: its sum
   int first = lid * TL_SCAN_ITEMS;
   int own = 0;
-  for (int k = 0; k < TL_SCAN_ITEMS; ++k) own += items[first + k];
+  for (int k = 0; k < TL_SCAN_ITEMS; ++k) own += items[SCAN_SLOT(first + k)];
   sums[lid] = own;
   barrier(CLK_LOCAL_MEM_FENCE);
   // inclusive scan of the runs' sums by doubling offsets (Hillis-Steele)
@@ -36,8 +39,8 @@ __kernel void scan_blocks(__global const int* in, __global int* out, __global in
   // the run's exclusive results in place, from the sum of the runs before it
   int running = sums[lid] - own;
   for (int k = 0; k < TL_SCAN_ITEMS; ++k) {
-    int value = items[first + k];
-    items[first + k] = running;
+    int value = items[SCAN_SLOT(first + k)];
+    items[SCAN_SLOT(first + k)] = running;
     running += value;
   }
   if (lid == TL_SCAN_GROUP - 1) block_sums[get_group_id(0)] = sums[lid];
@@ -45,7 +48,7 @@ __kernel void scan_blocks(__global const int* in, __global int* out, __global in
   // the block out, as it came in
   for (int k = 0; k < TL_SCAN_ITEMS; ++k) {
     int i = k * TL_SCAN_GROUP + lid;
-    if (block + i < n_out) out[block + i] = items[i];
+    if (block + i < n_out) out[block + i] = items[SCAN_SLOT(i)];
   }
 }
 

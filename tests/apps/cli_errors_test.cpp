@@ -260,7 +260,8 @@ TEST(CliErrors, StepCountsAndLoadsOutsideTheirRangeAreRefused) {
   // the speculative reach takes its two words alone: a bool's 0/1 or a typo is refused, naming
   // the flag and the words it takes, before any folder is made
   for (const char* reach : {"1", "0", "bogus", "Pair"})
-    for (const char* cmd : {"bench dem --levels D400 --reach ", "bench dig --reach ",
+    for (const char* cmd : {"bench dem --levels D400 --steps 1 --no-settle10k --reach ",
+                            "bench dig --seconds 0.01 --reach ",
                             "run --scenario hd27 --out /tmp/talus_cli_reach --reach "}) {
       const Outcome o = run("", std::string(cmd) + reach);
       EXPECT_EQ(o.code, 2) << cmd << reach << ": " << o.err;
