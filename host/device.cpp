@@ -5,12 +5,15 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <system_error>
 
 #include "host/embedded.hpp"
 #include "host/error.hpp"
+#include "host/files.hpp"
+#include "host/program_cache.hpp"
 
 namespace talus {
 
@@ -149,6 +152,11 @@ Device::Device(const DeviceChoice& choice) {
      << device_.getInfo<CL_DEVICE_MAX_COMPUTE_UNITS>() << " compute units, "
      << (device_.getInfo<CL_DEVICE_GLOBAL_MEM_SIZE>() >> 20) << " MiB)";
   description_ = os.str();
+  platform_identity_ =
+      c.platform.getInfo<CL_PLATFORM_NAME>() + " | " + c.platform.getInfo<CL_PLATFORM_VERSION>();
+  device_identity_ = device_.getInfo<CL_DEVICE_NAME>() + " | " +
+                     device_.getInfo<CL_DEVICE_VERSION>() + " | " +
+                     device_.getInfo<CL_DRIVER_VERSION>();
 }
 
 const cl::Program& Device::program(const std::vector<std::string>& files, const std::string& options) {
@@ -164,10 +172,27 @@ const cl::Program& Device::program(const std::vector<std::string>& files, const 
     if (name.size() > 2 && name.compare(name.size() - 2, 2, ".h") == 0) source += e.text + "\n";
   }
   for (auto& f : files) source += embedded_source(f) + "\n";
+  const std::string build_options = "-cl-std=CL1.2 " + options;
+
+  // the binary a former run saved for this very source, options and driver, if the driver takes
+  // it back; anything else builds the source
+  const std::string cache_dir = default_cache_dir();
+  const std::string cache_key =
+      program_cache_key(source, build_options, platform_identity_, device_identity_);
+  if (std::optional<std::string> binary = read_program_binary(cache_dir, cache_key)) {
+    try {
+      cl::Program::Binaries binaries{std::vector<unsigned char>(binary->begin(), binary->end())};
+      cl::Program cached(context_, std::vector<cl::Device>{device_}, binaries);
+      cached.build(std::vector<cl::Device>{device_}, build_options.c_str());
+      return programs_.emplace(key, std::move(cached)).first->second;
+    } catch (const cl::Error&) {
+      // refused (another driver build under the same version string): from source below
+    }
+  }
 
   cl::Program program(context_, source);
   try {
-    program.build(std::vector<cl::Device>{device_}, ("-cl-std=CL1.2 " + options).c_str());
+    program.build(std::vector<cl::Device>{device_}, build_options.c_str());
   } catch (const cl::Error& e) {
     std::string log;
     try {
@@ -179,6 +204,17 @@ const cl::Program& Device::program(const std::vector<std::string>& files, const 
     for (auto& f : files) names += f + " ";
     throw Error("OpenCL: building kernels " + names + "failed with " + cl_status_name(e.err()) +
                 "; build log:\n" + log);
+  }
+  // its binary for the next run (a cache that cannot be written only loses that)
+  if (!cache_dir.empty()) {
+    try {
+      const auto binaries = program.getInfo<CL_PROGRAM_BINARIES>();
+      if (binaries.size() == 1)
+        save_program_binary(cache_dir, cache_key,
+                            std::string(binaries[0].begin(), binaries[0].end()));
+    } catch (const cl::Error&) {
+      // a driver without binaries: nothing to keep
+    }
   }
   return programs_.emplace(key, std::move(program)).first->second;
 }

@@ -82,7 +82,9 @@ class Device {
   std::size_t max_allocation() const { return device_.getInfo<CL_DEVICE_MAX_MEM_ALLOC_SIZE>(); }
 
   // a program made of the shared headers followed by `files` (names in kernels/);
-  // built once per Device and option string, and kept
+  // built once per Device and option string, and kept; created from the binary a former run
+  // saved in default_cache_dir()/kernels when one is there for this very source, options and
+  // driver (host/program_cache.hpp), else built from source and its binary saved
   const cl::Program& program(const std::vector<std::string>& files, const std::string& options = "");
   // a fresh kernel object from a program (kernels carry their arguments, so callers own them)
   cl::Kernel kernel(const cl::Program& program, const char* name);
@@ -102,6 +104,9 @@ class Device {
   cl::CommandQueue queue_;
   bool is_gpu_ = false;
   std::string description_;
+  // the platform's and device's names and versions and the driver's: what a program binary is
+  // built for (host/program_cache.hpp)
+  std::string platform_identity_, device_identity_;
   std::map<std::string, cl::Program> programs_;
   StageTimes* stage_times_ = nullptr;
 };

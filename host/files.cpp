@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <array>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -92,6 +93,16 @@ nlohmann::json read_json_file(const std::string& path, const std::string& why_ne
     throw InputError(path + ": not readable as JSON (" + e.what() +
                      "); write numbers within ±1.8e308");
   }
+}
+
+std::string default_cache_dir() {
+  // the XDG base directory specification's order, with talus's own variable first
+  if (const char* dir = std::getenv("TALUS_CACHE_DIR"); dir && *dir) return dir;
+  if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg)
+    return (std::filesystem::path(xdg) / "talus").string();
+  if (const char* home = std::getenv("HOME"); home && *home)
+    return (std::filesystem::path(home) / ".cache" / "talus").string();
+  return "";
 }
 
 }  // namespace talus

@@ -29,4 +29,8 @@ std::string read_file_bytes(const std::string& path, const std::string& why_need
 // reliability.md)
 nlohmann::json read_json_file(const std::string& path, const std::string& why_needed);
 
+// where talus keeps what it can rebuild (settled piles, program binaries): $TALUS_CACHE_DIR, else
+// $XDG_CACHE_HOME/talus, else ~/.cache/talus (empty when none of them is set)
+std::string default_cache_dir();
+
 }  // namespace talus

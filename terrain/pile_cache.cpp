@@ -194,16 +194,6 @@ PileBuild read_pile(const std::string& path, std::string* key) {
   return parse_pile(read_file_bytes(path, "a settled pile"), path, key);
 }
 
-std::string default_cache_dir() {
-  // the XDG base directory specification's order, with talus's own variable first
-  if (const char* dir = std::getenv("TALUS_CACHE_DIR"); dir && *dir) return dir;
-  if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg)
-    return (std::filesystem::path(xdg) / "talus").string();
-  if (const char* home = std::getenv("HOME"); home && *home)
-    return (std::filesystem::path(home) / ".cache" / "talus").string();
-  return "";
-}
-
 PileBuild build_pile_cached(Device& dev, const PileProfile& profile, const FidelityPreset& preset,
                             const Material& material, const PileBuildOptions& options,
                             const PileCacheOptions& cache, Progress* progress) {

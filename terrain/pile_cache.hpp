@@ -16,6 +16,7 @@
 #include <string>
 
 #include "host/device.hpp"
+#include "host/files.hpp"
 #include "host/progress.hpp"
 #include "terrain/pile.hpp"
 
@@ -45,13 +46,9 @@ std::string pile_key_bytes(const PileProfile& profile, const FidelityPreset& pre
 // the key's file name stem: the hash as 16 hex digits
 std::string pile_key_name(const std::string& key_bytes);
 
-// where piles are kept: $TALUS_CACHE_DIR, else $XDG_CACHE_HOME/talus, else ~/.cache/talus (empty
-// when none is set), with the piles under piles/
-std::string default_cache_dir();
-
 struct PileCacheOptions {
   bool enabled = false;  // off unless a caller asks (the CLI and the facade do, by default)
-  std::string dir;       // empty: default_cache_dir()
+  std::string dir;       // empty: default_cache_dir() (host/files.hpp), the piles under piles/
   std::string commit;    // empty: the build's (git_commit()); one ending in "-dirty" is not cached
   // what the cache tells a person (a hit, a miss it fills, why it is not used, a file it cannot
   // write): one line each; none given, nothing is told

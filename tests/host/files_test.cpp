@@ -11,6 +11,7 @@
 #include <string>
 
 #include "host/error.hpp"
+#include "tests/host/scoped_env.hpp"
 
 namespace talus {
 namespace {
@@ -51,6 +52,29 @@ TEST(Files, ReadJsonFileRefusesEveryBadFileWithOneInputErrorNamingIt) {
   }
   const std::string missing = refusal("/nonexistent/talus.json");
   EXPECT_NE(missing.find("cannot open the file (a test file)"), std::string::npos) << missing;
+}
+
+using test::ScopedEnv;
+
+// where the piles and program binaries are kept: TALUS_CACHE_DIR first, then XDG_CACHE_HOME/talus,
+// then ~/.cache/talus
+TEST(Files, CacheDirFollowsTheEnvironment) {
+  {
+    ScopedEnv talus_dir("TALUS_CACHE_DIR", "/tmp/talus-here");
+    ScopedEnv xdg("XDG_CACHE_HOME", "/tmp/xdg");
+    EXPECT_EQ(default_cache_dir(), "/tmp/talus-here");
+  }
+  {
+    ScopedEnv talus_dir("TALUS_CACHE_DIR", nullptr);
+    ScopedEnv xdg("XDG_CACHE_HOME", "/tmp/xdg");
+    EXPECT_EQ(default_cache_dir(), "/tmp/xdg/talus");
+  }
+  {
+    ScopedEnv talus_dir("TALUS_CACHE_DIR", nullptr);
+    ScopedEnv xdg("XDG_CACHE_HOME", nullptr);
+    ScopedEnv home("HOME", "/home/someone");
+    EXPECT_EQ(default_cache_dir(), "/home/someone/.cache/talus");
+  }
 }
 
 }  // namespace

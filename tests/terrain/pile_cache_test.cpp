@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "host/error.hpp"
+#include "tests/host/scoped_env.hpp"
 #include "tests/solvers/dem_test_util.hpp"
 
 namespace talus {
@@ -44,29 +45,7 @@ class TempDir {
   fs::path path_;
 };
 
-// sets an environment variable for the scope and puts the old value back
-class ScopedEnv {
- public:
-  ScopedEnv(const char* name, const char* value) : name_(name) {
-    if (const char* old = std::getenv(name)) old_ = old;
-    if (value)
-      setenv(name, value, 1);
-    else
-      unsetenv(name);
-  }
-  ~ScopedEnv() {
-    if (old_)
-      setenv(name_, old_->c_str(), 1);
-    else
-      unsetenv(name_);
-  }
-  ScopedEnv(const ScopedEnv&) = delete;
-  ScopedEnv& operator=(const ScopedEnv&) = delete;
-
- private:
-  const char* name_;
-  std::optional<std::string> old_;
-};
+using test::ScopedEnv;
 
 // a double's 64 bits (NaN payloads and the sign of zero included)
 std::uint64_t bits_of(double v) {
@@ -280,26 +259,6 @@ TEST(PileCache, WrongVersionShortOrCorruptFileIsRefused) {
   msg = refusal("{\"not\": \"a pile\"}");
   EXPECT_NE(msg.find("not a talus pile"), std::string::npos) << msg;
   EXPECT_THROW(read_pile("/nonexistent/talus/x.pile"), InputError);
-}
-
-// TALUS_CACHE_DIR first, then XDG_CACHE_HOME/talus, then ~/.cache/talus
-TEST(PileCache, CacheDirFollowsTheEnvironment) {
-  {
-    ScopedEnv talus_dir("TALUS_CACHE_DIR", "/tmp/talus-here");
-    ScopedEnv xdg("XDG_CACHE_HOME", "/tmp/xdg");
-    EXPECT_EQ(default_cache_dir(), "/tmp/talus-here");
-  }
-  {
-    ScopedEnv talus_dir("TALUS_CACHE_DIR", nullptr);
-    ScopedEnv xdg("XDG_CACHE_HOME", "/tmp/xdg");
-    EXPECT_EQ(default_cache_dir(), "/tmp/xdg/talus");
-  }
-  {
-    ScopedEnv talus_dir("TALUS_CACHE_DIR", nullptr);
-    ScopedEnv xdg("XDG_CACHE_HOME", nullptr);
-    ScopedEnv home("HOME", "/home/someone");
-    EXPECT_EQ(default_cache_dir(), "/home/someone/.cache/talus");
-  }
 }
 
 // a cached build in $TALUS_CACHE_DIR: a miss builds and saves, the next build reads the same pile
