@@ -369,9 +369,9 @@ TEST(ReferenceNarrowPhase, ManyBoxesBinnedByColumnGiveEveryContact) {
 // the write pass's two paths (DemSettings::narrow_phase_slots): a particle written from the
 // partners its count pass kept gives the bytes of one visited again. Worlds with 0 slots (every
 // particle with a contact visited twice), 2 (both paths) and the default step three times from
-// one random scene
-// (the second and third narrow phases warm start from the last); every contact byte and every
-// particle state byte must agree. The scene's fastest reach makes particles own up to ~6 contacts
+// one random scene (the second and third narrow phases warm start from the last); every contact
+// byte and every particle state byte must agree. The scene's fastest reach makes particles own up
+// to ~6 contacts
 TEST(ReferenceNarrowPhase, ContactsWrittenFromTheSlotsAreThoseOfASecondVisit) {
   uint64_t seed = test::fresh_seed();
   SCOPED_TRACE(test::seed_note(seed));
