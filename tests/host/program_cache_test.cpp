@@ -93,7 +93,8 @@ void expect_scan_works(Device& dev, const std::string& label) {
 
 // a Device saves its programs' binaries in TALUS_CACHE_DIR/kernels; the next Device creates its
 // programs from them (the file is not written again) and they compute what the source's do; over
-// a damaged file it builds the source and saves a whole binary again
+// a damaged file it builds the source and saves a whole binary again, which the Device after it
+// takes. (A binary's size is PoCL's to choose: it holds the kernels PoCL had compiled by then.)
 TEST(ProgramCache, ADeviceBuildsFromTheSavedBinaryAndFromSourceOverADamagedOne) {
   TempFolder dir("talus-program-cache-device");
   ScopedEnv env("TALUS_CACHE_DIR", dir.path.c_str());
@@ -103,22 +104,26 @@ TEST(ProgramCache, ADeviceBuildsFromTheSavedBinaryAndFromSourceOverADamagedOne) 
   }
   const std::vector<fs::path> saved = files_in(dir.path / "kernels");
   ASSERT_EQ(saved.size(), 1u) << "the scan's program, saved once";
-  const auto written = fs::last_write_time(saved[0]);
-  const auto size = fs::file_size(saved[0]);
-  std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  {
-    Device second;
-    expect_scan_works(second, "created from the saved binary");
-  }
-  EXPECT_EQ(fs::last_write_time(saved[0]), written) << "a hit writes nothing";
-  EXPECT_EQ(files_in(dir.path / "kernels").size(), 1u);
-  // damaged: built from source, saved whole again
+  // a Device that takes the saved binary writes nothing
+  const auto expect_hit = [&](const char* label) {
+    const auto written = fs::last_write_time(saved[0]);
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    {
+      Device next;
+      expect_scan_works(next, label);
+    }
+    EXPECT_EQ(fs::last_write_time(saved[0]), written) << label << ": a hit writes nothing";
+    EXPECT_EQ(files_in(dir.path / "kernels").size(), 1u) << label;
+  };
+  expect_hit("created from the saved binary");
+  // damaged: built from source and saved again, whole, as the next Device shows
   std::ofstream(saved[0], std::ios::binary) << "not a program binary";
   {
-    Device third;
-    expect_scan_works(third, "rebuilt over a damaged file");
+    Device rebuilt;
+    expect_scan_works(rebuilt, "rebuilt over a damaged file");
   }
-  EXPECT_EQ(fs::file_size(saved[0]), size);
+  EXPECT_GT(fs::file_size(saved[0]), 1000u);
+  expect_hit("created from the binary saved over the damaged one");
 }
 
 }  // namespace
