@@ -1,5 +1,6 @@
 #include "host/binary.hpp"
 
+#include <cstdio>
 #include <cstring>
 #include <utility>
 
@@ -20,6 +21,12 @@ std::uint64_t fnv1a64(std::string_view bytes) {
     h *= kFnvPrime;
   }
   return h;
+}
+
+std::string key_file_name(std::string_view key) {
+  char name[17];
+  std::snprintf(name, sizeof name, "%016llx", static_cast<unsigned long long>(fnv1a64(key)));
+  return name;
 }
 
 void begin_sealed(ByteWriter& w, const SealedFormat& format) {

@@ -20,6 +20,9 @@ namespace talus {
 // the checksum of the files and the name of a pile's key. Not cryptographic: a file also holds
 // what it is checked against, so a collision is a miss, never a wrong answer
 std::uint64_t fnv1a64(std::string_view bytes);
+// a cache file's name for a key: its FNV-1a 64 as 16 hex digits (the pile cache's piles, the
+// program binaries)
+std::string key_file_name(std::string_view key);
 
 // appends little-endian numbers to a byte string
 class ByteWriter {

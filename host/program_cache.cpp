@@ -1,6 +1,5 @@
 #include "host/program_cache.hpp"
 
-#include <cstdio>
 #include <filesystem>
 #include <system_error>
 #include <utility>
@@ -16,9 +15,7 @@ const SealedFormat kProgramFormat{"TALUSBIN", 1, "program binary",
                                   "delete it, the kernels are built from source again"};
 
 std::string file_of(const std::string& dir, const std::string& key) {
-  char name[17];
-  std::snprintf(name, sizeof name, "%016llx", static_cast<unsigned long long>(fnv1a64(key)));
-  return (std::filesystem::path(dir) / "kernels" / (std::string(name) + ".bin")).string();
+  return (std::filesystem::path(dir) / "kernels" / (key_file_name(key) + ".bin")).string();
 }
 }  // namespace
 

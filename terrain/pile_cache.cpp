@@ -5,7 +5,6 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <string_view>
 
 #include "host/binary.hpp"
@@ -35,14 +34,6 @@ Vec3 read_vec(ByteReader& r, const char* what) {
   return v;
 }
 
-std::string hex16(std::uint64_t v) {
-  std::ostringstream s;
-  s.width(16);
-  s.fill('0');
-  s << std::hex << v;
-  return s.str();
-}
-
 // a profile that says where it came from in a note
 std::string describe(const PileProfile& profile, const FidelityPreset& preset) {
   return (profile.name.empty() ? std::string("pile") : profile.name) + " at " + preset.name;
@@ -50,7 +41,7 @@ std::string describe(const PileProfile& profile, const FidelityPreset& preset) {
 
 }  // namespace
 
-std::string pile_key_name(const std::string& key_bytes) { return hex16(fnv1a64(key_bytes)); }
+std::string pile_key_name(const std::string& key_bytes) { return key_file_name(key_bytes); }
 
 std::string pile_key_bytes(const PileProfile& profile, const FidelityPreset& preset,
                            const Material& material, const PileBuildOptions& options,
