@@ -170,6 +170,7 @@ DiggingOptions digging_options(const RunOptions& o) {
   options.sweep_tolerance = o.sweep_tolerance;
   options.pair_reach = o.pair_reach;
   options.relaxation = o.relaxation;
+  options.seed_diameter = o.seed_diameter;
   if (o.form_speed >= 0.0) options.pile.form_speed = o.form_speed;
   options.pile.hold_face = o.hold_face;
   options.sweep = parse_sweep(o.sweep, "--sweep");
@@ -267,6 +268,7 @@ nlohmann::json dig_details(const RunOptions& o, const vehicle::Scenario& sc,
         {"sweep_tolerance_m_s", options.sweep_tolerance},
         {"pair_reach", options.pair_reach},
         {"relaxation", options.relaxation},
+        {"seed_diameter", options.seed_diameter},
         {"max_passes", sim.max_passes()},
         {"max_residual_m_s", sim.max_residual()},
         {"steps_at_pass_limit", sim.steps_at_pass_limit()},
@@ -434,8 +436,12 @@ void run_scenario(const RunOptions& o) {
   // the model extensions of the options, in their order (bad input before anything runs)
   const auto effects = vehicle::load_effects(o.effects, o.effect_plugins, sc, "--effect");
   // the level and the sweep are checked for every scenario, though only a pile uses them
-  level_preset(o.fidelity);
+  const FidelityPreset level = level_preset(o.fidelity);
   parse_sweep(o.sweep, "--sweep");
+  if (o.seed_diameter != 1.0 && !(sc.pile && is_multiscale(level)))
+    throw InputError("--seed-diameter " + std::to_string(o.seed_diameter) +
+                     ": only a pile scenario at a type-G level (G400 ... G50) grows its zone's "
+                     "particles from seeds; give --fidelity G400 (or finer) or leave it at 1");
   if (sc.pile) {
     run_digging(o, sc, effects->set);
   } else {
@@ -500,6 +506,12 @@ void add_run_command(CLI::App& app, const std::string& command_line) {
   add_reach_option(*cmd, opts->pair_reach);
   cmd->add_option("--relaxation", opts->relaxation, kRelaxationHelp)
       ->check(relaxation_number())
+      ->capture_default_str();
+  cmd->add_option("--seed-diameter", opts->seed_diameter,
+                  "study, type G: the zone's particles appear at this fraction of their full "
+                  "diameter and grow as the excavated soil feeds them, in (0, 1]; 1 = at full "
+                  "size (docs/multiscale.md \"Growth\": smaller seeds load more soil)")
+      ->check(seed_fraction())
       ->capture_default_str();
   cmd->add_option("--form-speed", opts->form_speed,
                   "study, with --free-face: speed the pile's formwork withdraws at before it "

@@ -37,6 +37,9 @@ struct RunOptions {
   bool pair_reach = DiggingOptions{}.pair_reach;
   // the relaxation of the particle rows' PGS sweeps (DemSettings::relaxation; study)
   double relaxation = 1.0;
+  // type G: the zone particles' seed diameter, a fraction of their full one (study;
+  // --seed-diameter)
+  double seed_diameter = kSeedDiameter;
   bool residuals = false;
   // settled piles read from and saved to the pile cache (terrain/pile_cache.hpp; --no-pile-cache)
   bool pile_cache = true;

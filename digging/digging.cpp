@@ -97,6 +97,11 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
   steps_total_ = static_cast<int>(std::lround(scenario.duration / h));
   Material soil = options.soil;
   soil.cohesion = effects_.soil({options.soil.cohesion}).cohesion;
+  if (!is_multiscale(preset) && options.seed_diameter != 1.0)
+    throw InputError("seed_diameter " + std::to_string(options.seed_diameter) + " at " +
+                     preset.name +
+                     ": only the type-G levels' zone particles grow from seeds; use a G level or "
+                     "leave it at 1");
   // type G: the voxel terrain of the scenario's profile, its zone's particles and the aggregate
   // solved with the machine (terrain/multiscale_terrain, terrain/aggregate)
   if (is_multiscale(preset)) {
@@ -107,6 +112,7 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
     terrain.one_group_rows = options.one_group_rows;
     terrain.pair_reach = options.pair_reach;
     terrain.relaxation = options.relaxation;
+    terrain.seed_diameter = options.seed_diameter;
     terrain.seed = options.pile.seed;
     terrain_ = std::make_unique<MultiscaleTerrain>(dev, scenario_pile_profile(scenario), preset,
                                                    loader_->bucket_mesh(),

@@ -51,6 +51,9 @@ struct DiggingOptions {
   // the relaxation omega of the particle rows' PGS sweeps (DemSettings::relaxation; type D and the
   // type-G zone alike; the pile is settled with its own settings)
   double relaxation = 1.0;
+  // type G: the fraction of its full diameter a zone particle appears at and grows from
+  // (MultiscaleOptions::seed_diameter; 1, the default: at full size; docs/multiscale.md "Growth")
+  double seed_diameter = kSeedDiameter;
   // a type-D dig's sweeps end early once the particle rows' RMS residual is below this [m/s]
   // (DemSettings::tolerance; the level's N_it is the cap). 0: always N_it, as the paper's presets
   double sweep_tolerance = kDigSweepTolerance;

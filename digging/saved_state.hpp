@@ -21,8 +21,9 @@ namespace talus {
 // the file's format: raise it whenever what any save_state writes changes (a file of another
 // version is refused, never half-read)
 // 2: walls, type G (2026-11-25); 3: the dig's sweep count (2026-11-27); 4: the particle
-// contacts' colours (2026-11-27, issue 13)
-inline constexpr std::uint32_t kStateFormatVersion = 4;
+// contacts' colours (2026-11-27, issue 13); 5: type G's full particle diameters (growth,
+// 2026-11-29, issue 14)
+inline constexpr std::uint32_t kStateFormatVersion = 5;
 
 struct SavedStateHeader {
   std::string key;     // "name=value" lines: what the simulation was made from

@@ -230,6 +230,27 @@ void DemWorld::set_particles(const Particles& in) {
   update_params();
 }
 
+void DemWorld::resize_particles(const Particles& in) {
+  const size_t n = in.size();
+  if (n != particle_count_)
+    throw Error("DemWorld::resize_particles: " + std::to_string(n) + " particles for the " +
+                std::to_string(particle_count_) + " the world holds");
+  // the three arrays whose w lanes hold a size: position (radius), velocity (inverse mass) and
+  // omega (inverse inertia), written whole as set_particles writes them
+  std::vector<cl_float4> x(n), v(n), w(n);
+  max_radius_ = 0.0;
+  for (size_t i = 0; i < n; ++i) {
+    x[i] = to_float4(in.position[i], in.radius[i]);
+    v[i] = to_float4(in.velocity[i], in.inv_mass[i]);
+    w[i] = to_float4(in.omega[i], in.inv_inertia[i]);
+    max_radius_ = std::max(max_radius_, in.radius[i]);
+  }
+  buffers_.position.upload(x);
+  buffers_.velocity.upload(v);
+  buffers_.omega.upload(w);
+  update_params();
+}
+
 void DemWorld::renumber_particles(const Particles& in, const std::vector<int>& new_index_of_old) {
   DemBuffers& b = buffers_;
   const size_t old_count = particle_count_;

@@ -17,6 +17,13 @@ void Particles::add(const Vec3& x, double r, double density) {
   inv_inertia.push_back(1.0 / (0.4 * mass * r * r));
 }
 
+void Particles::resize(size_t i, double r, double density) {
+  double mass = density * 4.0 / 3.0 * M_PI * r * r * r;
+  radius.at(i) = r;
+  inv_mass.at(i) = 1.0 / mass;
+  inv_inertia.at(i) = 1.0 / (0.4 * mass * r * r);
+}
+
 Particles Particles::permuted(const std::vector<size_t>& order) const {
   Particles out;
   for (size_t i : order) {

@@ -63,6 +63,9 @@ struct Particles {
   size_t size() const { return position.size(); }
   // appends a solid sphere of the given density at rest
   void add(const Vec3& x, double r, double density);
+  // gives particle i the radius r as a solid sphere of the given density (mass and inertia as
+  // add's), keeping where it is and how it moves
+  void resize(size_t i, double r, double density);
   // mass of particle i [kg] (0 for fixed ones)
   double mass(size_t i) const { return inv_mass[i] > 0 ? 1.0 / inv_mass[i] : 0.0; }
   // the particles at the indices `order`, in that order (a permutation of 0..size-1, or a subset)

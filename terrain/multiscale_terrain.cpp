@@ -62,6 +62,9 @@ class CentreGrid {
   std::vector<double> radii_;
 };
 
+// the mass of a sphere of diameter d at density rho [kg], as spawning has always counted it
+double sphere_mass(double d, double rho) { return rho * M_PI / 6.0 * d * d * d; }
+
 BucketPose pose_of(const KinematicBucket& b) {
   BucketPose pose;
   pose.position = b.position;
@@ -108,6 +111,13 @@ MultiscaleTerrain::MultiscaleTerrain(Device& dev, const PileProfile& profile,
   if (!find_multiscale_preset(level.name))
     throw InputError("multiscale terrain: level '" + level.name +
                      "' is not a type-G level (G50, G100, G200, G400)");
+  if (!(options.seed_diameter > 0.0 && options.seed_diameter <= 1.0))
+    throw InputError(
+        "multiscale terrain: seed_diameter " + std::to_string(options.seed_diameter) +
+        " is not in (0, 1]: a seed is that fraction of its full diameter (1: full size)");
+  if (!(options.growth_speed > 0.0 && std::isfinite(options.growth_speed)))
+    throw InputError("multiscale terrain: growth_speed " + std::to_string(options.growth_speed) +
+                     " m/s is not a positive speed");
   DemSettings settings;
   settings.dt = level.dt;
   settings.iterations = level.iterations;
@@ -187,13 +197,17 @@ void MultiscaleTerrain::step(const KinematicBucket& bucket) {
   stage.emplace(dev, "spawn_merge");
   std::vector<int> new_index_of_old;
   last_.merged = merge(particles, bucket, &new_index_of_old);
+  last_.grown = grow(particles);
   last_.spawned = spawn(particles, columns, pose);
   if (last_.merged > 0 || last_.spawned > 0) {
     // the pairs of the particles that stay, and their contacts with the bucket, keep their warm
     // start (and colours) (until 2026-11-27 every contact started from zero at a step that merged
-    // or spawned any particle)
+    // or spawned any particle); the grown ones' sizes go with them
     dem_->renumber_particles(particles, new_index_of_old);
     tools_->renumber_particles(new_index_of_old);
+  } else if (last_.grown > 0) {
+    // the same particles, some larger: only their sizes change on the device
+    dem_->resize_particles(particles);
   }
 
   // 3. one DEM step with the bucket kinematic, on the voxel surface near the particles
@@ -235,7 +249,7 @@ int MultiscaleTerrain::merge(Particles& particles, const KinematicBucket& bucket
   keep.lo -= Vec3::Constant(options_.no_merge_margin);
   keep.hi += Vec3::Constant(options_.no_merge_margin);
   std::vector<size_t> kept;  // the particles that stay, in order
-  std::vector<double> kept_mass;
+  std::vector<double> kept_mass, kept_full;
   int merged = 0;
   for (size_t k = 0; k < particles.size(); ++k) {
     const Vec3& x = particles.position[k];
@@ -262,12 +276,39 @@ int MultiscaleTerrain::merge(Particles& particles, const KinematicBucket& bucket
     (*new_index_of_old)[k] = static_cast<int>(kept.size());
     kept.push_back(k);
     kept_mass.push_back(ledger_[k]);
+    kept_full.push_back(full_[k]);
   }
   if (merged > 0) {
     particles = particles.permuted(kept);
     ledger_ = std::move(kept_mass);
+    full_ = std::move(kept_full);
   }
   return merged;
+}
+
+int MultiscaleTerrain::grow(Particles& particles) {
+  // oldest first, each diameter up by at most the growth step, the last one's share what the
+  // pool holds; a particle that reaches its full diameter takes exactly the full mass, so the
+  // grown and the spawned-at-full-size particles are alike
+  const double rho = options_.particle_material.density;
+  const double step = options_.growth_speed * level_.dt;
+  int grown = 0;
+  for (size_t k = 0; k < particles.size() && pool_ > 0.0; ++k) {
+    const double full_mass = sphere_mass(full_[k], rho);
+    if (ledger_[k] >= full_mass) continue;
+    const double d_now = std::cbrt(6.0 * ledger_[k] / (M_PI * rho));
+    const double d_next = std::min(full_[k], d_now + step);
+    const double m_next = d_next >= full_[k] ? full_mass : sphere_mass(d_next, rho);
+    double m = m_next;
+    if (m_next - ledger_[k] > pool_) m = ledger_[k] + pool_;
+    if (!(m > ledger_[k])) continue;
+    pool_ = m == m_next ? pool_ - (m_next - ledger_[k]) : 0.0;
+    ledger_[k] = m;
+    particles.resize(k, m == full_mass ? 0.5 * full_[k] : 0.5 * std::cbrt(6.0 * m / (M_PI * rho)),
+                     rho);
+    ++grown;
+  }
+  return grown;
 }
 
 int MultiscaleTerrain::spawn(Particles& particles, const std::vector<ExcavatedColumn>& columns,
@@ -303,22 +344,30 @@ int MultiscaleTerrain::spawn(Particles& particles, const std::vector<ExcavatedCo
   std::vector<bool> blocked(slots.size(), false);
   for (const BucketContact& c : bucket_scene_.find_bucket_contacts(slots, all, pose, 0.0))
     blocked[c.particle] = true;
-  // fill the free slots in order while the pool holds the next particle's mass
+  // fill the free slots in order with seeds while the pool holds the next one's mass; each
+  // seed's full diameter drawn as the particles' sizes always were (a seed of fraction 1 is the
+  // full particle, made as before growth existed). The grid holds the particles as they are and
+  // the seeds made here at their full size
   CentreGrid grid(d * (1.0 + kSizeSpread));
   for (size_t k = 0; k < particles.size(); ++k)
     grid.add(particles.position[k], particles.radius[k]);
   std::uniform_real_distribution<double> spread(-kSizeSpread, kSizeSpread);
   const double rho = options_.particle_material.density;
+  const double fraction = options_.seed_diameter;
   int made = 0;
   double next_d = d * (1.0 + spread(sizes_));
   for (size_t k = 0; k < slots.size(); ++k) {
-    const double mass = rho * M_PI / 6.0 * next_d * next_d * next_d;
+    const double seed_d = fraction == 1.0 ? next_d : fraction * next_d;
+    const double mass = sphere_mass(seed_d, rho);
     if (pool_ < mass) break;
     if (blocked[k]) continue;
     const Vec3 x = slots.position[k];
+    // the seed's slot must hold its full size: a seed placed in a gap its full size does not
+    // fit overfills the zone as it grows (docs/multiscale.md "Growth": measured)
     if (grid.touches(x, 0.5 * next_d)) continue;
-    particles.add(x, 0.5 * next_d, rho);
+    particles.add(x, 0.5 * seed_d, rho);
     ledger_.push_back(mass);
+    full_.push_back(next_d);
     pool_ -= mass;
     grid.add(x, 0.5 * next_d);
     ++made;
@@ -423,6 +472,7 @@ void MultiscaleTerrain::save_state(ByteWriter& w) const {
   tools_->save_state(w);
   w.u64(ledger_.size());
   w.f64s(ledger_.data(), ledger_.size());
+  w.f64s(full_.data(), full_.size());
   w.f64(pool_);
   w.u64(sites_.size());
   for (const ExcavatedColumn& c : sites_) {
@@ -458,8 +508,9 @@ void MultiscaleTerrain::restore_state(ByteReader& r) {
   if (n != dem_->size())
     throw InputError(r.where() + ": " + std::to_string(n) + " particle masses for " +
                      std::to_string(dem_->size()) + " particles (corrupt)");
-  std::vector<double> ledger(n);
+  std::vector<double> ledger(n), full(n);
   r.f64s(ledger.data(), ledger.size(), "particle masses");
+  r.f64s(full.data(), full.size(), "full diameters");
   const double pool = r.f64("pool");
   const std::uint64_t sites = r.u64("excavated columns");
   r.need_elements(sites, 8 * 5, "excavated columns");
@@ -483,6 +534,10 @@ void MultiscaleTerrain::restore_state(ByteReader& r) {
   for (double m : ledger)
     if (!(m > 0.0 && std::isfinite(m)))
       throw InputError(r.where() + ": a particle mass of " + std::to_string(m) + " kg (corrupt)");
+  for (double x : full)
+    if (!(x > 0.0 && std::isfinite(x)))
+      throw InputError(r.where() + ": a full particle diameter of " + std::to_string(x) +
+                       " m (corrupt)");
   if (!(pool >= 0.0 && std::isfinite(pool)))
     throw InputError(r.where() + ": a pool of " + std::to_string(pool) + " kg (corrupt)");
   const double time = r.f64("terrain clock");
@@ -500,6 +555,7 @@ void MultiscaleTerrain::restore_state(ByteReader& r) {
   last.avalanched = r.f64("last step");
   read_matrix(r, last.bucket_wrench, "last step");
   ledger_ = std::move(ledger);
+  full_ = std::move(full);
   pool_ = pool;
   sites_ = std::move(columns);
   sizes_ = sizes;

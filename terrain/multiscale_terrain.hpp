@@ -10,11 +10,13 @@
 //      heaped on them: once the soil in front of a blade is particles, the voxels there stand on
 //      the last failure plane), and, while the bucket cuts, its solid soil leaves the voxels as
 //      dynamic mass into a pool;
-//   2. the pool becomes particles of the level's size (D ± 10 %, the gravel's grain density) over
-//      the columns the soil left, layer by layer from each one's new floor (or a taller
+//   2. the pool becomes particles of the level's size (D ± 10 %, the gravel's grain density): first
+//      the particles still growing take its mass, oldest first, each its diameter up by at most
+//      `growth_speed` times the step; then seeds (`seed_diameter` of their own full diameter) are
+//      made over the columns the soil left, layer by layer from each one's new floor (or a taller
 //      neighbour's, so no particle starts inside the voxel surface) up (2 m at most: the
-//      soil a bucket pushes heaps up in front of it), wherever a particle fits without touching
-//      another one or the bucket; what does not fit yet waits in the pool;
+//      soil a bucket pushes heaps up in front of it), wherever a seed fits without touching
+//      another particle or the bucket; what does not fit yet waits in the pool;
 //   3. the particles take one DEM step with the bucket as a kinematic tool (solvers/tool_world),
 //      on the voxel surface near them (one static box per column) inside the pile's container;
 //   4. particles that have come to rest on the surface outside the zone and away from the bucket
@@ -24,8 +26,9 @@
 // of a double-precision ledger (the device's float masses are not used for it), and each transfer
 // hands the same double on. `mass_balance()` adds the three.
 //
-// Choices where the paper says nothing (docs/multiscale.md): particles appear at full size rather
-// than growing from small seeds; a particle merges whole once it rests, slower than the zone's
+// Choices where the paper says nothing (docs/multiscale.md): how small a seed starts and how fast
+// it grows (the paper: particles "grow and shrink"); a particle merges whole once it rests, slower
+// than the zone's
 // activation speed (0.1 m/s: soil slower than the tool that mobilises it counts as at rest),
 // touching the surface, outside the zone and more than 0.5 m from the bucket's bounding box (the
 // reference engine's default margin).
@@ -49,6 +52,16 @@ namespace talus {
 
 class ToolWorld;
 
+// the seeds' diameter as a fraction of their full one: 1, particles appear at full size and do not
+// grow. Growth from smaller seeds is built and measured (docs/multiscale.md "Growth"): it loads
+// more soil the smaller the seed (G400 kinematic dig: 1397 kg carried at 1, 1830 at 0.5, 2538 at
+// 0.3), at every level, without bringing the levels' coupled digs closer together, so it is a
+// study option, not the default
+inline constexpr double kSeedDiameter = 1.0;
+// [m/s] how fast a seed's diameter may grow: about the bucket's cutting speed (the soil a bucket
+// mobilises moves with it), a judgement, not a source's value
+inline constexpr double kGrowthSpeed = 1.0;
+
 struct MultiscaleOptions {
   BulkSoil soil;
   AvalancheOptions avalanche;
@@ -61,6 +74,11 @@ struct MultiscaleOptions {
   int one_group_rows = kPgsOneGroupRows;  // DemSettings::one_group_rows of the zone's sweeps
   bool pair_reach = true;                 // DemSettings::pair_reach of the zone's particles (digs')
   double relaxation = 1.0;                // DemSettings::relaxation of the zone's sweeps
+  // a particle appears as a seed of this fraction of its full diameter and grows as the pool
+  // feeds it, in (0, 1]; 1 (the default): at full size, no growth (docs/multiscale.md "Growth")
+  double seed_diameter = kSeedDiameter;
+  // [m/s] the most a growing particle's diameter rises per second of the step
+  double growth_speed = kGrowthSpeed;
   unsigned seed = 1;                      // of the particles' sizes
 };
 
@@ -85,7 +103,8 @@ struct MassBalance {
 struct MultiscaleStep {
   ActiveZone zone;
   double excavated = 0.0;   // soil turned dynamic [kg]
-  int spawned = 0;          // particles made from the pool
+  int spawned = 0;          // particles made from the pool (seeds)
+  int grown = 0;            // particles that grew from the pool
   int merged = 0;           // particles merged back into the voxels
   double avalanched = 0.0;  // soil that slid [kg]
   Vec6 bucket_wrench =
@@ -120,10 +139,10 @@ class MultiscaleTerrain {
   const FidelityPreset& level() const { return level_; }
 
   // the state a step carries to the next, for a saved state (digging/saved_state): the voxels'
-  // soil, the pool, the zone's particles with their contacts and masses (the ledger), the
-  // bucket's contact impulses, where the pool's soil came from, the size generator, the clock
-  // and what the last step did (its zone is what the aggregate reads next). restore_state reads
-  // it into a terrain made with the same profile, level, bucket and options; the terrain then
+  // soil, the pool, the zone's particles with their contacts, masses (the ledger) and full
+  // diameters, the bucket's contact impulses, where the pool's soil came from, the size generator,
+  // the clock and what the last step did (its zone is what the aggregate reads next). restore_state
+  // reads it into a terrain made with the same profile, level, bucket and options; the terrain then
   // steps on bit-identically to the saved one on the same device. InputError (naming the
   // reader's place) for a state of another grid or a ledger that does not match the particles;
   // the checks run as the parts are read, so a failed restore may leave the terrain half
@@ -132,7 +151,9 @@ class MultiscaleTerrain {
   void restore_state(ByteReader& r);
 
  private:
-  // step 2: particles from the pool in the excavated cells; returns how many
+  // step 2: the growing particles fed from the pool; returns how many grew
+  int grow(Particles& particles);
+  // step 2: seeds from the pool in the excavated cells; returns how many
   int spawn(Particles& particles, const std::vector<ExcavatedColumn>& columns,
             const BucketPose& pose);
   // step 4: resting particles back into the voxels; returns how many, and each old particle's
@@ -159,6 +180,7 @@ class MultiscaleTerrain {
   std::unique_ptr<DemWorld> dem_;
   std::unique_ptr<ToolWorld> tools_;
   std::vector<double> ledger_;  // mass of each particle on the device, in its order [kg]
+  std::vector<double> full_;    // the diameter each particle grows to, in the same order [m]
   Particles state_;             // the device's particles after the last step (host copy)
   double pool_ = 0.0;           // dynamic soil not yet made into particles [kg]
   std::vector<ExcavatedColumn>

@@ -251,6 +251,22 @@ TEST(CliErrors, StepCountsAndLoadsOutsideTheirRangeAreRefused) {
       EXPECT_NE(o.err.find("--relaxation"), std::string::npos) << cmd << omega << ": " << o.err;
       EXPECT_FALSE(std::filesystem::exists("/tmp/talus_cli_relaxation")) << cmd << omega;
     }
+  // the type-G seed diameter: a fraction in (0, 1], at a G level only
+  for (const char* seed : {"0", "-0.5", "1.5", "nan", "x"}) {
+    const Outcome o = run("", std::string("run --scenario hd27 --fidelity G400 --out "
+                                          "/tmp/talus_cli_seed --seed-diameter ") +
+                                  seed);
+    EXPECT_EQ(o.code, 2) << seed << ": " << o.err;
+    EXPECT_NE(o.err.find("--seed-diameter"), std::string::npos) << seed << ": " << o.err;
+    EXPECT_FALSE(std::filesystem::exists("/tmp/talus_cli_seed")) << seed;
+  }
+  for (const char* cmd : {"run --scenario hd27 --fidelity D400", "run --scenario load-carry"}) {
+    const Outcome o = run("", std::string(cmd) + " --out /tmp/talus_cli_seed --seed-diameter 0.5");
+    EXPECT_EQ(o.code, 2) << cmd << ": " << o.err;
+    EXPECT_NE(o.err.find("--seed-diameter"), std::string::npos) << cmd << ": " << o.err;
+    EXPECT_NE(o.err.find("type-G"), std::string::npos) << cmd << ": " << o.err;
+    EXPECT_FALSE(std::filesystem::exists("/tmp/talus_cli_seed")) << cmd;
+  }
   // the Jacobi sweep has no relaxation to take
   const Outcome jacobi = run(
       "", "run --scenario hd27 --out /tmp/talus_cli_relaxation --sweep jacobi --relaxation 1.3");

@@ -767,6 +767,45 @@ TEST(ReferenceColouring, RenumberedParticlesKeepTheirPairsWarmStartAndColours) {
   EXPECT_THROW(world.renumber_particles(now, swapped), Error);
 }
 
+TEST(ReferenceColouring, ResizedParticlesKeepEveryContactAndTheirColours) {
+  RandomWorld r = random_world();
+  SCOPED_TRACE(r.seed_note);
+  DemWorld& world = *r.world;
+  world.step();
+  world.step();
+  ASSERT_TRUE(world.carries_colours());
+  const DemBuffers& b = world.buffers();
+  // last step's contacts and colours, as the next step's narrow phase and colouring read them
+  const int n_contacts = b.n_contacts;
+  const std::vector<TlContact> contacts = b.contacts[1 - b.current].download(n_contacts);
+  const std::vector<int> colours = b.colour_previous.download(n_contacts);
+  // every third particle grows by 5 % (a growing type-G seed), the others keep their size
+  Particles p = world.particles();
+  const double density = 1.0 / (p.inv_mass[0] * 4.0 / 3.0 * M_PI * std::pow(p.radius[0], 3));
+  for (size_t k = 0; k < p.size(); k += 3) p.resize(k, 1.05 * p.radius[k], density);
+  world.resize_particles(p);
+  // the sizes reached the device, the contacts, their impulses and colours did not move
+  const Particles q = world.particles();
+  for (size_t k = 0; k < p.size(); ++k) {
+    EXPECT_EQ(q.radius[k], static_cast<double>(static_cast<float>(p.radius[k]))) << k;
+    EXPECT_EQ(q.inv_mass[k], static_cast<double>(static_cast<float>(p.inv_mass[k]))) << k;
+    EXPECT_EQ(q.inv_inertia[k], static_cast<double>(static_cast<float>(p.inv_inertia[k]))) << k;
+    EXPECT_EQ(q.position[k], p.position[k]) << k;
+  }
+  EXPECT_DOUBLE_EQ(world.max_radius(), *std::max_element(p.radius.begin(), p.radius.end()));
+  ASSERT_EQ(b.n_contacts, n_contacts);
+  EXPECT_TRUE(world.carries_colours());
+  const std::vector<TlContact> after = b.contacts[1 - b.current].download(n_contacts);
+  EXPECT_EQ(std::memcmp(after.data(), contacts.data(), contacts.size() * sizeof(TlContact)), 0);
+  EXPECT_EQ(b.colour_previous.download(n_contacts), colours);
+  // and the world steps on from them
+  world.step();
+  EXPECT_GT(b.n_contacts, 0);
+  // another count is refused
+  Particles fewer = p.permuted({0, 1});
+  EXPECT_THROW(world.resize_particles(fewer), Error);
+}
+
 // ---------------------------------------------------------------------------------------------
 // rows, gravity and warm start
 
