@@ -313,19 +313,21 @@ void write_dig_figures(const std::filesystem::path& dir, const sim2real::Run& ru
   write_render((dir / "side.png").string(), final_particles, loader, view, terrain);
 }
 
-// the type-G aggregate step by step as CSV (ParaView reads it with Table To Points on cx, cy, cz)
+// the type-G aggregate step by step as CSV (ParaView reads it with Table To Points on cx, cy, cz;
+// its pose's orientation is the quaternion qx..qw of its principal axes, moments i1 <= i2 <= i3)
 std::string aggregate_csv(const std::vector<AggregateSample>& log) {
   std::ostringstream os;
   os << "t,particles,mass,cx,cy,cz,vx,vy,vz,fx_bucket,fy_bucket,fz_bucket,terrain_normal_force,"
-        "edge_force,"
-        "depth_a,depth_b\n";
+        "edge_force,depth_a,depth_b,qx,qy,qz,qw,i1,i2,i3\n";
   os.precision(9);
   for (const AggregateSample& a : log)
     os << a.t << ',' << a.particles << ',' << a.mass << ',' << a.centre.x() << ',' << a.centre.y()
        << ',' << a.centre.z() << ',' << a.velocity.x() << ',' << a.velocity.y() << ','
        << a.velocity.z() << ',' << a.force_on_bucket.x() << ',' << a.force_on_bucket.y() << ','
        << a.force_on_bucket.z() << ',' << a.terrain_normal_force << ',' << a.edge_force << ','
-       << a.depth_a << ',' << a.depth_b << '\n';
+       << a.depth_a << ',' << a.depth_b << ',' << a.orientation.x() << ',' << a.orientation.y()
+       << ',' << a.orientation.z() << ',' << a.orientation.w() << ',' << a.principal_moments.x()
+       << ',' << a.principal_moments.y() << ',' << a.principal_moments.z() << '\n';
   return os.str();
 }
 

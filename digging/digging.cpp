@@ -278,6 +278,9 @@ void DiggingSimulation::multiscale_step() {
   a.edge_force = aggregate_->edge_force();
   a.depth_a = aggregate_->depth_a();
   a.depth_b = aggregate_->depth_b();
+  const PrincipalAxes axes = principal_axes(aggregate_->aggregate().inertia);
+  a.orientation = axes.orientation;
+  a.principal_moments = axes.moments;
   aggregate_log_.push_back(a);
 }
 
@@ -291,6 +294,8 @@ void write_aggregate_sample(ByteWriter& w, const AggregateSample& a) {
   write_matrix(w, a.velocity);
   write_matrix(w, a.force_on_bucket);
   for (double v : {a.terrain_normal_force, a.edge_force, a.depth_a, a.depth_b}) w.f64(v);
+  write_matrix(w, a.orientation.coeffs());
+  write_matrix(w, a.principal_moments);
 }
 AggregateSample read_aggregate_sample(ByteReader& r) {
   AggregateSample a;
@@ -302,10 +307,12 @@ AggregateSample read_aggregate_sample(ByteReader& r) {
   read_matrix(r, a.force_on_bucket, "aggregate log");
   for (double* v : {&a.terrain_normal_force, &a.edge_force, &a.depth_a, &a.depth_b})
     *v = r.f64("aggregate log");
+  read_matrix(r, a.orientation.coeffs(), "aggregate log");
+  read_matrix(r, a.principal_moments, "aggregate log");
   return a;
 }
 // bytes write_aggregate_sample writes
-constexpr std::uint64_t kAggregateSampleBytes = 8 * (1 + 1 + 1 + 3 + 3 + 3 + 4);
+constexpr std::uint64_t kAggregateSampleBytes = 8 * (1 + 1 + 1 + 3 + 3 + 3 + 4 + 4 + 3);
 }  // namespace
 
 void DiggingSimulation::save_state(ByteWriter& w) const {

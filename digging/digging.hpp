@@ -98,6 +98,10 @@ struct AggregateSample {
   double terrain_normal_force = 0.0;    // interface B's normal force [N]
   double edge_force = 0.0;              // the penetration resistance's [N]
   double depth_a = 0.0, depth_b = 0.0;  // the interfaces' depths [m]
+  // its principal axes of inertia (a rotation from the world, terrain/aggregate principal_axes)
+  // and the moments about them [kg m^2]: the orientation of its pose
+  Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();
+  Vec3 principal_moments = Vec3::Zero();
 };
 
 // the laser scan of a scenario's pile before loading, as the field tests measured it: the settled

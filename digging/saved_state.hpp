@@ -21,8 +21,8 @@ namespace talus {
 // the file's format: raise it whenever what any save_state writes changes (a file of another
 // version is refused, never half-read)
 // 2: walls, type G (2026-11-25); 3: the dig's sweep count (2026-11-27); 4: the particle
-// contacts' colours (2026-11-27, issue 13); 5: type G's full particle diameters (growth,
-// 2026-11-29, issue 14)
+// contacts' colours (2026-11-27, issue 13); 5: type G's full particle diameters (growth) and the
+// aggregate log's principal axes (2026-11-29, issue 14)
 inline constexpr std::uint32_t kStateFormatVersion = 5;
 
 struct SavedStateHeader {

@@ -1,6 +1,7 @@
 #include "terrain/aggregate.hpp"
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -65,6 +66,24 @@ Aggregate aggregate_of(const Particles& p, const std::vector<double>& masses,
   }
   a.omega = a.inertia.ldlt().solve(spin);
   return a;
+}
+
+PrincipalAxes principal_axes(const Eigen::Matrix3d& inertia) {
+  PrincipalAxes out;
+  if (inertia.isZero(0.0)) return out;
+  // the symmetric eigenproblem: Eigen sorts the moments ascending
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(inertia);
+  Eigen::Matrix3d axes = solver.eigenvectors();
+  // each axis's sign fixed by its largest world component, the third made right-handed
+  for (int c = 0; c < 2; ++c) {
+    Eigen::Index largest = 0;
+    axes.col(c).cwiseAbs().maxCoeff(&largest);
+    if (axes(largest, c) < 0.0) axes.col(c) = -axes.col(c);
+  }
+  axes.col(2) = axes.col(0).cross(axes.col(1));
+  out.orientation = Eigen::Quaterniond(axes).normalized();
+  out.moments = solver.eigenvalues();
+  return out;
 }
 
 std::vector<int> zone_members(const Particles& particles, const ActiveZone& zone) {

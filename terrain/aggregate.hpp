@@ -62,6 +62,16 @@ struct Aggregate {
 Aggregate aggregate_of(const Particles& particles, const std::vector<double>& masses,
                        const std::vector<int>& members);
 
+// the aggregate's orientation: its principal axes of inertia as the columns of a rotation from
+// the world (ascending moments; each axis signed so that its largest world component is positive,
+// the third the cross product of the first two, so the same inertia always gives the same frame),
+// and the moments about them [kg m^2]. A body with zero inertia (no members) has the identity
+struct PrincipalAxes {
+  Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();
+  Vec3 moments = Vec3::Zero();
+};
+PrincipalAxes principal_axes(const Eigen::Matrix3d& inertia);
+
 // the particles of the zone: inside its wedge, whatever the surface (they stand above it)
 std::vector<int> zone_members(const Particles& particles, const ActiveZone& zone);
 

@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -11,6 +12,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
+#include <vector>
 
 namespace {
 
@@ -166,6 +168,27 @@ TEST(DiggingRunTest, Hd27AtG400WritesTheRunContractAndTheTerrain) {
   const std::string text((std::istreambuf_iterator<char>(vts)), std::istreambuf_iterator<char>());
   EXPECT_NE(text.find("StructuredGrid"), std::string::npos);
   EXPECT_NE(text.find("Name=\"compaction\""), std::string::npos);
+  // the aggregate's pose: its centre and the unit quaternion of its principal axes, every step
+  std::ifstream csv(dir / "aggregate.csv");
+  std::string header, row;
+  std::getline(csv, header);
+  EXPECT_NE(header.find(",cx,cy,cz,"), std::string::npos) << header;
+  EXPECT_NE(header.find(",qx,qy,qz,qw,i1,i2,i3"), std::string::npos) << header;
+  int rows = 0, posed = 0;
+  while (std::getline(csv, row)) {
+    std::vector<double> v;
+    std::istringstream cells(row);
+    for (std::string cell; std::getline(cells, cell, ',');) v.push_back(std::stod(cell));
+    ASSERT_EQ(v.size(), 23u) << row;
+    const double norm = std::hypot(std::hypot(v[16], v[17]), std::hypot(v[18], v[19]));
+    EXPECT_NEAR(norm, 1.0, 1e-6) << row;
+    EXPECT_LE(v[20], v[21]) << row;
+    EXPECT_LE(v[21], v[22]) << row;
+    ++rows;
+    if (v[1] > 0 && v[20] > 0.0) ++posed;  // particles in the zone: a body with inertia
+  }
+  EXPECT_GT(rows, 10);
+  EXPECT_GT(posed, 0);
 }
 
 TEST(DiggingRunTest, UnknownFidelityIsBadInput) {

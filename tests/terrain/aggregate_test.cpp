@@ -1,9 +1,11 @@
 // terrain/aggregate: the aggregate of a set of particles against the rigid-body sums worked by hand
-// (mass, centre, momentum, parallel-axis inertia, spin from the angular momentum), and the zone's
-// members.
+// (mass, centre, momentum, parallel-axis inertia, spin from the angular momentum), its principal
+// axes, and the zone's members.
 #include "terrain/aggregate.hpp"
 
 #include <gtest/gtest.h>
+
+#include <random>
 
 namespace talus {
 namespace {
@@ -28,6 +30,32 @@ TEST(Aggregate, TwoOrbitingSpheresSpinAboutTheirCentre) {
   EXPECT_NEAR(g.inertia(0, 0), 2 * 0.4 * m * r * r, 1e-12);
   EXPECT_NEAR(g.omega.z(), 2 * m * a * u / izz, 1e-12);
   EXPECT_NEAR(g.omega.head<2>().norm(), 0.0, 1e-12);
+}
+
+// an inertia made from known principal axes and moments, turned by a fresh random rotation: the
+// axes come back (up to their fixed signs), in ascending order, right-handed, and rebuild it
+TEST(Aggregate, PrincipalAxesOfARotatedInertiaComeBack) {
+  std::mt19937_64 rng(std::random_device{}());
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int draw = 0; draw < 50; ++draw) {
+    const Eigen::Quaterniond turn = Eigen::Quaterniond(u(rng), u(rng), u(rng), u(rng)).normalized();
+    const Vec3 moments(1.0 + 2.0 * std::abs(u(rng)), 4.0 + std::abs(u(rng)),
+                       6.0 + std::abs(u(rng)));
+    const Eigen::Matrix3d R = turn.toRotationMatrix();
+    const Eigen::Matrix3d inertia = R * moments.asDiagonal() * R.transpose();
+    const PrincipalAxes axes = principal_axes(inertia);
+    EXPECT_LT((axes.moments - moments).norm(), 1e-9 * moments.norm()) << draw;
+    const Eigen::Matrix3d A = axes.orientation.toRotationMatrix();
+    EXPECT_NEAR(A.determinant(), 1.0, 1e-12) << draw;
+    EXPECT_LT((A * axes.moments.asDiagonal() * A.transpose() - inertia).norm(), 1e-9) << draw;
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(std::abs(A.col(c).dot(R.col(c))), 1.0, 1e-9) << draw;
+    // the same inertia, the same frame
+    EXPECT_EQ(principal_axes(inertia).orientation.coeffs(), axes.orientation.coeffs());
+  }
+  // no members: no inertia, the identity
+  const PrincipalAxes none = principal_axes(Eigen::Matrix3d::Zero());
+  EXPECT_EQ(none.orientation.coeffs(), Eigen::Quaterniond::Identity().coeffs());
+  EXPECT_EQ(none.moments, Vec3::Zero());
 }
 
 // one sphere: its own mass, place, velocity and spin
