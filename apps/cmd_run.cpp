@@ -440,10 +440,15 @@ void run_scenario(const RunOptions& o) {
   // the level and the sweep are checked for every scenario, though only a pile uses them
   const FidelityPreset level = level_preset(o.fidelity);
   parse_sweep(o.sweep, "--sweep");
-  if (o.seed_diameter != 1.0 && !(sc.pile && is_multiscale(level)))
-    throw InputError("--seed-diameter " + std::to_string(o.seed_diameter) +
-                     ": only a pile scenario at a type-G level (G400 ... G50) grows its zone's "
-                     "particles from seeds; give --fidelity G400 (or finer) or leave it at 1");
+  if (o.seed_diameter != 1.0 && !sc.pile)
+    throw InputError("--seed-diameter " + std::to_string(o.seed_diameter) + ": scenario '" +
+                     sc.name +
+                     "' has no pile, so no type-G particles to grow; leave it at 1 or run a pile "
+                     "scenario (fb35, hd27, rd21)");
+  if (o.seed_diameter != 1.0 && !is_multiscale(level))
+    throw InputError("--seed-diameter " + std::to_string(o.seed_diameter) + " at " + level.name +
+                     ": only the type-G levels (G400 ... G50) grow their zone's particles from "
+                     "seeds; give --fidelity G400 (or finer) or leave it at 1");
   if (sc.pile) {
     run_digging(o, sc, effects->set);
   } else {
@@ -511,7 +516,7 @@ void add_run_command(CLI::App& app, const std::string& command_line) {
       ->capture_default_str();
   cmd->add_option("--seed-diameter", opts->seed_diameter,
                   "study, type G: the zone's particles appear at this fraction of their full "
-                  "diameter and grow as the excavated soil feeds them, in (0, 1]; 1 = at full "
+                  "diameter and grow as the excavated soil feeds them, in [0.1, 1]; 1 = at full "
                   "size (docs/multiscale.md \"Growth\": smaller seeds load more soil)")
       ->check(seed_fraction())
       ->capture_default_str();

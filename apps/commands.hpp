@@ -12,6 +12,7 @@
 #include "host/error.hpp"
 #include "host/files.hpp"
 #include "solvers/dem_settings.hpp"
+#include "terrain/multiscale_terrain.hpp"
 #include "terrain/pile.hpp"
 
 namespace talus::app {
@@ -84,17 +85,16 @@ inline CLI::Validator signed_number(bool allow_zero) {
 inline CLI::Validator positive_number() { return signed_number(false); }
 inline CLI::Validator non_negative_number() { return signed_number(true); }
 
-// a type-G seed's diameter as a fraction of its full one, in (0, 1]
-// (MultiscaleOptions::seed_diameter)
+// a type-G seed's diameter as a fraction of its full one, in [0.1, 1]
+// (MultiscaleOptions::seed_diameter, kMinSeedDiameter)
 inline CLI::Validator seed_fraction() {
   return CLI::Validator(
       [](std::string& text) {
         const std::optional<double> x = finite_number_in(text);
-        if (x && *x > 0.0 && *x <= 1.0) return std::string();
-        return "must be a fraction above 0 and at most 1 (1: particles at full size); got '" +
-               text + "'";
+        if (x && *x >= kMinSeedDiameter && *x <= 1.0) return std::string();
+        return "must be a fraction from 0.1 to 1 (1: particles at full size); got '" + text + "'";
       },
-      "(0, 1]");
+      "[0.1, 1]");
 }
 
 // a PGS relaxation, 0.01 <= omega < 2 (solvers/dem_settings relaxation_in_range)

@@ -111,10 +111,10 @@ MultiscaleTerrain::MultiscaleTerrain(Device& dev, const PileProfile& profile,
   if (!find_multiscale_preset(level.name))
     throw InputError("multiscale terrain: level '" + level.name +
                      "' is not a type-G level (G50, G100, G200, G400)");
-  if (!(options.seed_diameter > 0.0 && options.seed_diameter <= 1.0))
-    throw InputError(
-        "multiscale terrain: seed_diameter " + std::to_string(options.seed_diameter) +
-        " is not in (0, 1]: a seed is that fraction of its full diameter (1: full size)");
+  if (!(options.seed_diameter >= kMinSeedDiameter && options.seed_diameter <= 1.0))
+    throw InputError("multiscale terrain: seed_diameter " + std::to_string(options.seed_diameter) +
+                     " is not in [0.1, 1]: a seed is that fraction of its full diameter (1: full "
+                     "size)");
   if (!(options.growth_speed > 0.0 && std::isfinite(options.growth_speed)))
     throw InputError("multiscale terrain: growth_speed " + std::to_string(options.growth_speed) +
                      " m/s is not a positive speed");
@@ -299,10 +299,12 @@ int MultiscaleTerrain::grow(Particles& particles) {
     const double d_now = std::cbrt(6.0 * ledger_[k] / (M_PI * rho));
     const double d_next = std::min(full_[k], d_now + step);
     const double m_next = d_next >= full_[k] ? full_mass : sphere_mass(d_next, rho);
-    double m = m_next;
-    if (m_next - ledger_[k] > pool_) m = ledger_[k] + pool_;
+    // the pool pays the whole step, or what it holds (the branch decided once: a rounded sum
+    // ledger + pool equal to m_next must not send the pool below zero)
+    const bool whole = m_next - ledger_[k] <= pool_;
+    const double m = whole ? m_next : ledger_[k] + pool_;
     if (!(m > ledger_[k])) continue;
-    pool_ = m == m_next ? pool_ - (m_next - ledger_[k]) : 0.0;
+    pool_ = whole ? pool_ - (m_next - ledger_[k]) : 0.0;
     ledger_[k] = m;
     particles.resize(k, m == full_mass ? 0.5 * full_[k] : 0.5 * std::cbrt(6.0 * m / (M_PI * rho)),
                      rho);
@@ -492,6 +494,7 @@ void MultiscaleTerrain::save_state(ByteWriter& w) const {
   write_zone(w, last_.zone);
   w.f64(last_.excavated);
   w.i64(last_.spawned);
+  w.i64(last_.grown);
   w.i64(last_.merged);
   w.f64(last_.avalanched);
   write_matrix(w, last_.bucket_wrench);
@@ -504,7 +507,7 @@ void MultiscaleTerrain::restore_state(ByteReader& r) {
   dem_->restore_state(r, true);
   tools_->restore_state(r);
   const std::uint64_t n = r.u64("particle masses");
-  r.need_elements(n, 8, "particle masses");
+  r.need_elements(n, 16, "particle masses");  // each particle's mass and full diameter
   if (n != dem_->size())
     throw InputError(r.where() + ": " + std::to_string(n) + " particle masses for " +
                      std::to_string(dem_->size()) + " particles (corrupt)");
@@ -534,10 +537,13 @@ void MultiscaleTerrain::restore_state(ByteReader& r) {
   for (double m : ledger)
     if (!(m > 0.0 && std::isfinite(m)))
       throw InputError(r.where() + ": a particle mass of " + std::to_string(m) + " kg (corrupt)");
-  for (double x : full)
-    if (!(x > 0.0 && std::isfinite(x)))
-      throw InputError(r.where() + ": a full particle diameter of " + std::to_string(x) +
-                       " m (corrupt)");
+  for (size_t k = 0; k < n; ++k) {
+    // a particle holds at most its full size's mass (a growing seed less)
+    if (!(full[k] > 0.0 && std::isfinite(full[k])) ||
+        ledger[k] > sphere_mass(full[k], options_.particle_material.density))
+      throw InputError(r.where() + ": a full particle diameter of " + std::to_string(full[k]) +
+                       " m for a mass of " + std::to_string(ledger[k]) + " kg (corrupt)");
+  }
   if (!(pool >= 0.0 && std::isfinite(pool)))
     throw InputError(r.where() + ": a pool of " + std::to_string(pool) + " kg (corrupt)");
   const double time = r.f64("terrain clock");
@@ -545,12 +551,16 @@ void MultiscaleTerrain::restore_state(ByteReader& r) {
   MultiscaleStep last;
   last.zone = read_zone(r);
   last.excavated = r.f64("last step");
-  const std::int64_t spawned = r.i64("last step"), merged = r.i64("last step");
-  if (spawned < 0 || spawned > static_cast<std::int64_t>(n) || merged < 0 ||
+  const std::int64_t spawned = r.i64("last step"), grown = r.i64("last step"),
+                     merged = r.i64("last step");
+  if (spawned < 0 || spawned > static_cast<std::int64_t>(n) || grown < 0 ||
+      grown > static_cast<std::int64_t>(n) || merged < 0 ||
       merged > std::numeric_limits<int>::max())
-    throw InputError(r.where() + ": the last step spawned " + std::to_string(spawned) +
-                     " and merged " + std::to_string(merged) + " particles (corrupt)");
+    throw InputError(r.where() + ": the last step spawned " + std::to_string(spawned) + ", grew " +
+                     std::to_string(grown) + " and merged " + std::to_string(merged) +
+                     " particles (corrupt)");
   last.spawned = static_cast<int>(spawned);
+  last.grown = static_cast<int>(grown);
   last.merged = static_cast<int>(merged);
   last.avalanched = r.f64("last step");
   read_matrix(r, last.bucket_wrench, "last step");

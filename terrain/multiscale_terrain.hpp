@@ -58,6 +58,9 @@ class ToolWorld;
 // 0.3), at every level, without bringing the levels' coupled digs closer together, so it is a
 // study option, not the default
 inline constexpr double kSeedDiameter = 1.0;
+// the smallest seed accepted: a tenth of its diameter, a thousandth of its mass (far smaller seeds
+// hold too little mass for the DEM's float state: 1e-9 made non-finite velocities)
+inline constexpr double kMinSeedDiameter = 0.1;
 // [m/s] how fast a seed's diameter may grow: about the bucket's cutting speed (the soil a bucket
 // mobilises moves with it), a judgement, not a source's value
 inline constexpr double kGrowthSpeed = 1.0;
@@ -75,7 +78,8 @@ struct MultiscaleOptions {
   bool pair_reach = true;                 // DemSettings::pair_reach of the zone's particles (digs')
   double relaxation = 1.0;                // DemSettings::relaxation of the zone's sweeps
   // a particle appears as a seed of this fraction of its full diameter and grows as the pool
-  // feeds it, in (0, 1]; 1 (the default): at full size, no growth (docs/multiscale.md "Growth")
+  // feeds it, in [kMinSeedDiameter, 1]; 1 (the default): at full size, no growth
+  // (docs/multiscale.md "Growth")
   double seed_diameter = kSeedDiameter;
   // [m/s] the most a growing particle's diameter rises per second of the step
   double growth_speed = kGrowthSpeed;

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "tests/apps/cli_test_util.hpp"
@@ -252,7 +253,7 @@ TEST(CliErrors, StepCountsAndLoadsOutsideTheirRangeAreRefused) {
       EXPECT_FALSE(std::filesystem::exists("/tmp/talus_cli_relaxation")) << cmd << omega;
     }
   // the type-G seed diameter: a fraction in (0, 1], at a G level only
-  for (const char* seed : {"0", "-0.5", "1.5", "nan", "x"}) {
+  for (const char* seed : {"0", "0.09", "1e-9", "-0.5", "1.5", "nan", "x"}) {
     const Outcome o = run("", std::string("run --scenario hd27 --fidelity G400 --out "
                                           "/tmp/talus_cli_seed --seed-diameter ") +
                                   seed);
@@ -260,11 +261,15 @@ TEST(CliErrors, StepCountsAndLoadsOutsideTheirRangeAreRefused) {
     EXPECT_NE(o.err.find("--seed-diameter"), std::string::npos) << seed << ": " << o.err;
     EXPECT_FALSE(std::filesystem::exists("/tmp/talus_cli_seed")) << seed;
   }
-  for (const char* cmd : {"run --scenario hd27 --fidelity D400", "run --scenario load-carry"}) {
+  // ... at a type-D level, or for a scenario without a pile (each told what would fix it)
+  const std::pair<const char*, const char*> misplaced[] = {
+      {"run --scenario hd27 --fidelity D400", "give --fidelity G400"},
+      {"run --scenario load-carry --fidelity G400", "has no pile"}};
+  for (const auto& [cmd, fix] : misplaced) {
     const Outcome o = run("", std::string(cmd) + " --out /tmp/talus_cli_seed --seed-diameter 0.5");
     EXPECT_EQ(o.code, 2) << cmd << ": " << o.err;
     EXPECT_NE(o.err.find("--seed-diameter"), std::string::npos) << cmd << ": " << o.err;
-    EXPECT_NE(o.err.find("type-G"), std::string::npos) << cmd << ": " << o.err;
+    EXPECT_NE(o.err.find(fix), std::string::npos) << cmd << ": " << o.err;
     EXPECT_FALSE(std::filesystem::exists("/tmp/talus_cli_seed")) << cmd;
   }
   // the Jacobi sweep has no relaxation to take

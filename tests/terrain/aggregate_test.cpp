@@ -35,7 +35,9 @@ TEST(Aggregate, TwoOrbitingSpheresSpinAboutTheirCentre) {
 // an inertia made from known principal axes and moments, turned by a fresh random rotation: the
 // axes come back (up to their fixed signs), in ascending order, right-handed, and rebuild it
 TEST(Aggregate, PrincipalAxesOfARotatedInertiaComeBack) {
-  std::mt19937_64 rng(std::random_device{}());
+  const std::uint64_t seed = std::random_device{}();
+  SCOPED_TRACE("seed " + std::to_string(seed));
+  std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   for (int draw = 0; draw < 50; ++draw) {
     const Eigen::Quaterniond turn = Eigen::Quaterniond(u(rng), u(rng), u(rng), u(rng)).normalized();
@@ -49,6 +51,12 @@ TEST(Aggregate, PrincipalAxesOfARotatedInertiaComeBack) {
     EXPECT_NEAR(A.determinant(), 1.0, 1e-12) << draw;
     EXPECT_LT((A * axes.moments.asDiagonal() * A.transpose() - inertia).norm(), 1e-9) << draw;
     for (int c = 0; c < 3; ++c) EXPECT_NEAR(std::abs(A.col(c).dot(R.col(c))), 1.0, 1e-9) << draw;
+    // the sign convention: the first two axes' largest world component is positive
+    for (int c = 0; c < 2; ++c) {
+      Eigen::Index largest = 0;
+      A.col(c).cwiseAbs().maxCoeff(&largest);
+      EXPECT_GT(A(largest, c), 0.0) << draw;
+    }
     // the same inertia, the same frame
     EXPECT_EQ(principal_axes(inertia).orientation.coeffs(), axes.orientation.coeffs());
   }

@@ -205,7 +205,7 @@ TEST(MultiscaleTerrain, DISABLED_CarriedSoilAcrossLevelsWithAndWithoutGrowth) {
 TEST(MultiscaleTerrain, SeedAndGrowthOptionsOutsideTheirRangeAreRefused) {
   Device dev;
   const vehicle::BucketMesh mesh = vehicle::make_bucket_mesh(vehicle::BucketGeometry{});
-  for (double seed : {0.0, -0.5, 1.5, std::nan("")}) {
+  for (double seed : {0.0, 1e-9, 0.09, -0.5, 1.5, std::nan("")}) {
     MultiscaleOptions o;
     o.seed_diameter = seed;
     EXPECT_THROW(MultiscaleTerrain(dev, default_pile_profile(), *find_multiscale_preset("G400"),
