@@ -767,6 +767,10 @@ TEST(ReferenceColouring, RenumberedParticlesKeepTheirPairsWarmStartAndColours) {
   EXPECT_THROW(world.renumber_particles(now, swapped), Error);
 }
 
+// particles that only change size between two steps (DemWorld::resize_particles: the type-G
+// terrain's growing seeds): the sizes reach the device, and every contact, impulse and colour of
+// the last step stays for the next one's warm start and colouring (the same start as the
+// renumbering test above)
 TEST(ReferenceColouring, ResizedParticlesKeepEveryContactAndTheirColours) {
   RandomWorld r = random_world();
   SCOPED_TRACE(r.seed_note);

@@ -205,21 +205,21 @@ TEST(MultiscaleTerrain, DISABLED_CarriedSoilAcrossLevelsWithAndWithoutGrowth) {
 TEST(MultiscaleTerrain, SeedAndGrowthOptionsOutsideTheirRangeAreRefused) {
   Device dev;
   const vehicle::BucketMesh mesh = vehicle::make_bucket_mesh(vehicle::BucketGeometry{});
-  for (double seed : {0.0, 1e-9, 0.09, -0.5, 1.5, std::nan("")}) {
-    MultiscaleOptions o;
-    o.seed_diameter = seed;
+  const auto refused = [&](const MultiscaleOptions& o, double value) {
     EXPECT_THROW(MultiscaleTerrain(dev, default_pile_profile(), *find_multiscale_preset("G400"),
                                    mesh, KinematicBucket{}, o),
                  InputError)
-        << seed;
+        << value;
+  };
+  for (double seed : {0.0, 1e-9, 0.09, -0.5, 1.5, std::nan("")}) {
+    MultiscaleOptions o;
+    o.seed_diameter = seed;
+    refused(o, seed);
   }
   for (double speed : {0.0, -1.0, std::numeric_limits<double>::infinity()}) {
     MultiscaleOptions o;
     o.growth_speed = speed;
-    EXPECT_THROW(MultiscaleTerrain(dev, default_pile_profile(), *find_multiscale_preset("G400"),
-                                   mesh, KinematicBucket{}, o),
-                 InputError)
-        << speed;
+    refused(o, speed);
   }
 }
 
