@@ -171,6 +171,7 @@ DiggingOptions digging_options(const RunOptions& o) {
   options.pair_reach = o.pair_reach;
   options.relaxation = o.relaxation;
   options.seed_diameter = o.seed_diameter;
+  options.content_inertia = o.content_inertia;
   if (o.form_speed >= 0.0) options.pile.form_speed = o.form_speed;
   options.pile.hold_face = o.hold_face;
   options.sweep = parse_sweep(o.sweep, "--sweep");
@@ -269,6 +270,7 @@ nlohmann::json dig_details(const RunOptions& o, const vehicle::Scenario& sc,
         {"pair_reach", options.pair_reach},
         {"relaxation", options.relaxation},
         {"seed_diameter", options.seed_diameter},
+        {"content_inertia", options.content_inertia},
         {"max_passes", sim.max_passes()},
         {"max_residual_m_s", sim.max_residual()},
         {"steps_at_pass_limit", sim.steps_at_pass_limit()},
@@ -445,6 +447,11 @@ void run_scenario(const RunOptions& o) {
                      sc.name +
                      "' has no pile, so no type-G particles to grow; leave it at 1 or run a pile "
                      "scenario (fb35, hd27, rd21)");
+  if (o.content_inertia && !(sc.pile && is_multiscale(level)))
+    throw InputError(std::string("--content-inertia: only a pile scenario at a type-G level (G400 "
+                                 "... G50) holds its bucket's soil as a body; scenario '") +
+                     sc.name + "' at " + level.name +
+                     " does not: give a pile scenario with --fidelity G400 (or finer)");
   if (o.seed_diameter != 1.0 && !is_multiscale(level))
     throw InputError("--seed-diameter " + std::to_string(o.seed_diameter) + " at " + level.name +
                      ": only the type-G levels (G400 ... G50) grow their zone's particles from "
@@ -520,6 +527,10 @@ void add_run_command(CLI::App& app, const std::string& command_line) {
                   "size (docs/multiscale.md \"Growth\": smaller seeds load more soil)")
       ->check(seed_fraction())
       ->capture_default_str();
+  cmd->add_flag("--content-inertia", opts->content_inertia,
+                "study, type G: the soil the bucket holds is a body welded to it, so the machine "
+                "feels its inertia as well as its weight (docs/multiscale.md \"The bucket's "
+                "content\"); by default its weight alone");
   cmd->add_option("--form-speed", opts->form_speed,
                   "study, with --free-face: speed the pile's formwork withdraws at before it "
                   "settles, 0 = removed at once [m/s]")

@@ -40,6 +40,8 @@ struct RunOptions {
   // type G: the zone particles' seed diameter, a fraction of their full one (study;
   // --seed-diameter)
   double seed_diameter = kSeedDiameter;
+  // type G: the bucket's soil as a body welded to it (study; --content-inertia)
+  bool content_inertia = false;
   bool residuals = false;
   // settled piles read from and saved to the pile cache (terrain/pile_cache.hpp; --no-pile-cache)
   bool pile_cache = true;

@@ -97,6 +97,10 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
   steps_total_ = static_cast<int>(std::lround(scenario.duration / h));
   Material soil = options.soil;
   soil.cohesion = effects_.soil({options.soil.cohesion}).cohesion;
+  if (!is_multiscale(preset) && options.content_inertia)
+    throw InputError("content_inertia at " + preset.name +
+                     ": only the type-G levels hold their bucket's soil as a body; at a type-D "
+                     "level the particles in the bucket are the content itself");
   if (!is_multiscale(preset) && options.seed_diameter != 1.0)
     throw InputError("seed_diameter " + std::to_string(options.seed_diameter) + " at " +
                      preset.name +
@@ -119,6 +123,8 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
                                                    kinematic_bucket(*loader_), terrain);
     aggregate_ = std::make_unique<AggregateCoupling>(loader_->system(), loader_->bucket_body(),
                                                      terrain.soil);
+    if (options.content_inertia)
+      payload_ = std::make_unique<BucketPayload>(loader_->system(), loader_->bucket_body());
     sensors_ = vehicle::start_with_effects(*loader_, effects_, log_);
     return;
   }
@@ -239,20 +245,27 @@ void DiggingSimulation::multiscale_step() {
   // stages: the aggregate, the machine's direct solve, then the terrain's own)
   std::optional<StageScope> stage(std::in_place, dev_, "aggregate");
   aggregate_->update(*terrain_, loader_->bucket_mesh(), kinematic_bucket(*loader_), h);
-  // the soil in the bucket and outside the zone weighs on the bucket (its weight, not its
-  // inertia: docs/multiscale.md)
+  // the soil in the bucket and outside the zone: its weight on the bucket (the default), or a
+  // body welded to the bucket that carries its weight and its inertia (content_inertia;
+  // docs/multiscale.md)
   const Particles& p = terrain_->particles();
   const std::vector<double>& mass = terrain_->particle_masses();
   const ActiveZone& zone = terrain_->last_step().zone;
   const vehicle::RigidBody& bucket = loader_->bodies().at(loader_->bucket_body());
-  Vec6 weight = Vec6::Zero();
-  for (int k : particles_in_bucket(p, loader_->bucket_mesh(), bucket_pose(*loader_))) {
-    if (zone.depth > 0.0 && zone.contains(p.position[k])) continue;
-    const Vec3 f = mass[k] * loader_->system().gravity();
-    weight.head<3>() += f;
-    weight.tail<3>() += (p.position[k] - bucket.position).cross(f);
+  std::vector<int> held;
+  for (int k : particles_in_bucket(p, loader_->bucket_mesh(), bucket_pose(*loader_)))
+    if (!(zone.depth > 0.0 && zone.contains(p.position[k]))) held.push_back(k);
+  if (payload_) {
+    payload_->update(aggregate_of(p, mass, held));
+  } else {
+    Vec6 weight = Vec6::Zero();
+    for (int k : held) {
+      const Vec3 f = mass[k] * loader_->system().gravity();
+      weight.head<3>() += f;
+      weight.tail<3>() += (p.position[k] - bucket.position).cross(f);
+    }
+    loader_->system().set_external_wrench(loader_->bucket_body(), weight);
   }
-  loader_->system().set_external_wrench(loader_->bucket_body(), weight);
   // the machine's step with the aggregate, then the terrain's with the bucket as it moved: from
   // its pose at the step's start with the twist the machine solved (the terrain moves its tool by
   // h times that twist, so both end the step where the machine's bucket is)

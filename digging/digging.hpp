@@ -54,6 +54,10 @@ struct DiggingOptions {
   // type G: the fraction of its full diameter a zone particle appears at and grows from
   // (MultiscaleOptions::seed_diameter; 1, the default: at full size; docs/multiscale.md "Growth")
   double seed_diameter = kSeedDiameter;
+  // type G: the soil the bucket holds as a body welded to it (its weight and inertia in the
+  // machine's solve, terrain/aggregate BucketPayload) instead of its weight alone (the default;
+  // a study option, docs/multiscale.md "The bucket's content")
+  bool content_inertia = false;
   // a type-D dig's sweeps end early once the particle rows' RMS residual is below this [m/s]
   // (DemSettings::tolerance; the level's N_it is the cap). 0: always N_it, as the paper's presets
   double sweep_tolerance = kDigSweepTolerance;
@@ -193,6 +197,7 @@ class DiggingSimulation {
   std::unique_ptr<SplitSolver> split_;
   std::unique_ptr<MultiscaleTerrain> terrain_;
   std::unique_ptr<AggregateCoupling> aggregate_;
+  std::unique_ptr<BucketPayload> payload_;  // type G with DiggingOptions::content_inertia
   // the type-G coupled step (see the top of this file)
   void multiscale_step();
   std::vector<AggregateSample> aggregate_log_;

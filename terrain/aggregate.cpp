@@ -68,6 +68,50 @@ Aggregate aggregate_of(const Particles& p, const std::vector<double>& masses,
   return a;
 }
 
+namespace {
+// the payload's stand-in when the bucket holds nothing [kg], and its radius of gyration [m]
+constexpr double kIdlePayloadMass = 1.0;
+constexpr double kIdlePayloadGyration = 0.1;
+}  // namespace
+
+BucketPayload::BucketPayload(vehicle::MultibodySystem& system, int bucket)
+    : system_(system), bucket_(bucket) {
+  vehicle::RigidBody body;
+  body.name = "bucket payload";
+  body.mass = kIdlePayloadMass;
+  body.inertia = Eigen::Matrix3d::Identity() *
+                 (kIdlePayloadMass * kIdlePayloadGyration * kIdlePayloadGyration);
+  body.position = system.body(bucket).position;
+  body.velocity = system.body(bucket).velocity;
+  body.angular_velocity = system.body(bucket).angular_velocity;
+  body_ = system.add_body(body);
+  lock_ = &system.add_constraint(
+      std::make_unique<vehicle::LockJoint>(system.bodies(), bucket, body_, body.position));
+  lock_->name = "bucket payload lock";
+}
+
+void BucketPayload::update(const Aggregate& held) {
+  const vehicle::RigidBody bucket = system_.body(bucket_);
+  vehicle::RigidBody& body = system_.body(body_);
+  // the held soil's mass and inertia (world axes, the body unrotated), or the idle stand-in at
+  // the bucket's centre
+  body.orientation = Eigen::Quaterniond::Identity();
+  if (held.particles > 0) {
+    body.mass = held.mass;
+    body.inertia = held.inertia;
+    body.position = held.centre;
+  } else {
+    body.mass = kIdlePayloadMass;
+    body.inertia = Eigen::Matrix3d::Identity() *
+                   (kIdlePayloadMass * kIdlePayloadGyration * kIdlePayloadGyration);
+    body.position = bucket.position;
+  }
+  // moving with the bucket, and locked to it where both now stand
+  body.velocity = bucket.point_velocity(body.position);
+  body.angular_velocity = bucket.angular_velocity;
+  lock_->reanchor(system_.bodies(), body.position);
+}
+
 PrincipalAxes principal_axes(const Eigen::Matrix3d& inertia) {
   PrincipalAxes out;
   if (inertia.isZero(0.0)) return out;

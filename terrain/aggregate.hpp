@@ -40,6 +40,7 @@
 
 #include "terrain/multiscale_terrain.hpp"
 #include "terrain/penetration.hpp"
+#include "vehicle/joints.hpp"
 #include "vehicle/multibody.hpp"
 #include "vehicle/plane_contact.hpp"
 #include "vehicle/point_brake.hpp"
@@ -61,6 +62,26 @@ struct Aggregate {
 // the parallel-axis rule, velocity from the momentum, omega solving I omega = L about the centre
 Aggregate aggregate_of(const Particles& particles, const std::vector<double>& masses,
                        const std::vector<int>& members);
+
+// the soil the bucket holds outside the zone as a body welded to the bucket (issue 14, a study
+// option): its mass, centre and inertia re-set every step from the held particles (`aggregate_of`
+// over them), moving with the bucket, so the machine's direct solve feels the load's weight
+// through gravity and its inertia through the lock, instead of the weight alone as an external
+// wrench (docs/multiscale.md "The bucket's content"). With nothing held it is a nominal 1 kg body
+// at the bucket's centre of mass. Added to the machine once, so the system's sparsity never changes
+class BucketPayload {
+ public:
+  BucketPayload(vehicle::MultibodySystem& system, int bucket);
+  // the held soil for this step (an aggregate of zero particles: nothing held)
+  void update(const Aggregate& held);
+  int body() const { return body_; }
+
+ private:
+  vehicle::MultibodySystem& system_;
+  int bucket_;
+  int body_;
+  vehicle::LockJoint* lock_ = nullptr;
+};
 
 // the aggregate's orientation: its principal axes of inertia as the columns of a rotation from
 // the world (ascending moments; each axis signed so that its largest world component is positive,

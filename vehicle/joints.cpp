@@ -198,6 +198,11 @@ LockJoint::LockJoint(const std::vector<RigidBody>& bodies, int a, int b, const V
   check_body(bodies, b);
 }
 
+void LockJoint::reanchor(const std::vector<RigidBody>& bodies, const Vec3& world_anchor) {
+  a_ = BodyFrame::from_world(bodies, a_.body, world_anchor, Mat3::Identity());
+  b_ = BodyFrame::from_world(bodies, b_.body, world_anchor, Mat3::Identity());
+}
+
 void LockJoint::add_rows(const std::vector<RigidBody>& bodies, std::vector<ConstraintRow>& rows) {
   begin_rows(rows);
   add_point_rows(bodies, rows);

@@ -110,6 +110,10 @@ class PrismaticJoint : public Joint {
 class LockJoint : public Joint {
  public:
   LockJoint(const std::vector<RigidBody>& bodies, int a, int b, const Vec3& world_anchor, RowParameters p = {});
+  // the two frames made again at the bodies' current poses, both at `world_anchor` with the
+  // world's axes: a lock whose owner moves one body every step (the type-G bucket's payload)
+  // holds them as they now stand, with no violation to correct
+  void reanchor(const std::vector<RigidBody>& bodies, const Vec3& world_anchor);
   void add_rows(const std::vector<RigidBody>& bodies, std::vector<ConstraintRow>& rows) override;
   double coordinate(const std::vector<RigidBody>&) const override { return 0.0; }
 

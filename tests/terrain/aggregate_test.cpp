@@ -66,6 +66,49 @@ TEST(Aggregate, PrincipalAxesOfARotatedInertiaComeBack) {
   EXPECT_EQ(none.moments, Vec3::Zero());
 }
 
+// the bucket's payload welded to a free 'bucket': a push accelerates the two together (its
+// inertia), and under gravity a push of the two bodies' weight holds them still (its weight comes
+// through gravity, no external wrench); with nothing held it is the 1 kg stand-in
+TEST(BucketPayload, ALockedLoadAddsItsInertiaAndItsWeight) {
+  const double m_bucket = 1000.0, m_load = 500.0, h = 0.01;
+  const auto velocity_after_push = [&](bool load, const Vec3& gravity, const Vec3& force,
+                                       const Vec3& offset = Vec3::Zero()) {
+    vehicle::MultibodySystem system;
+    system.set_gravity(gravity);
+    vehicle::RigidBody bucket;
+    bucket.name = "bucket";
+    bucket.mass = m_bucket;
+    bucket.inertia = Eigen::Matrix3d::Identity() * 200.0;
+    bucket.position = Vec3(2.0, 0.0, 1.0);
+    const int b = system.add_body(bucket);
+    BucketPayload payload(system, b);
+    Particles p;
+    p.add(bucket.position + offset, 0.3, 2590.0);  // the load's centre (on the bucket's)
+    payload.update(load ? aggregate_of(p, {m_load}, {0}) : aggregate_of(p, {m_load}, {}));
+    Vec6 push = Vec6::Zero();
+    push.head<3>() = force;
+    system.set_external_wrench(b, push);
+    system.step(h);
+    return system.body(b).velocity;
+  };
+  const Vec3 f(0.0, 0.0, 3000.0);
+  // inertia: the pair moves at F h / (M + m); the idle stand-in adds 1 kg
+  EXPECT_NEAR(velocity_after_push(true, Vec3::Zero(), f).z(), f.z() * h / (m_bucket + m_load),
+              1e-3 * f.z() * h / (m_bucket + m_load));
+  EXPECT_NEAR(velocity_after_push(false, Vec3::Zero(), f).z(), f.z() * h / (m_bucket + 1.0),
+              1e-3 * f.z() * h / m_bucket);
+  // a load whose centre moved since the lock was made is held where it now is (the lock
+  // re-anchored), not pulled back to where the lock began
+  EXPECT_LT(velocity_after_push(true, Vec3::Zero(), Vec3::Zero(), Vec3(0.5, 0.2, 0.3)).norm(),
+            1e-9);
+  // weight: gravity on both bodies, balanced by a push of (M + m) g on the bucket alone (to the
+  // lock's compliance, which lets the load sag by micrometres a step), not by M g
+  const Vec3 g(0.0, 0.0, -9.81);
+  const double unbalanced = m_load * 9.81 * h / (m_bucket + m_load);  // [m/s] without its weight
+  EXPECT_LT(velocity_after_push(true, g, -(m_bucket + m_load) * g).norm(), 1e-3 * unbalanced);
+  EXPECT_NEAR(velocity_after_push(true, g, -m_bucket * g).z(), -unbalanced, 1e-3 * unbalanced);
+}
+
 // one sphere: its own mass, place, velocity and spin
 TEST(Aggregate, OneSphereIsItself) {
   Particles p;
