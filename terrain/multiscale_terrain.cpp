@@ -64,6 +64,8 @@ class CentreGrid {
 
 // the mass of a sphere of diameter d at density rho [kg], as spawning has always counted it
 double sphere_mass(double d, double rho) { return rho * M_PI / 6.0 * d * d * d; }
+// the diameter of a sphere of mass m at density rho [m], sphere_mass's inverse
+double sphere_diameter(double m, double rho) { return std::cbrt(6.0 * m / (M_PI * rho)); }
 
 BucketPose pose_of(const KinematicBucket& b) {
   BucketPose pose;
@@ -296,7 +298,7 @@ int MultiscaleTerrain::grow(Particles& particles) {
   for (size_t k = 0; k < particles.size() && pool_ > 0.0; ++k) {
     const double full_mass = sphere_mass(full_[k], rho);
     if (ledger_[k] >= full_mass) continue;
-    const double d_now = std::cbrt(6.0 * ledger_[k] / (M_PI * rho));
+    const double d_now = sphere_diameter(ledger_[k], rho);
     const double d_next = std::min(full_[k], d_now + step);
     const double m_next = d_next >= full_[k] ? full_mass : sphere_mass(d_next, rho);
     // the pool pays the whole step, or what it holds (the branch decided once: a rounded sum
@@ -306,8 +308,7 @@ int MultiscaleTerrain::grow(Particles& particles) {
     if (!(m > ledger_[k])) continue;
     pool_ = whole ? pool_ - (m_next - ledger_[k]) : 0.0;
     ledger_[k] = m;
-    particles.resize(k, m == full_mass ? 0.5 * full_[k] : 0.5 * std::cbrt(6.0 * m / (M_PI * rho)),
-                     rho);
+    particles.resize(k, m == full_mass ? 0.5 * full_[k] : 0.5 * sphere_diameter(m, rho), rho);
     ++grown;
   }
   return grown;
