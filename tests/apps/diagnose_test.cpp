@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <iterator>
 #include <nlohmann/json.hpp>
 #include <random>
@@ -363,43 +364,67 @@ TEST(DiagnoseTest, AMissingEffectBesideTheSimulationsSensitivityIsStillUnexplain
 // the chaos check (docs/sim2real.md section 4, item 5) end to end: the calibration run is dug on
 // the very pile the model digs (HD27-G400, pile 1, one pile), with moist soil of 1-5 kPa; the
 // held-out run is load-carry, which has no soil, so the share is counted on the calibration run.
-// There the fitted cohesion explains the run (the same grains, so nothing but the effect differs),
-// but on the next pile (2) the grains' arrangement moves the dig far more than the cohesion does:
-// the addition is refused and nothing is added. Measured with 700, 1500, 5000 and 15000 Pa: the
-// reference piles' share -3 to +12 %
+// There the fitted cohesion usually explains the run: the same grains at the start, so the
+// cohesion's mean effect on the forces stands out. But on the next pile (2) the grains'
+// arrangement moves the dig far more than the cohesion does: the addition is refused and nothing
+// is added. Measured with 700, 1500, 5000 and 15000 Pa: the reference piles' share -3 to +12 %.
+// The dig is chaotic in the cohesion too, even on one pile (2945.57 Pa against 2950 Pa moves
+// f_lift by 0.8 kN rms, against 2900 Pa by 6.8 kN): in 1 of 57 draws measured (seed 523734056,
+// 2945.57 Pa; docs/sim2real.md) no scanned value came near enough and the fit explained 28 %. Such
+// a fit is not an addition (below half), so there is no check to run: that draw asserts nothing was
+// added and the test draws again, at most kChaosDraws times, until one reaches the check it is
+// about
 TEST(DiagnoseTest, AFitOfThePileTheDataWereDugOnIsRefusedByTheChaosCheck) {
+  constexpr int kChaosDraws = 3;
   const unsigned seed = test_seed();
   std::mt19937_64 rng(seed);
-  const double cohesion = std::uniform_real_distribution<double>(1e3, 5e3)(rng);
-  const std::string context =
-      "TALUS_TEST_SEED=" + std::to_string(seed) + ", cohesion " + std::to_string(cohesion) + " Pa";
-  const fs::path base =
-      fs::temp_directory_path() / ("talus_diagnose_chaos_" + std::to_string(seed));
-  fs::remove_all(base);
-  const std::string synth = kTalus + " synth --noise default --quiet --seed ";
-  const std::string dig = synth + std::to_string(seed) +
-                          " --scenario hd27 --fidelity G400 --pile-seed 1 --effect "
-                          "soil_cohesion:cohesion=" +
-                          std::to_string(cohesion) + " --out " + (base / "run0").string();
-  const std::string carry =
-      synth + std::to_string(seed + 1) + " --scenario load-carry --out " + (base / "run1").string();
-  for (const std::string& cmd : {dig, carry}) ASSERT_EQ(exit_code(cmd + " 2>/dev/null"), 0) << cmd;
-  const auto j = diagnose(base,
-                          " --fidelity G400 --pile-seed 1 --pile-ensemble 1 --validation 1 "
-                          "--max-effects 1 --candidates soil_cohesion");
-  // the fit on the model's own pile explains at least half, counted on the calibration run
-  const auto& round = j["rounds"][0];
-  ASSERT_FALSE(round["fitted"].empty()) << context;
-  EXPECT_GE(round["fitted"][0]["explained"].get<double>(), 0.5) << context;
-  EXPECT_EQ(round["fitted"][0]["explained_on"], "calibration") << context;
-  // the check digs the calibration run on the reference pile without and with it: refused
-  ASSERT_FALSE(round["chaos_checks"].empty()) << context << ": " << round.dump();
-  const auto& check = round["chaos_checks"][0];
-  EXPECT_FALSE(check["passed"].get<bool>()) << context << ": " << check.dump();
-  EXPECT_LT(check["explained"].get<double>(), 0.5) << context;
-  EXPECT_EQ(check["simulations"], 2) << context;
-  EXPECT_TRUE(j["effects_found"].empty()) << context << ": " << j["effects_found"].dump();
-  fs::remove_all(base);
+  bool checked = false;
+  for (int draw = 0; draw < kChaosDraws && !checked; ++draw) {
+    const double cohesion = std::uniform_real_distribution<double>(1e3, 5e3)(rng);
+    const std::string context = "TALUS_TEST_SEED=" + std::to_string(seed) + ", draw " +
+                                std::to_string(draw) + ", cohesion " + std::to_string(cohesion) +
+                                " Pa";
+    const fs::path base =
+        fs::temp_directory_path() /
+        ("talus_diagnose_chaos_" + std::to_string(seed) + "_" + std::to_string(draw));
+    fs::remove_all(base);
+    const std::string synth = kTalus + " synth --noise default --quiet --seed ";
+    const unsigned data_seed = seed + 2 * static_cast<unsigned>(draw);
+    const std::string dig = synth + std::to_string(data_seed) +
+                            " --scenario hd27 --fidelity G400 --pile-seed 1 --effect "
+                            "soil_cohesion:cohesion=" +
+                            std::to_string(cohesion) + " --out " + (base / "run0").string();
+    const std::string carry = synth + std::to_string(data_seed + 1) +
+                              " --scenario load-carry --out " + (base / "run1").string();
+    for (const std::string& cmd : {dig, carry})
+      ASSERT_EQ(exit_code(cmd + " 2>/dev/null"), 0) << cmd;
+    const auto j = diagnose(base,
+                            " --fidelity G400 --pile-seed 1 --pile-ensemble 1 --validation 1 "
+                            "--max-effects 1 --candidates soil_cohesion");
+    // whatever the fit explains, a fit of the model's own pile is never added
+    EXPECT_TRUE(j["effects_found"].empty()) << context << ": " << j["effects_found"].dump();
+    const auto& round = j["rounds"][0];
+    ASSERT_FALSE(round["fitted"].empty()) << context;
+    EXPECT_EQ(round["fitted"][0]["explained_on"], "calibration") << context;
+    // a fit below half is no addition, so nothing to check: draw again
+    if (round["fitted"][0]["explained"].get<double>() < 0.5) {
+      EXPECT_TRUE(round["chaos_checks"].empty()) << context << ": " << round.dump();
+      std::cout << context << ": the fit explained "
+                << round["fitted"][0]["explained"].get<double>() << ", no check; drawing again\n";
+      fs::remove_all(base);
+      continue;
+    }
+    // the check digs the calibration run on the reference pile without and with it: refused
+    ASSERT_FALSE(round["chaos_checks"].empty()) << context << ": " << round.dump();
+    const auto& check = round["chaos_checks"][0];
+    EXPECT_FALSE(check["passed"].get<bool>()) << context << ": " << check.dump();
+    EXPECT_LT(check["explained"].get<double>(), 0.5) << context;
+    EXPECT_EQ(check["simulations"], 2) << context;
+    checked = true;
+    fs::remove_all(base);
+  }
+  EXPECT_TRUE(checked) << "TALUS_TEST_SEED=" << seed << ": no draw of " << kChaosDraws
+                       << " gave a fit that explains half of its own pile's dig";
 }
 
 TEST(DiagnoseTest, TheThreadCountDoesNotChangeTheDiagnosis) {
