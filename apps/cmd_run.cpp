@@ -447,11 +447,13 @@ void run_scenario(const RunOptions& o) {
                      sc.name +
                      "' has no pile, so no type-G particles to grow; leave it at 1 or run a pile "
                      "scenario (fb35, hd27, rd21)");
-  if (o.content_inertia && !(sc.pile && is_multiscale(level)))
-    throw InputError(std::string("--content-inertia: only a pile scenario at a type-G level (G400 "
-                                 "... G50) holds its bucket's soil as a body; scenario '") +
+  if (!o.content_inertia && !(sc.pile && is_multiscale(level)))
+    throw InputError(std::string("--no-content-inertia: only a pile scenario at a type-G level "
+                                 "(G400 ... G50) can hold its bucket's soil by its weight alone; "
+                                 "scenario '") +
                      sc.name + "' at " + level.name +
-                     " does not: give a pile scenario with --fidelity G400 (or finer)");
+                     " cannot: give a pile scenario with --fidelity G400 (or finer), or leave "
+                     "the option out");
   if (o.seed_diameter != 1.0 && !is_multiscale(level))
     throw InputError("--seed-diameter " + std::to_string(o.seed_diameter) + " at " + level.name +
                      ": only the type-G levels (G400 ... G50) grow their zone's particles from "
@@ -527,10 +529,11 @@ void add_run_command(CLI::App& app, const std::string& command_line) {
                   "size (docs/multiscale.md \"Growth\": smaller seeds load more soil)")
       ->check(seed_fraction())
       ->capture_default_str();
-  cmd->add_flag("--content-inertia", opts->content_inertia,
-                "study, type G: the soil the bucket holds is a body welded to it, so the machine "
-                "feels its inertia as well as its weight (docs/multiscale.md \"The bucket's "
-                "content\"); by default its weight alone");
+  cmd->add_flag("--content-inertia,!--no-content-inertia", opts->content_inertia,
+                "type G: the soil the bucket holds is a body welded to it, so the machine feels "
+                "its inertia as well as its weight (the default); --no-content-inertia, a study: "
+                "its weight alone (docs/multiscale.md \"The bucket's content\")")
+      ->capture_default_str();
   cmd->add_option("--form-speed", opts->form_speed,
                   "study, with --free-face: speed the pile's formwork withdraws at before it "
                   "settles, 0 = removed at once [m/s]")

@@ -40,8 +40,9 @@ struct RunOptions {
   // type G: the zone particles' seed diameter, a fraction of their full one (study;
   // --seed-diameter)
   double seed_diameter = kSeedDiameter;
-  // type G: the bucket's soil as a body welded to it (study; --content-inertia)
-  bool content_inertia = false;
+  // type G: the bucket's soil as a body welded to it (the default); --no-content-inertia: its
+  // weight alone (a study)
+  bool content_inertia = true;
   bool residuals = false;
   // settled piles read from and saved to the pile cache (terrain/pile_cache.hpp; --no-pile-cache)
   bool pile_cache = true;

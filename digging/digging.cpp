@@ -97,10 +97,11 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
   steps_total_ = static_cast<int>(std::lround(scenario.duration / h));
   Material soil = options.soil;
   soil.cohesion = effects_.soil({options.soil.cohesion}).cohesion;
-  if (!is_multiscale(preset) && options.content_inertia)
-    throw InputError("content_inertia at " + preset.name +
-                     ": only the type-G levels hold their bucket's soil as a body; at a type-D "
-                     "level the particles in the bucket are the content itself");
+  if (!is_multiscale(preset) && !options.content_inertia)
+    throw InputError("content_inertia off at " + preset.name +
+                     ": at a type-D level the particles in the bucket are the content itself, "
+                     "inertia and all; its weight alone is a type-G study (a G level), or leave "
+                     "content_inertia on");
   if (!is_multiscale(preset) && options.seed_diameter != 1.0)
     throw InputError("seed_diameter " + std::to_string(options.seed_diameter) + " at " +
                      preset.name +

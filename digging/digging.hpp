@@ -54,10 +54,12 @@ struct DiggingOptions {
   // type G: the fraction of its full diameter a zone particle appears at and grows from
   // (MultiscaleOptions::seed_diameter; 1, the default: at full size; docs/multiscale.md "Growth")
   double seed_diameter = kSeedDiameter;
-  // type G: the soil the bucket holds as a body welded to it (its weight and inertia in the
-  // machine's solve, terrain/aggregate BucketPayload) instead of its weight alone (the default;
-  // a study option, docs/multiscale.md "The bucket's content")
-  bool content_inertia = false;
+  // type G: the soil the bucket holds as a body welded to it, its weight and inertia in the
+  // machine's solve (terrain/aggregate BucketPayload; the default since 2026-11-29: the carry's
+  // lift force then fluctuates per kg as a type-D dig's does, docs/validation.md "Type G against
+  // type D"); off, its weight alone (a type-G study; refused at a type-D level, whose particles
+  // are the content itself)
+  bool content_inertia = true;
   // a type-D dig's sweeps end early once the particle rows' RMS residual is below this [m/s]
   // (DemSettings::tolerance; the level's N_it is the cap). 0: always N_it, as the paper's presets
   double sweep_tolerance = kDigSweepTolerance;

@@ -68,12 +68,6 @@ Aggregate aggregate_of(const Particles& p, const std::vector<double>& masses,
   return a;
 }
 
-namespace {
-// the payload's stand-in when the bucket holds nothing [kg], and its radius of gyration [m]
-constexpr double kIdlePayloadMass = 1.0;
-constexpr double kIdlePayloadGyration = 0.1;
-}  // namespace
-
 BucketPayload::BucketPayload(vehicle::MultibodySystem& system, int bucket)
     : system_(system), bucket_(bucket) {
   vehicle::RigidBody body;

@@ -63,12 +63,19 @@ struct Aggregate {
 Aggregate aggregate_of(const Particles& particles, const std::vector<double>& masses,
                        const std::vector<int>& members);
 
-// the soil the bucket holds outside the zone as a body welded to the bucket (issue 14, a study
-// option): its mass, centre and inertia re-set every step from the held particles (`aggregate_of`
-// over them), moving with the bucket, so the machine's direct solve feels the load's weight
-// through gravity and its inertia through the lock, instead of the weight alone as an external
-// wrench (docs/multiscale.md "The bucket's content"). With nothing held it is a nominal 1 kg body
-// at the bucket's centre of mass. Added to the machine once, so the system's sparsity never changes
+// the payload's stand-in when the bucket holds nothing [kg], and its radius of gyration [m]: a
+// body must have a mass for the direct solve to stay regular; 1 kg is 7e-5 of the machine's
+// 15,175 kg (and so its share of an empty machine's motion)
+inline constexpr double kIdlePayloadMass = 1.0;
+inline constexpr double kIdlePayloadGyration = 0.1;
+
+// the soil the bucket holds outside the zone as a body welded to the bucket (issue 14; the
+// default of a type-G dig since 2026-11-29, DiggingOptions::content_inertia): its mass, centre
+// and inertia re-set every step from the held particles (`aggregate_of` over them), moving with
+// the bucket, so the machine's direct solve feels the load's weight through gravity and its
+// inertia through the lock, instead of the weight alone as an external wrench (docs/multiscale.md
+// "The bucket's content"). With nothing held it is a nominal kIdlePayloadMass body at the
+// bucket's centre of mass. Added to the machine once, so the system's sparsity never changes
 class BucketPayload {
  public:
   BucketPayload(vehicle::MultibodySystem& system, int bucket);

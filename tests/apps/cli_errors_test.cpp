@@ -272,12 +272,12 @@ TEST(CliErrors, StepCountsAndLoadsOutsideTheirRangeAreRefused) {
     EXPECT_NE(o.err.find(fix), std::string::npos) << cmd << ": " << o.err;
     EXPECT_FALSE(std::filesystem::exists("/tmp/talus_cli_seed")) << cmd;
   }
-  // the bucket's content as a body: a pile scenario at a G level only
+  // the bucket's content by its weight alone: a pile scenario at a G level only
   for (const char* cmd :
        {"run --scenario hd27 --fidelity D400", "run --scenario load-carry --fidelity G400"}) {
-    const Outcome o = run("", std::string(cmd) + " --out /tmp/talus_cli_seed --content-inertia");
+    const Outcome o = run("", std::string(cmd) + " --out /tmp/talus_cli_seed --no-content-inertia");
     EXPECT_EQ(o.code, 2) << cmd << ": " << o.err;
-    EXPECT_NE(o.err.find("--content-inertia"), std::string::npos) << cmd << ": " << o.err;
+    EXPECT_NE(o.err.find("--no-content-inertia"), std::string::npos) << cmd << ": " << o.err;
     EXPECT_FALSE(std::filesystem::exists("/tmp/talus_cli_seed")) << cmd;
   }
   // the Jacobi sweep has no relaxation to take

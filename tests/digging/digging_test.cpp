@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <string>
 
 #include "terrain/bucket_fill.hpp"
 #include "tests/solvers/dem_test_util.hpp"
@@ -66,6 +67,31 @@ TEST(Digging, ScenarioWithoutAPileIsRejected) {
                InputError);
 }
 
+// the bucket's content: at a G level a body welded to the bucket by default (its weight and its
+// inertia in the machine's solve), its weight alone on request; a type-D level's content is its
+// particles, so asking for the weight alone there is one clear input error (before any pile)
+TEST(Digging, TheBucketContentIsABodyAtTypeGAndItsParticlesAtTypeD) {
+  const vehicle::Scenario sc = vehicle::load_scenario("hd27");
+  const auto payloads = [](const DiggingSimulation& sim) {
+    int n = 0;
+    for (const auto& b : sim.loader().bodies()) n += b.name == "bucket payload";
+    return n;
+  };
+  const FidelityPreset& g400 = level_preset("G400");
+  DiggingOptions options;
+  EXPECT_TRUE(options.content_inertia);
+  const PileBuild g_pile = build_scenario_pile(test::shared_device(), sc, scenario_pile_profile(sc),
+                                               g400, options, nullptr);
+  EXPECT_EQ(payloads(DiggingSimulation(test::shared_device(), sc, g400, g_pile, options)), 1);
+  options.content_inertia = false;
+  EXPECT_EQ(payloads(DiggingSimulation(test::shared_device(), sc, g400, g_pile, options)), 0);
+  try {
+    DiggingSimulation(test::shared_device(), sc, fidelity_preset("D400"), PileBuild{}, options);
+    ADD_FAILURE() << "the weight alone was taken at D400";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("content_inertia"), std::string::npos) << e.what();
+  }
+}
 
 // cohesive soil (the soil_cohesion effect) resists the bucket more: FB35 at D400 pushes the flat
 // bucket deep into the pile at the traction the driveline has, and in cohesive gravel it gets less
