@@ -246,9 +246,9 @@ void DiggingSimulation::multiscale_step() {
   // stages: the aggregate, the machine's direct solve, then the terrain's own)
   std::optional<StageScope> stage(std::in_place, dev_, "aggregate");
   aggregate_->update(*terrain_, loader_->bucket_mesh(), kinematic_bucket(*loader_), h);
-  // the soil in the bucket and outside the zone: its weight on the bucket (the default), or a
-  // body welded to the bucket that carries its weight and its inertia (content_inertia;
-  // docs/multiscale.md)
+  // the soil in the bucket and outside the zone: a body welded to the bucket that carries its
+  // weight and its inertia (content_inertia, the default), or its weight alone on the bucket (a
+  // study; docs/multiscale.md)
   const Particles& p = terrain_->particles();
   const std::vector<double>& mass = terrain_->particle_masses();
   const ActiveZone& zone = terrain_->last_step().zone;

@@ -22,8 +22,10 @@ namespace talus {
 // version is refused, never half-read)
 // 2: walls, type G (2026-11-25); 3: the dig's sweep count (2026-11-27); 4: the particle
 // contacts' colours (2026-11-27, issue 13); 5: type G's full particle diameters (growth) and the
-// aggregate log's principal axes (2026-11-29, issue 14)
-inline constexpr std::uint32_t kStateFormatVersion = 5;
+// aggregate log's principal axes (2026-11-29, issue 14); 6: type G's bucket content a body by
+// default, a machine of one more body (2026-11-29, issue 14: a version-5 type-G state would meet
+// a machine it does not fit)
+inline constexpr std::uint32_t kStateFormatVersion = 6;
 
 struct SavedStateHeader {
   std::string key;     // "name=value" lines: what the simulation was made from

@@ -369,11 +369,11 @@ TEST(DiagnoseTest, AMissingEffectBesideTheSimulationsSensitivityIsStillUnexplain
 // arrangement moves the dig far more than the cohesion does: the addition is refused and nothing
 // is added. Measured with 700, 1500, 5000 and 15000 Pa: the reference piles' share -3 to +12 %.
 // The dig is chaotic in the cohesion too, even on one pile (2945.57 Pa against 2950 Pa moves
-// f_lift by 0.8 kN rms, against 2900 Pa by 6.8 kN): in 1 of 57 draws measured (seed 523734056,
-// 2945.57 Pa; docs/sim2real.md) no scanned value came near enough and the fit explained 28 %. Such
-// a fit is not an addition (below half), so there is no check to run: that draw asserts nothing was
-// added and the test draws again, at most kChaosDraws times, until one reaches the check it is
-// about
+// f_lift by 0.8 kN rms, against 2900 Pa by 6.8 kN; the bucket's content a weight, the default
+// before 9e456b7): in 1 of 57 draws measured then (seed 523734056, 2945.57 Pa; docs/sim2real.md)
+// no scanned value came near enough and the fit explained 28 %. Such a fit is not an addition
+// (below half), so there is no check to run: that draw asserts nothing was added and the test
+// draws again, at most kChaosDraws times, until one reaches the check it is about
 TEST(DiagnoseTest, AFitOfThePileTheDataWereDugOnIsRefusedByTheChaosCheck) {
   constexpr int kChaosDraws = 3;
   const unsigned seed = test_seed();

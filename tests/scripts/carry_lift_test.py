@@ -13,10 +13,12 @@ SCRIPT = pathlib.Path(__file__).resolve().parents[2] / "scripts" / "carry-lift.p
 EMPTY = 50e3  # [N] the empty bucket's lift force
 
 
-def write_run(directory, mass, per_kg, amplitude, frequency=2.0):
+def write_run(directory, mass, per_kg, amplitude, frequency=2.0, ramp=0.0):
     """A run at 100 Hz for 9 s: the empty bucket's force until 2 s, then per_kg N per kg of load
     above it plus a sine of `amplitude` N at `frequency` Hz (2 Hz: one period per 0.5 s moving mean,
-    which it averages to zero, so the fluctuation is the whole sine)."""
+    which it averages to zero, so the fluctuation is the whole sine) and a ramp of `ramp` N/s from
+    2.5 s (as the boom's geometry changes the force slowly: the moving mean follows it, so it is no
+    fluctuation; its mean over the window shifts the force above the empty bucket)."""
     directory.mkdir(parents=True, exist_ok=True)
     with (directory / "timeseries.csv").open("w", newline="") as f:
         w = csv.writer(f)
@@ -26,6 +28,7 @@ def write_run(directory, mass, per_kg, amplitude, frequency=2.0):
             force = EMPTY
             if t >= 2.0:
                 force += per_kg * mass + amplitude * math.sin(2.0 * math.pi * frequency * t)
+                force += ramp * max(0.0, t - 2.5)
             w.writerow([f"{t:.2f}", f"{force:.6f}"])
     (directory / "summary.json").write_text(json.dumps({"loaded_mass_kg": mass}))
 
@@ -47,6 +50,18 @@ class CarryLift(unittest.TestCase):
             self.assertEqual(float(cells[1]), 2000.0)
             self.assertAlmostEqual(float(cells[2]), 37.0, delta=0.05)
             # RMS of the sine: amplitude / sqrt 2, per kg
+            self.assertAlmostEqual(float(cells[3]), 1500.0 / math.sqrt(2.0) / 2000.0, delta=0.01)
+
+    def test_a_slow_change_is_not_a_fluctuation(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            run = pathlib.Path(tmp) / "ramped"
+            # 20 kN/s from 2.5 s: 110 kN by the window's end, 100 times the sine's RMS
+            write_run(run, mass=2000.0, per_kg=37.0, amplitude=1500.0, ramp=20e3)
+            out = table("--window", "3", "8", str(run))
+            self.assertEqual(out.returncode, 0, out.stderr)
+            cells = [c.strip() for c in out.stdout.splitlines()[-1].strip("|").split("|")]
+            # the ramp's mean over the window (its middle, 5.5 s, is 3 s into the ramp), per kg
+            self.assertAlmostEqual(float(cells[2]), 37.0 + 20e3 * 3.0 / 2000.0, delta=0.1)
             self.assertAlmostEqual(float(cells[3]), 1500.0 / math.sqrt(2.0) / 2000.0, delta=0.01)
 
     def test_a_load_that_only_weighs_does_not_fluctuate(self):
