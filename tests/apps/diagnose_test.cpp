@@ -373,7 +373,9 @@ TEST(DiagnoseTest, AMissingEffectBesideTheSimulationsSensitivityIsStillUnexplain
 // before 9e456b7): in 1 of 57 draws measured then (seed 523734056, 2945.57 Pa; docs/sim2real.md)
 // no scanned value came near enough and the fit explained 28 %. Such a fit is not an addition
 // (below half), so there is no check to run: that draw asserts nothing was added and the test
-// draws again, at most kChaosDraws times, until one reaches the check it is about
+// draws again, at most kChaosDraws times, until one reaches the check it is about. With the
+// content a body (the default since 9e456b7) 1 of 20 draws (seed 101) dug data within noise of
+// the model without cohesion: no round at all, and the test draws again too
 TEST(DiagnoseTest, AFitOfThePileTheDataWereDugOnIsRefusedByTheChaosCheck) {
   constexpr int kChaosDraws = 3;
   const unsigned seed = test_seed();
@@ -403,6 +405,13 @@ TEST(DiagnoseTest, AFitOfThePileTheDataWereDugOnIsRefusedByTheChaosCheck) {
                             "--max-effects 1 --candidates soil_cohesion");
     // whatever the fit explains, a fit of the model's own pile is never added
     EXPECT_TRUE(j["effects_found"].empty()) << context << ": " << j["effects_found"].dump();
+    // data within noise of the model without the cohesion leave nothing to search: draw again
+    if (j.at("rounds").empty()) {
+      EXPECT_EQ(j.at("excess_before").get<double>(), 0.0) << context;
+      std::cout << context << ": the data are within noise of the model, no round; drawing again\n";
+      fs::remove_all(base);
+      continue;
+    }
     const auto& round = j["rounds"][0];
     ASSERT_FALSE(round["fitted"].empty()) << context;
     EXPECT_EQ(round["fitted"][0]["explained_on"], "calibration") << context;
