@@ -171,6 +171,7 @@ DiggingOptions digging_options(const RunOptions& o) {
   options.pair_reach = o.pair_reach;
   options.relaxation = o.relaxation;
   options.seed_diameter = o.seed_diameter;
+  options.edge_resistance = o.edge_resistance;
   options.content_inertia = o.content_inertia;
   if (o.form_speed >= 0.0) options.pile.form_speed = o.form_speed;
   options.pile.hold_face = o.hold_face;
@@ -270,6 +271,7 @@ nlohmann::json dig_details(const RunOptions& o, const vehicle::Scenario& sc,
         {"pair_reach", options.pair_reach},
         {"relaxation", options.relaxation},
         {"seed_diameter", options.seed_diameter},
+        {"edge_resistance", options.edge_resistance},
         {"content_inertia", options.content_inertia},
         {"max_passes", sim.max_passes()},
         {"max_residual_m_s", sim.max_residual()},
@@ -454,6 +456,11 @@ void run_scenario(const RunOptions& o) {
                      sc.name + "' at " + level.name +
                      " cannot: give a pile scenario with --fidelity G400 (or finer), or leave "
                      "the option out");
+  if (o.edge_resistance != 1.0 && !(sc.pile && is_multiscale(level)))
+    throw InputError("--edge-resistance " + std::to_string(o.edge_resistance) + ": scenario '" +
+                     sc.name + "' at " + level.name +
+                     " has no type-G cutting edge to resist; give a pile scenario with --fidelity "
+                     "G400 (or finer), or leave it at 1");
   if (o.seed_diameter != 1.0 && !is_multiscale(level))
     throw InputError("--seed-diameter " + std::to_string(o.seed_diameter) + " at " + level.name +
                      ": only the type-G levels (G400 ... G50) grow their zone's particles from "
@@ -522,6 +529,12 @@ void add_run_command(CLI::App& app, const std::string& command_line) {
   add_reach_option(*cmd, opts->pair_reach);
   cmd->add_option("--relaxation", opts->relaxation, kRelaxationHelp)
       ->check(relaxation_number())
+      ->capture_default_str();
+  cmd->add_option("--edge-resistance", opts->edge_resistance,
+                  "study, type G: a factor on the cutting edge's penetration resistance, in [0, "
+                  "10]; 1 = the law as it stands, 0 = none (docs/multiscale.md \"Penetration "
+                  "resistance\": the law is talus's own and moves a dig most)")
+      ->check(number_in(0.0, kMaxEdgeResistance, ""))
       ->capture_default_str();
   cmd->add_option("--seed-diameter", opts->seed_diameter,
                   "study, type G: the zone's particles appear at this fraction of their full "

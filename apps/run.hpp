@@ -40,6 +40,8 @@ struct RunOptions {
   // type G: the zone particles' seed diameter, a fraction of their full one (study;
   // --seed-diameter)
   double seed_diameter = kSeedDiameter;
+  // type G, a study: a factor on the cutting edge's penetration resistance (--edge-resistance)
+  double edge_resistance = 1.0;
   // type G: the bucket's soil as a body welded to it (the default); --no-content-inertia: its
   // weight alone (a study)
   bool content_inertia = true;

@@ -102,6 +102,15 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
                      ": at a type-D level the particles in the bucket are the content itself, "
                      "inertia and all; its weight alone is a type-G study (a G level), or leave "
                      "content_inertia on");
+  if (!(options.edge_resistance >= 0.0 && options.edge_resistance <= kMaxEdgeResistance))
+    throw InputError("edge_resistance " + std::to_string(options.edge_resistance) +
+                     ": the factor on the cutting edge's penetration resistance must lie in [0, " +
+                     std::to_string(kMaxEdgeResistance) + "] (1: the law as it stands)");
+  if (!is_multiscale(preset) && options.edge_resistance != 1.0)
+    throw InputError("edge_resistance " + std::to_string(options.edge_resistance) + " at " +
+                     preset.name +
+                     ": only the type-G levels model the cutting edge's penetration resistance; "
+                     "at a type-D level the particles resist the edge themselves: leave it at 1");
   if (!is_multiscale(preset) && options.seed_diameter != 1.0)
     throw InputError("seed_diameter " + std::to_string(options.seed_diameter) + " at " +
                      preset.name +
@@ -122,8 +131,10 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
     terrain_ = std::make_unique<MultiscaleTerrain>(dev, scenario_pile_profile(scenario), preset,
                                                    loader_->bucket_mesh(),
                                                    kinematic_bucket(*loader_), terrain);
+    AggregateParameters aggregate;
+    aggregate.penetration_factor = options.edge_resistance;
     aggregate_ = std::make_unique<AggregateCoupling>(loader_->system(), loader_->bucket_body(),
-                                                     terrain.soil);
+                                                     terrain.soil, aggregate);
     if (options.content_inertia)
       payload_ = std::make_unique<BucketPayload>(loader_->system(), loader_->bucket_body());
     sensors_ = vehicle::start_with_effects(*loader_, effects_, log_);
@@ -228,6 +239,11 @@ const SplitSolver& DiggingSimulation::split() const {
 const MultiscaleTerrain& DiggingSimulation::terrain() const {
   if (!terrain_) throw Error("digging: a type-D run has no multiscale terrain");
   return *terrain_;
+}
+
+const AggregateCoupling& DiggingSimulation::aggregate() const {
+  if (!aggregate_) throw Error("digging: a type-D run has no aggregate");
+  return *aggregate_;
 }
 
 KinematicBucket kinematic_bucket(const vehicle::WheelLoader& loader) {

@@ -36,6 +36,10 @@ namespace talus {
 // +0.9 % and +1.3 %, HD27's five-pile means by -0.6 % and -0.6 %, with 62-79 sweeps a step
 // instead of 500 (3.8-4.6 times the speed); D400's 15 sweeps rarely reach it
 inline constexpr double kDigSweepTolerance = 1.0e-4;
+// the largest factor DiggingOptions::edge_resistance takes: a study's range, up to ten times the
+// law (at 0.5 m of depth the law gives 38 kN; ten times it is four times the machine's traction,
+// about 100 kN, so larger factors only stall the bucket)
+inline constexpr double kMaxEdgeResistance = 10.0;
 
 struct DiggingOptions {
   PileBuildOptions pile;         // settling of the pile before the machine starts
@@ -60,6 +64,11 @@ struct DiggingOptions {
   // type D"); off, its weight alone (a type-G study; refused at a type-D level, whose particles
   // are the content itself)
   bool content_inertia = true;
+  // type G, a study: a factor on the cutting edge's penetration resistance (constraint C,
+  // terrain/penetration), in [0, kMaxEdgeResistance]; 1 the law as it stands, 0 none. The law is
+  // talus's own (the paper gives none) and moves a type-G dig more than anything else measured
+  // (docs/validation.md "Type G against type D"); refused at a type-D level unless 1
+  double edge_resistance = 1.0;
   // a type-D dig's sweeps end early once the particle rows' RMS residual is below this [m/s]
   // (DemSettings::tolerance; the level's N_it is the cap). 0: always N_it, as the paper's presets
   double sweep_tolerance = kDigSweepTolerance;
@@ -147,6 +156,9 @@ class DiggingSimulation {
   const DemWorld& dem() const;
   const SplitSolver& split() const;
   const MultiscaleTerrain& terrain() const;
+  // the type-G aggregate, its interfaces and the cutting edge's resistance (talus::Error at a
+  // type-D level)
+  const AggregateCoupling& aggregate() const;
   bool multiscale() const { return terrain_ != nullptr; }
   // type G: the aggregate after every step so far (empty at a type-D level)
   const std::vector<AggregateSample>& aggregate_log() const { return aggregate_log_; }

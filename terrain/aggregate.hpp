@@ -107,9 +107,10 @@ struct AggregateParameters {
   double youngs_modulus = 4.6e6;       // bulk E [Pa], paper §4.4
   double stiffness_multiplier = 0.01;  // paper §4.4
   double damping_steps = 2.0;          // SPOOK damping time of the interfaces, in timesteps
-  // constraint C, the cutting edge's penetration resistance (terrain/penetration), on unless a
-  // test of the aggregate alone turns it off
-  bool penetration = true;
+  // constraint C, the cutting edge's penetration resistance (terrain/penetration), times this
+  // factor: 1 the law as it stands, 0 none (a study of its share, DiggingOptions::edge_resistance;
+  // docs/validation.md "Type G against type D": the law is talus's own and moves a dig most)
+  double penetration_factor = 1.0;
   PenetrationParameters edge;
   // kg: the mass the aggregate body keeps while the zone holds no particle (its rows carry no
   // force then; a nominal mass keeps the system regular)
@@ -146,6 +147,9 @@ class AggregateCoupling {
   // the penetration resistance's force on the bucket in the last solve [N], against its cutting
   // direction
   double edge_force() const { return brake_->force(); }
+  // the most the penetration resistance gives in the next solve [N]: penetration_factor times
+  // terrain/penetration's law at the zone's depth (0 while the edge is out of the soil)
+  double edge_limit() const { return brake_->max_force(); }
   const vehicle::PlaneContact& interface_a() const { return *a_; }
   const vehicle::PlaneContact& interface_b() const { return *b_; }
 

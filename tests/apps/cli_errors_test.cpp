@@ -272,14 +272,24 @@ TEST(CliErrors, StepCountsAndLoadsOutsideTheirRangeAreRefused) {
     EXPECT_NE(o.err.find(fix), std::string::npos) << cmd << ": " << o.err;
     EXPECT_FALSE(std::filesystem::exists("/tmp/talus_cli_seed")) << cmd;
   }
-  // the bucket's content by its weight alone: a pile scenario at a G level only
-  for (const char* cmd :
-       {"run --scenario hd27 --fidelity D400", "run --scenario load-carry --fidelity G400"}) {
-    const Outcome o = run("", std::string(cmd) + " --out /tmp/talus_cli_seed --no-content-inertia");
-    EXPECT_EQ(o.code, 2) << cmd << ": " << o.err;
-    EXPECT_NE(o.err.find("--no-content-inertia"), std::string::npos) << cmd << ": " << o.err;
-    EXPECT_FALSE(std::filesystem::exists("/tmp/talus_cli_seed")) << cmd;
+  // the bucket's content by its weight alone, and a factor on the cutting edge's resistance: a
+  // pile scenario at a G level only
+  for (const char* option : {" --no-content-inertia", " --edge-resistance 0"}) {
+    for (const char* cmd :
+         {"run --scenario hd27 --fidelity D400", "run --scenario load-carry --fidelity G400"}) {
+      const Outcome o = run("", std::string(cmd) + " --out /tmp/talus_cli_seed" + option);
+      EXPECT_EQ(o.code, 2) << cmd << option << ": " << o.err;
+      EXPECT_NE(o.err.find(std::string(option).substr(1, 17)), std::string::npos)
+          << cmd << option << ": " << o.err;
+      EXPECT_FALSE(std::filesystem::exists("/tmp/talus_cli_seed")) << cmd << option;
+    }
   }
+  // outside its range
+  const Outcome edge = run("",
+                           "run --scenario hd27 --fidelity G400 --out /tmp/talus_cli_seed "
+                           "--edge-resistance 12");
+  EXPECT_EQ(edge.code, 2) << edge.err;
+  EXPECT_NE(edge.err.find("--edge-resistance"), std::string::npos) << edge.err;
   // the Jacobi sweep has no relaxation to take
   const Outcome jacobi = run(
       "", "run --scenario hd27 --out /tmp/talus_cli_relaxation --sweep jacobi --relaxation 1.3");

@@ -5,11 +5,13 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <string>
 
 #include "terrain/bucket_fill.hpp"
+#include "terrain/penetration.hpp"
 #include "tests/solvers/dem_test_util.hpp"
 
 namespace talus {
@@ -91,6 +93,53 @@ TEST(Digging, TheBucketContentIsABodyAtTypeGAndItsParticlesAtTypeD) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("content_inertia"), std::string::npos) << e.what();
   }
+}
+
+// the cutting edge's penetration resistance, a study factor at type G: the brake's bound each step
+// is the factor times terrain/penetration's law at the depth and width of the zone the aggregate
+// was placed on (the terrain's zone before the step), the law's own at 1, nothing at 0 (no edge
+// force all dig long, where the law's acts); any other factor is refused at a type-D level
+TEST(Digging, TheCuttingEdgesResistanceIsTheLawTimesItsStudyFactor) {
+  const vehicle::Scenario sc = vehicle::load_scenario("hd27");
+  const FidelityPreset& g400 = level_preset("G400");
+  for (const double factor : {1.0, 2.5, 0.0}) {
+    DiggingOptions options;
+    options.edge_resistance = factor;
+    const PileBuild pile = build_scenario_pile(test::shared_device(), sc, scenario_pile_profile(sc),
+                                               g400, options, nullptr);
+    DiggingSimulation sim(test::shared_device(), sc, g400, pile, options);
+    int engaged = 0;
+    double largest = 0.0;
+    while (!sim.done()) {
+      const ActiveZone zone = sim.terrain().last_step().zone;
+      sim.step();
+      const double law = penetration_resistance(zone.depth, zone.width, BulkSoil{});
+      EXPECT_NEAR(sim.aggregate().edge_limit(), factor * law, 1e-9 * (1.0 + law))
+          << "factor " << factor << " at t " << sim.time();
+      engaged += zone.depth > 0.0 && law > 0.0;
+      largest = std::max(largest, sim.aggregate().edge_force());
+    }
+    std::printf(
+        "[ measured ] HD27-G400, edge resistance x%.1f: %d steps under the soil, the "
+        "edge's largest force %.1f kN\n",
+        factor, engaged, 1e-3 * largest);
+    EXPECT_GT(engaged, 10) << factor;
+    if (factor == 0.0)
+      EXPECT_EQ(largest, 0.0);
+    else
+      EXPECT_GT(largest, 0.0) << factor;
+  }
+  DiggingOptions d;
+  d.edge_resistance = 0.5;
+  EXPECT_THROW(
+      DiggingSimulation(test::shared_device(), sc, fidelity_preset("D400"), PileBuild{}, d),
+      InputError);
+  d.edge_resistance = -0.1;
+  EXPECT_THROW(DiggingSimulation(test::shared_device(), sc, g400,
+                                 build_scenario_pile(test::shared_device(), sc,
+                                                     scenario_pile_profile(sc), g400, d, nullptr),
+                                 d),
+               InputError);
 }
 
 // cohesive soil (the soil_cohesion effect) resists the bucket more: FB35 at D400 pushes the flat
