@@ -88,7 +88,8 @@ TEST(Digging, TheBucketContentIsABodyAtTypeGAndItsParticlesAtTypeD) {
   options.content_inertia = false;
   EXPECT_EQ(payloads(DiggingSimulation(test::shared_device(), sc, g400, g_pile, options)), 0);
   try {
-    DiggingSimulation(test::shared_device(), sc, fidelity_preset("D400"), PileBuild{}, options);
+    const DiggingSimulation refused(test::shared_device(), sc, fidelity_preset("D400"), PileBuild{},
+                                    options);
     ADD_FAILURE() << "the weight alone was taken at D400";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("content_inertia"), std::string::npos) << e.what();
