@@ -39,13 +39,17 @@ def table(*args):
 
 
 class CarryLift(unittest.TestCase):
+    def row(self, run, **shape):
+        """The script's row for a synthetic run of this shape (write_run's), window 3-8 s."""
+        write_run(run, **shape)
+        out = table("--window", "3", "8", str(run))
+        self.assertEqual(out.returncode, 0, out.stderr)
+        return [c.strip() for c in out.stdout.splitlines()[-1].strip("|").split("|")]
+
     def test_weight_and_fluctuation_per_kg(self):
         with tempfile.TemporaryDirectory() as tmp:
-            run = pathlib.Path(tmp) / "loaded"
-            write_run(run, mass=2000.0, per_kg=37.0, amplitude=1500.0)
-            out = table("--window", "3", "8", str(run))
-            self.assertEqual(out.returncode, 0, out.stderr)
-            cells = [c.strip() for c in out.stdout.splitlines()[-1].strip("|").split("|")]
+            cells = self.row(pathlib.Path(tmp) / "loaded", mass=2000.0, per_kg=37.0,
+                             amplitude=1500.0)
             self.assertEqual(cells[0], "loaded")
             self.assertEqual(float(cells[1]), 2000.0)
             self.assertAlmostEqual(float(cells[2]), 37.0, delta=0.05)
@@ -54,23 +58,16 @@ class CarryLift(unittest.TestCase):
 
     def test_a_slow_change_is_not_a_fluctuation(self):
         with tempfile.TemporaryDirectory() as tmp:
-            run = pathlib.Path(tmp) / "ramped"
             # 20 kN/s from 2.5 s: 110 kN by the window's end, 100 times the sine's RMS
-            write_run(run, mass=2000.0, per_kg=37.0, amplitude=1500.0, ramp=20e3)
-            out = table("--window", "3", "8", str(run))
-            self.assertEqual(out.returncode, 0, out.stderr)
-            cells = [c.strip() for c in out.stdout.splitlines()[-1].strip("|").split("|")]
+            cells = self.row(pathlib.Path(tmp) / "ramped", mass=2000.0, per_kg=37.0,
+                             amplitude=1500.0, ramp=20e3)
             # the ramp's mean over the window (its middle, 5.5 s, is 3 s into the ramp), per kg
             self.assertAlmostEqual(float(cells[2]), 37.0 + 20e3 * 3.0 / 2000.0, delta=0.1)
             self.assertAlmostEqual(float(cells[3]), 1500.0 / math.sqrt(2.0) / 2000.0, delta=0.01)
 
     def test_a_load_that_only_weighs_does_not_fluctuate(self):
         with tempfile.TemporaryDirectory() as tmp:
-            run = pathlib.Path(tmp) / "still"
-            write_run(run, mass=3000.0, per_kg=30.0, amplitude=0.0)
-            out = table("--window", "3", "8", str(run))
-            self.assertEqual(out.returncode, 0, out.stderr)
-            cells = [c.strip() for c in out.stdout.splitlines()[-1].strip("|").split("|")]
+            cells = self.row(pathlib.Path(tmp) / "still", mass=3000.0, per_kg=30.0, amplitude=0.0)
             self.assertAlmostEqual(float(cells[2]), 30.0, delta=1e-6)
             self.assertAlmostEqual(float(cells[3]), 0.0, delta=1e-6)
 
