@@ -449,18 +449,18 @@ void run_scenario(const RunOptions& o) {
                      sc.name +
                      "' has no pile, so no type-G particles to grow; leave it at 1 or run a pile "
                      "scenario (fb35, hd27, rd21)");
-  if (!o.content_inertia && !(sc.pile && is_multiscale(level)))
-    throw InputError(std::string("--no-content-inertia: only a pile scenario at a type-G level "
-                                 "(G400 ... G50) can hold its bucket's soil by its weight alone; "
-                                 "scenario '") +
-                     sc.name + "' at " + level.name +
-                     " cannot: give a pile scenario with --fidelity G400 (or finer), or leave "
-                     "the option out");
-  if (o.edge_resistance != 1.0 && !(sc.pile && is_multiscale(level)))
-    throw InputError("--edge-resistance " + std::to_string(o.edge_resistance) + ": scenario '" +
-                     sc.name + "' at " + level.name +
-                     " has no type-G cutting edge to resist; give a pile scenario with --fidelity "
-                     "G400 (or finer), or leave it at 1");
+  // the type-G studies of the bucket's content and its cutting edge: a pile scenario at a G level
+  const auto type_g_only = [&](bool given, const std::string& option, const std::string& what) {
+    if (given && !(sc.pile && is_multiscale(level)))
+      throw InputError(option + ": scenario '" + sc.name + "' at " + level.name + " has no " +
+                       what +
+                       "; give a pile scenario with --fidelity G400 (or finer), or leave "
+                       "the option out");
+  };
+  type_g_only(!o.content_inertia, "--no-content-inertia",
+              "type-G bucket content to hold by its weight alone");
+  type_g_only(o.edge_resistance != 1.0, "--edge-resistance " + std::to_string(o.edge_resistance),
+              "type-G cutting edge to resist");
   if (o.seed_diameter != 1.0 && !is_multiscale(level))
     throw InputError("--seed-diameter " + std::to_string(o.seed_diameter) + " at " + level.name +
                      ": only the type-G levels (G400 ... G50) grow their zone's particles from "

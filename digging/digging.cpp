@@ -81,22 +81,7 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
                                      vehicle::EffectSet* effects)
     : dev_(dev), scenario_(scenario), preset_(preset), log_(100.0), effects_(effects ? *effects : no_effects_) {
   if (!scenario.pile) throw InputError(scenario.path + ": scenario '" + scenario.name + "' has no pile (\"pile\": false)");
-  loader_ = std::make_unique<vehicle::WheelLoader>(vehicle::machine_file(scenario), scenario.payload);
-  // the pile's container walls stop the bucket as they stop the gravel (the ground has its own
-  // contact): without them a cycle that drives on after its fill takes the bucket through the
-  // rear wall, which holds the load back (docs/multiscale.md)
-  loader_->add_bucket_walls(container_walls(pile.geoms));
-
-  // the machine settles on its tyres first, controls at rest
-  const double h = preset.dt;
-  loader_->set_drive_speed(0.0);
-  loader_->set_lift_speed(0.0);
-  loader_->set_tilt_speed(0.0);
-  for (int k = 0; k < static_cast<int>(std::lround(kVehicleSettle / h)); ++k) loader_->step(h);
-
-  steps_total_ = static_cast<int>(std::lround(scenario.duration / h));
-  Material soil = options.soil;
-  soil.cohesion = effects_.soil({options.soil.cohesion}).cohesion;
+  // the type-G options, before the machine is built and settled
   if (!is_multiscale(preset) && !options.content_inertia)
     throw InputError("content_inertia off at " + preset.name +
                      ": at a type-D level the particles in the bucket are the content itself, "
@@ -116,6 +101,23 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
                      preset.name +
                      ": only the type-G levels' zone particles grow from seeds; use a G level or "
                      "leave it at 1");
+  loader_ =
+      std::make_unique<vehicle::WheelLoader>(vehicle::machine_file(scenario), scenario.payload);
+  // the pile's container walls stop the bucket as they stop the gravel (the ground has its own
+  // contact): without them a cycle that drives on after its fill takes the bucket through the
+  // rear wall, which holds the load back (docs/multiscale.md)
+  loader_->add_bucket_walls(container_walls(pile.geoms));
+
+  // the machine settles on its tyres first, controls at rest
+  const double h = preset.dt;
+  loader_->set_drive_speed(0.0);
+  loader_->set_lift_speed(0.0);
+  loader_->set_tilt_speed(0.0);
+  for (int k = 0; k < static_cast<int>(std::lround(kVehicleSettle / h)); ++k) loader_->step(h);
+
+  steps_total_ = static_cast<int>(std::lround(scenario.duration / h));
+  Material soil = options.soil;
+  soil.cohesion = effects_.soil({options.soil.cohesion}).cohesion;
   // type G: the voxel terrain of the scenario's profile, its zone's particles and the aggregate
   // solved with the machine (terrain/multiscale_terrain, terrain/aggregate)
   if (is_multiscale(preset)) {

@@ -228,11 +228,8 @@ void AggregateCoupling::update(const MultiscaleTerrain& terrain, const vehicle::
   // constraint C: the cutting edge along the bucket's cutting direction (its profile frame's x),
   // resisted while it is under the soil's surface
   const vehicle::RigidBody& bucket_body = system_.body(bucket_);
-  const double resistance =
-      parameters_.penetration_factor > 0.0
-          ? parameters_.penetration_factor *
-                penetration_resistance(zone.depth, zone.width, soil_, parameters_.edge)
-          : 0.0;
+  const double resistance = parameters_.penetration_factor *
+                            penetration_resistance(zone.depth, zone.width, soil_, parameters_.edge);
   brake_->set(bucket_body.point_to_local(bucket.position), bucket.orientation * Vec3::UnitX(),
               resistance);
 }
