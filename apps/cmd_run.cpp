@@ -173,6 +173,7 @@ DiggingOptions digging_options(const RunOptions& o) {
   options.seed_diameter = o.seed_diameter;
   options.edge_resistance = o.edge_resistance;
   options.content_inertia = o.content_inertia;
+  options.bucket_support = o.bucket_support;
   if (o.form_speed >= 0.0) options.pile.form_speed = o.form_speed;
   options.pile.hold_face = o.hold_face;
   options.sweep = parse_sweep(o.sweep, "--sweep");
@@ -273,6 +274,7 @@ nlohmann::json dig_details(const RunOptions& o, const vehicle::Scenario& sc,
         {"seed_diameter", options.seed_diameter},
         {"edge_resistance", options.edge_resistance},
         {"content_inertia", options.content_inertia},
+        {"bucket_support", options.bucket_support},
         {"max_passes", sim.max_passes()},
         {"max_residual_m_s", sim.max_residual()},
         {"steps_at_pass_limit", sim.steps_at_pass_limit()},
@@ -317,12 +319,25 @@ void write_dig_figures(const std::filesystem::path& dir, const sim2real::Run& ru
   write_render((dir / "side.png").string(), final_particles, loader, view, terrain);
 }
 
+// the type-D soil's force on the bucket step by step as CSV (the torque about the bucket's centre
+// of mass; compare a type-G run's aggregate.csv: interface A, the edge, the support, the held load)
+std::string soil_csv(const std::vector<SoilForceSample>& log) {
+  std::ostringstream os;
+  os << "t,fx,fy,fz,mx,my,mz\n";
+  os.precision(9);
+  for (const SoilForceSample& f : log)
+    os << f.t << ',' << f.force.x() << ',' << f.force.y() << ',' << f.force.z() << ','
+       << f.torque.x() << ',' << f.torque.y() << ',' << f.torque.z() << '\n';
+  return os.str();
+}
+
 // the type-G aggregate step by step as CSV (ParaView reads it with Table To Points on cx, cy, cz;
 // its pose's orientation is the quaternion qx..qw of its principal axes, moments i1 <= i2 <= i3)
 std::string aggregate_csv(const std::vector<AggregateSample>& log) {
   std::ostringstream os;
   os << "t,particles,mass,cx,cy,cz,vx,vy,vz,fx_bucket,fy_bucket,fz_bucket,terrain_normal_force,"
-        "edge_force,depth_a,depth_b,qx,qy,qz,qw,i1,i2,i3\n";
+        "edge_force,depth_a,depth_b,qx,qy,qz,qw,i1,i2,i3,fx_support,fy_support,fz_support,"
+        "held_mass,fx_soil,fy_soil,fz_soil\n";
   os.precision(9);
   for (const AggregateSample& a : log)
     os << a.t << ',' << a.particles << ',' << a.mass << ',' << a.centre.x() << ',' << a.centre.y()
@@ -331,7 +346,10 @@ std::string aggregate_csv(const std::vector<AggregateSample>& log) {
        << a.force_on_bucket.z() << ',' << a.terrain_normal_force << ',' << a.edge_force << ','
        << a.depth_a << ',' << a.depth_b << ',' << a.orientation.x() << ',' << a.orientation.y()
        << ',' << a.orientation.z() << ',' << a.orientation.w() << ',' << a.principal_moments.x()
-       << ',' << a.principal_moments.y() << ',' << a.principal_moments.z() << '\n';
+       << ',' << a.principal_moments.y() << ',' << a.principal_moments.z() << ','
+       << a.support_force.x() << ',' << a.support_force.y() << ',' << a.support_force.z() << ','
+       << a.held_mass << ',' << a.soil_force.x() << ',' << a.soil_force.y() << ','
+       << a.soil_force.z() << '\n';
   return os.str();
 }
 
@@ -425,6 +443,8 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
   if (sim.multiscale()) {
     write_file_atomically((dir / "terrain.vts").string(), terrain_vts(sim.terrain().voxels()));
     write_file_atomically((dir / "aggregate.csv").string(), aggregate_csv(sim.aggregate_log()));
+  } else {
+    write_file_atomically((dir / "bucket_soil.csv").string(), soil_csv(sim.soil_log()));
   }
   if (!o.quiet)
     std::cerr << "talus run: " << sc.name << " " << preset.name << ": "
@@ -459,6 +479,8 @@ void run_scenario(const RunOptions& o) {
   };
   type_g_only(!o.content_inertia, "--no-content-inertia",
               "type-G bucket content to hold by its weight alone");
+  type_g_only(!o.bucket_support, "--no-bucket-support",
+              "type-G soil to hold the bucket up or give way");
   type_g_only(o.edge_resistance != 1.0, "--edge-resistance " + std::to_string(o.edge_resistance),
               "type-G cutting edge to resist");
   if (o.seed_diameter != 1.0 && !is_multiscale(level))
@@ -546,6 +568,11 @@ void add_run_command(CLI::App& app, const std::string& command_line) {
                 "type G: the soil the bucket holds is a body welded to it, so the machine feels "
                 "its inertia as well as its weight (the default); --no-content-inertia, a study: "
                 "its weight alone (docs/multiscale.md \"The bucket's content\")")
+      ->capture_default_str();
+  cmd->add_flag("--bucket-support,!--no-bucket-support", opts->bucket_support,
+                "type G: the resting soil holds the bucket's bottom up, solved with the machine "
+                "(the default); --no-bucket-support, a study: the soil under the bucket gives "
+                "way to any force (docs/multiscale.md \"The terrain's support under the bucket\")")
       ->capture_default_str();
   cmd->add_option("--form-speed", opts->form_speed,
                   "study, with --free-face: speed the pile's formwork withdraws at before it "

@@ -45,6 +45,9 @@ struct RunOptions {
   // type G: the bucket's soil as a body welded to it (the default); --no-content-inertia: its
   // weight alone (a study)
   bool content_inertia = true;
+  // type G: the resting soil holds the bucket's bottom up (the default); --no-bucket-support: the
+  // soil under the bucket gives way to any force (a study)
+  bool bucket_support = true;
   bool residuals = false;
   // settled piles read from and saved to the pile cache (terrain/pile_cache.hpp; --no-pile-cache)
   bool pile_cache = true;

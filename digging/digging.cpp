@@ -96,6 +96,11 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
                      preset.name +
                      ": only the type-G levels model the cutting edge's penetration resistance; "
                      "at a type-D level the particles resist the edge themselves: leave it at 1");
+  if (!is_multiscale(preset) && !options.bucket_support)
+    throw InputError("bucket_support off at " + preset.name +
+                     ": at a type-D level the pile's particles hold the bucket up themselves; the "
+                     "soil giving way under the bucket is a type-G study (a G level), or leave "
+                     "bucket_support on");
   if (!is_multiscale(preset) && options.seed_diameter != 1.0)
     throw InputError("seed_diameter " + std::to_string(options.seed_diameter) + " at " +
                      preset.name +
@@ -130,6 +135,7 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
     terrain.relaxation = options.relaxation;
     terrain.seed_diameter = options.seed_diameter;
     terrain.seed = options.pile.seed;
+    terrain.pressed_depth = options.bucket_support ? kPressedDepth : 0.0;
     terrain_ = std::make_unique<MultiscaleTerrain>(dev, scenario_pile_profile(scenario), preset,
                                                    loader_->bucket_mesh(),
                                                    kinematic_bucket(*loader_), terrain);
@@ -139,6 +145,9 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
                                                      terrain.soil, aggregate);
     if (options.content_inertia)
       payload_ = std::make_unique<BucketPayload>(loader_->system(), loader_->bucket_body());
+    if (options.bucket_support)
+      support_ = std::make_unique<BucketSupport>(loader_->system(), loader_->bucket_body(),
+                                                 loader_->bucket_mesh(), terrain.soil);
     sensors_ = vehicle::start_with_effects(*loader_, effects_, log_);
     return;
   }
@@ -197,8 +206,9 @@ void DiggingSimulation::step(double drive, double lift, double tilt) {
       *loader_, effects_, time_, h, t_end, {drive, lift, tilt}, [&] { split_->step(); }, &log_);
   ++steps_done_;
   time_ = t_end;
-  // coupling bookkeeping
+  // coupling bookkeeping, and the soil's force on the bucket
   const CouplingStats& s = split_->stats();
+  soil_log_.push_back({time_, s.wrench.head<3>(), s.wrench.tail<3>()});
   sweep_sum_ += s.sweeps;
   if (s.bucket_contacts > 0) {
     ++contact_steps_;
@@ -264,6 +274,8 @@ void DiggingSimulation::multiscale_step() {
   // stages: the aggregate, the machine's direct solve, then the terrain's own)
   std::optional<StageScope> stage(std::in_place, dev_, "aggregate");
   aggregate_->update(*terrain_, loader_->bucket_mesh(), kinematic_bucket(*loader_), h);
+  // the resting soil under the bucket's bottom
+  if (support_) support_->update(terrain_->voxels(), kinematic_bucket(*loader_));
   // the soil in the bucket and outside the zone: a body welded to the bucket that carries its
   // weight and its inertia (content_inertia, the default), or its weight alone on the bucket (a
   // study; docs/multiscale.md)
@@ -274,6 +286,9 @@ void DiggingSimulation::multiscale_step() {
   std::vector<int> held;
   for (int k : particles_in_bucket(p, loader_->bucket_mesh(), bucket_pose(*loader_)))
     if (!(zone.depth > 0.0 && zone.contains(p.position[k]))) held.push_back(k);
+  // (its mass now: the terrain's step below renumbers the particles)
+  double held_mass = 0.0;
+  for (int k : held) held_mass += mass[k];
   if (payload_) {
     payload_->update(aggregate_of(p, mass, held));
   } else {
@@ -308,6 +323,10 @@ void DiggingSimulation::multiscale_step() {
   a.force_on_bucket = aggregate_->force_on_bucket();
   a.terrain_normal_force = aggregate_->interface_b().normal_force();
   a.edge_force = aggregate_->edge_force();
+  if (support_) a.support_force = support_->force_on_bucket();
+  a.held_mass = held_mass;
+  a.soil_force = a.force_on_bucket + aggregate_->edge_force_on_bucket() + a.support_force +
+                 held_mass * loader_->system().gravity();
   a.depth_a = aggregate_->depth_a();
   a.depth_b = aggregate_->depth_b();
   const PrincipalAxes axes = principal_axes(aggregate_->aggregate().inertia);
@@ -326,6 +345,9 @@ void write_aggregate_sample(ByteWriter& w, const AggregateSample& a) {
   write_matrix(w, a.velocity);
   write_matrix(w, a.force_on_bucket);
   for (double v : {a.terrain_normal_force, a.edge_force, a.depth_a, a.depth_b}) w.f64(v);
+  write_matrix(w, a.support_force);
+  w.f64(a.held_mass);
+  write_matrix(w, a.soil_force);
   write_matrix(w, a.orientation.coeffs());
   write_matrix(w, a.principal_moments);
 }
@@ -339,12 +361,15 @@ AggregateSample read_aggregate_sample(ByteReader& r) {
   read_matrix(r, a.force_on_bucket, "aggregate log");
   for (double* v : {&a.terrain_normal_force, &a.edge_force, &a.depth_a, &a.depth_b})
     *v = r.f64("aggregate log");
+  read_matrix(r, a.support_force, "aggregate log");
+  a.held_mass = r.f64("aggregate log");
+  read_matrix(r, a.soil_force, "aggregate log");
   read_matrix(r, a.orientation.coeffs(), "aggregate log");
   read_matrix(r, a.principal_moments, "aggregate log");
   return a;
 }
 // bytes write_aggregate_sample writes
-constexpr std::uint64_t kAggregateSampleBytes = 8 * (1 + 1 + 1 + 3 + 3 + 3 + 4 + 4 + 3);
+constexpr std::uint64_t kAggregateSampleBytes = 8 * (1 + 1 + 1 + 3 + 3 + 3 + 4 + 3 + 1 + 3 + 4 + 3);
 }  // namespace
 
 void DiggingSimulation::save_state(ByteWriter& w) const {
@@ -379,6 +404,12 @@ void DiggingSimulation::save_state(ByteWriter& w) const {
     dem_->save_state(w);
     w.tag("bucket contacts");
     split_->save_state(w);
+    w.u64(soil_log_.size());
+    for (const SoilForceSample& f : soil_log_) {
+      w.f64(f.t);
+      write_matrix(w, f.force);
+      write_matrix(w, f.torque);
+    }
   }
   w.tag("effects");
   effects_.save_state(w);
@@ -428,6 +459,15 @@ void DiggingSimulation::restore_state(ByteReader& r) {
     dem_->restore_state(r);
     r.expect("bucket contacts");
     split_->restore_state(r);
+    const std::uint64_t samples = r.u64("soil force log");
+    r.need_elements(samples, 8 * 7, "soil force log");
+    std::vector<SoilForceSample> log(samples);
+    for (SoilForceSample& f : log) {
+      f.t = r.f64("soil force log");
+      read_matrix(r, f.force, "soil force log");
+      read_matrix(r, f.torque, "soil force log");
+    }
+    soil_log_ = std::move(log);
   }
   r.expect("effects");
   effects_.restore_state(r);

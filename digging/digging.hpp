@@ -21,6 +21,7 @@
 #include "host/progress.hpp"
 #include "solvers/split_solver.hpp"
 #include "terrain/aggregate.hpp"
+#include "terrain/bucket_support.hpp"
 #include "terrain/multiscale_terrain.hpp"
 #include "terrain/pile.hpp"
 #include "terrain/pile_cache.hpp"
@@ -69,6 +70,12 @@ struct DiggingOptions {
   // talus's own (the paper gives none) and moves a type-G dig more than anything else measured
   // (docs/validation.md "Type G against type D"); refused at a type-D level unless 1
   double edge_resistance = 1.0;
+  // type G: the resting soil holds the bucket's bottom up (terrain/bucket_support: its four
+  // corners on the voxel surface, solved with the machine; push_aside then leaves the soil the
+  // bottom presses in by less than kPressedDepth); off, the soil under the bucket gives way to any
+  // force as before 2026-11-29 (a study; refused at a type-D level, whose particles hold the
+  // bucket up themselves)
+  bool bucket_support = true;
   // a type-D dig's sweeps end early once the particle rows' RMS residual is below this [m/s]
   // (DemSettings::tolerance; the level's N_it is the cap). 0: always N_it, as the paper's presets
   double sweep_tolerance = kDigSweepTolerance;
@@ -112,11 +119,26 @@ struct AggregateSample {
   Vec3 force_on_bucket = Vec3::Zero();  // interface A's on the bucket [N]
   double terrain_normal_force = 0.0;    // interface B's normal force [N]
   double edge_force = 0.0;              // the penetration resistance's [N]
+  Vec3 support_force = Vec3::Zero();    // the terrain's support's on the bucket [N] (0 without)
+  double held_mass = 0.0;  // the soil the bucket holds outside the zone, this step's [kg]
+  // the soil's whole force on the bucket [N]: interface A, the cutting edge's brake, the support
+  // and the held load's weight (not its inertia); a type-D run's SoilForceSample::force
+  Vec3 soil_force = Vec3::Zero();
   double depth_a = 0.0, depth_b = 0.0;  // the interfaces' depths [m]
   // its principal axes of inertia (a rotation from the world, terrain/aggregate principal_axes)
   // and the moments about them [kg m^2]: the orientation of its pose
   Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();
   Vec3 principal_moments = Vec3::Zero();
+};
+
+// one type-D step's soil force on the bucket: the mean wrench of its particle contacts over the
+// step (the split solver's, solvers/split_solver CouplingStats::wrench), the load in the bucket
+// included, so it is what a type-G bucket feels of the soil through interface A, the cutting
+// edge's brake, the terrain's support and its held load's weight together
+struct SoilForceSample {
+  double t = 0.0;              // end of the step [s]
+  Vec3 force = Vec3::Zero();   // [N], world
+  Vec3 torque = Vec3::Zero();  // about the bucket's centre of mass at the step's start [N m]
 };
 
 // the laser scan of a scenario's pile before loading, as the field tests measured it: the settled
@@ -162,6 +184,8 @@ class DiggingSimulation {
   bool multiscale() const { return terrain_ != nullptr; }
   // type G: the aggregate after every step so far (empty at a type-D level)
   const std::vector<AggregateSample>& aggregate_log() const { return aggregate_log_; }
+  // type D: the soil's force on the bucket step by step (empty at type G: aggregate_log)
+  const std::vector<SoilForceSample>& soil_log() const { return soil_log_; }
   const vehicle::SensorLog& log() const { return log_; }
   // what the sensors report now, after the last step (at time()) and through the effects: what a
   // controller reads; the log holds only the 100 Hz instants, which a step under 10 ms may miss
@@ -212,9 +236,11 @@ class DiggingSimulation {
   std::unique_ptr<MultiscaleTerrain> terrain_;
   std::unique_ptr<AggregateCoupling> aggregate_;
   std::unique_ptr<BucketPayload> payload_;  // type G with DiggingOptions::content_inertia
+  std::unique_ptr<BucketSupport> support_;  // type G with DiggingOptions::bucket_support
   // the type-G coupled step (see the top of this file)
   void multiscale_step();
   std::vector<AggregateSample> aggregate_log_;
+  std::vector<SoilForceSample> soil_log_;
   vehicle::SensorLog log_;
   vehicle::SensorSample sensors_;
   vehicle::EffectSet no_effects_;

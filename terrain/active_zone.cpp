@@ -251,7 +251,10 @@ std::vector<char> closed_columns(const VoxelTerrain& terrain,
 }
 
 PushedSoil push_aside(VoxelTerrain& terrain, const std::vector<double>& underside,
-                      const BulkSoil& soil) {
+                      const BulkSoil& soil, double pressed_depth) {
+  if (!(pressed_depth >= 0.0))
+    throw Error("push aside: a pressed depth of " + std::to_string(pressed_depth) +
+                " m (it is 0 or more)");
   const std::vector<char> closed = closed_columns(terrain, underside);
   const int nx = terrain.nx(), ny = terrain.ny();
   const double h = terrain.cell();
@@ -264,8 +267,8 @@ PushedSoil push_aside(VoxelTerrain& terrain, const std::vector<double>& undersid
       if (!std::isfinite(low)) continue;
       const double lo = std::max(low, terrain.z0()), hi = terrain.surface_height(i, j);
       // an overlap within the columns' rounding is none (a column cut to the tool's underside
-      // stands a few 1e-16 m above it)
-      if (!(hi > lo + kOverlapRounding)) continue;
+      // stands a few 1e-16 m above it), and one within the pressed depth the soil bears
+      if (!(hi > lo + std::max(kOverlapRounding, pressed_depth))) continue;
       const SoilTaken taken = terrain.take(i, j, lo, hi);
       if (!(taken.mass > 0.0)) continue;
       const double compaction =

@@ -133,6 +133,12 @@ struct PushedSoil {
   DynamicSoil left;
 };
 
+// [m] how far a tool may press into the voxel surface before the soil under it gives way and
+// push_aside moves it, in a dig with the terrain's support under the bucket: 1 cm, above what the
+// support's rows let the machine's whole weight press in (150 kN on four points of 1e8 N/m, the
+// bucket's ground-contact stiffness: 0.4 mm) and below the finest level's cell (G50: 5 cm)
+inline constexpr double kPressedDepth = 0.01;
+
 // how far push_aside looks for an open column with room [cells]
 inline constexpr int kPushReach = 8;
 
@@ -146,7 +152,13 @@ inline constexpr int kPushReach = 8;
 // through the pile (a berm forms behind it), its body pressed in where the zone is not active.
 // Without it the voxel columns stood inside the bucket and scraped its load out
 // (docs/multiscale.md). Columns are taken in row order, so the same bits on every run
+//
+// `pressed_depth` [m]: soil standing less than this above the tool's underside is pressed, not
+// pushed (0: every overlap beyond rounding is pushed). The terrain's support under the bucket
+// (terrain/bucket_support) holds the bucket's bottom on the surface with stiff rows that let it
+// press in a little; pushing that little aside every step would let the bucket sink through the
+// support step by step, so a dig with the support passes kPressedDepth
 PushedSoil push_aside(VoxelTerrain& terrain, const std::vector<double>& underside,
-                      const BulkSoil& soil);
+                      const BulkSoil& soil, double pressed_depth = 0.0);
 
 }  // namespace talus

@@ -31,7 +31,7 @@ void place(vehicle::PlaneContact& contact, bool engaged, std::vector<Vec3> point
   g.active = engaged;
   g.points = std::move(points);
   g.normal = normal;
-  g.gap = -depth;
+  g.gaps.assign(g.points.size(), -depth);
   vehicle::PlaneContactParameters p = contact.parameters();
   p.stiffness = stiffness;
   p.damping_time = damping_time;

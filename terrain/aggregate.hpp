@@ -147,6 +147,8 @@ class AggregateCoupling {
   // the penetration resistance's force on the bucket in the last solve [N], against its cutting
   // direction
   double edge_force() const { return brake_->force(); }
+  // the same as a force on the bucket in the world [N]
+  Vec3 edge_force_on_bucket() const { return -brake_->force() * brake_->direction(); }
   // the most the penetration resistance gives in the next solve [N]: penetration_factor times
   // terrain/penetration's law at the zone's depth (0 while the edge is out of the soil)
   double edge_limit() const { return brake_->max_force(); }

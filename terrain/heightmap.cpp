@@ -98,14 +98,8 @@ Heightmap Heightmap::from_particles(const Particles& particles, double x0, doubl
 }
 
 std::optional<double> Heightmap::interpolate(double x, double y) const {
-  const double s = (x - x0_) / dx_, t = (y - y0_) / dx_;
-  if (!(s >= 0 && t >= 0 && s <= nx_ - 1 && t <= ny_ - 1)) return std::nullopt;
-  const int i = std::min(static_cast<int>(s), nx_ - 2), j = std::min(static_cast<int>(t), ny_ - 2);
-  const double u = s - i, v = t - j;
-  const double h00 = height(i, j), h10 = height(i + 1, j), h01 = height(i, j + 1), h11 = height(i + 1, j + 1);
-  // lower triangle (00, 10, 11) where u >= v, upper (00, 11, 01) otherwise
-  if (u >= v) return h00 + u * (h10 - h00) + v * (h11 - h10);
-  return h00 + v * (h01 - h00) + u * (h11 - h01);
+  return piecewise_linear_height(
+      x0_, y0_, dx_, nx_, ny_, [this](int i, int j) { return height(i, j); }, x, y);
 }
 
 std::optional<Eigen::Vector3d> Heightmap::cast(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir) const {

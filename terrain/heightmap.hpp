@@ -12,6 +12,7 @@
 // plane meets the true one there, so the error is float rounding of the ray times the slope jump.
 #pragma once
 #include <Eigen/Core>
+#include <algorithm>
 #include <optional>
 #include <vector>
 
@@ -19,6 +20,26 @@
 #include "solvers/embree.hpp"
 
 namespace talus {
+
+// the piecewise-linear surface of a grid of node heights at (x, y): node (i, j) at
+// (x0 + i dx, y0 + j dx) with height `height(i, j)`, each cell split along its (i, j)-(i+1, j+1)
+// diagonal (the triangles of the header's grid); nullopt off the grid (outside the nodes' hull)
+// and for a grid of fewer than 2 x 2 nodes (no triangle).
+// One law for every grid of heights: Heightmap::interpolate and VoxelTerrain::surface_at
+template <class Height>
+std::optional<double> piecewise_linear_height(double x0, double y0, double dx, int nx, int ny,
+                                              const Height& height, double x, double y) {
+  if (nx < 2 || ny < 2) return std::nullopt;
+  const double s = (x - x0) / dx, t = (y - y0) / dx;
+  if (!(s >= 0 && t >= 0 && s <= nx - 1 && t <= ny - 1)) return std::nullopt;
+  const int i = std::min(static_cast<int>(s), nx - 2), j = std::min(static_cast<int>(t), ny - 2);
+  const double u = s - i, v = t - j;
+  const double h00 = height(i, j), h10 = height(i + 1, j), h01 = height(i, j + 1),
+               h11 = height(i + 1, j + 1);
+  // lower triangle (00, 10, 11) where u >= v, upper (00, 11, 01) otherwise
+  if (u >= v) return h00 + u * (h10 - h00) + v * (h11 - h10);
+  return h00 + v * (h01 - h00) + u * (h11 - h01);
+}
 
 class Heightmap {
  public:

@@ -191,7 +191,7 @@ void MultiscaleTerrain::step(const KinematicBucket& bucket) {
   for (const Vec3& v : bucket_scene_.vertices()) bucket_vertices.push_back(pose.to_world(v));
   const std::vector<double> underside =
       tool_underside(voxels_, bucket_vertices, bucket_scene_.triangles());
-  const PushedSoil pushed = push_aside(voxels_, underside, options_.soil);
+  const PushedSoil pushed = push_aside(voxels_, underside, options_.soil, options_.pressed_depth);
   pool_ += pushed.left.mass;
   last_.excavated += pushed.left.mass;
 

@@ -73,6 +73,10 @@ struct MultiscaleOptions {
   double merge_speed = 0.1;               // [m/s] a particle slower than this may merge (see above)
   double no_merge_margin = 0.5;           // [m] around the bucket's bounding box: no merging there
   double front_margin = 2.0;              // voxels ahead of the toe [m] (VoxelTerrainOptions)
+  // [m] how far the bucket may press into the voxels before push_aside moves the soil: 0 without
+  // the terrain's support under the bucket (a kinematic bucket), kPressedDepth with it
+  // (terrain/bucket_support, the digs')
+  double pressed_depth = 0.0;
   double max_particle_speed = 4.0;        // [m/s] DemSettings::max_speed of the zone's particles
   int one_group_rows = kPgsOneGroupRows;  // DemSettings::one_group_rows of the zone's sweeps
   bool pair_reach = true;                 // DemSettings::pair_reach of the zone's particles (digs')

@@ -127,6 +127,12 @@ std::vector<double> VoxelTerrain::surface_heights() const {
   return heights;
 }
 
+std::optional<double> VoxelTerrain::surface_at(double x, double y) const {
+  return piecewise_linear_height(
+      x0_ + 0.5 * h_, y0_ + 0.5 * h_, h_, nx_, ny_,
+      [this](int i, int j) { return surface_height(i, j); }, x, y);
+}
+
 Heightmap VoxelTerrain::surface(const embree::Device& device) const {
   if (nx_ < 2 || ny_ < 2) throw Error("voxel terrain: a surface needs at least 2 x 2 columns");
   return Heightmap(x0_ + 0.5 * h_, y0_ + 0.5 * h_, h_, nx_, ny_, surface_heights(), device);

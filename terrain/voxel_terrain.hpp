@@ -87,6 +87,10 @@ class VoxelTerrain {
   double column_mass(int i, int j) const;
   double column_volume(int i, int j) const;
   double surface_height(int i, int j) const { return z0_ + column_volume(i, j) / (h_ * h_); }
+  // the surface at (x, y): the piecewise-linear surface through the columns' tops at their
+  // centres (the heightmap's triangles, terrain/heightmap piecewise_linear_height); nullopt
+  // outside the columns' centres and on a grid narrower than 2 x 2 columns
+  std::optional<double> surface_at(double x, double y) const;
   // the whole terrain's soil mass [kg], summed in a fixed order (the same on every run)
   double total_mass() const;
 

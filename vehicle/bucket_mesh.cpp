@@ -1,5 +1,6 @@
 #include "vehicle/bucket_mesh.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "host/error.hpp"
@@ -75,6 +76,21 @@ BucketMesh make_bucket_mesh(const BucketGeometry& g) {
   for (const auto& t : closed) v6 += tet6(m.vertices[t[0]], m.vertices[t[1]], m.vertices[t[2]]);
   m.mesh_volume = std::abs(v6) / 6.0;
   return m;
+}
+
+std::vector<Vec3> bottom_corners(const BucketMesh& mesh) {
+  // the heel: the last profile point still on the bottom (z = 0) behind the tip
+  double heel = 0.0;
+  for (const Vec3& p : mesh.profile) {
+    if (p.z() != 0.0) break;
+    heel = std::min(heel, p.x());
+  }
+  if (!(heel < 0.0)) throw Error("bucket mesh: the profile has no flat bottom behind the tip");
+  const double half = 0.5 * mesh.inner_width;
+  std::vector<Vec3> corners;
+  for (double x : {0.0, heel})
+    for (double y : {-half, half}) corners.emplace_back(x, y, 0.0);
+  return corners;
 }
 
 }  // namespace talus::vehicle

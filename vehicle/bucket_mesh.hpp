@@ -36,6 +36,12 @@ struct BucketMesh {
   Vec3 volume_centroid = Vec3::Zero();        // of the struck volume, profile frame
 };
 
+// the bottom's four corners in the profile frame: both ends of the cutting edge and of the heel
+// (the last profile point on the flat bottom, where the corner arc starts), across the inner
+// width; where the bucket meets the ground (vehicle/wheel_loader) and the type-G terrain's surface
+// (terrain/bucket_support)
+std::vector<Vec3> bottom_corners(const BucketMesh& mesh);
+
 // throws talus::Error for impossible geometry (non-positive sizes, lip not above and behind the tip)
 BucketMesh make_bucket_mesh(const BucketGeometry& g);
 

@@ -6,12 +6,14 @@
 //
 // The contact patch is a fixed number of points on the plane (its corners, say), so that it holds
 // torques as a face does, not only forces. Per point, as the ground and tyre contacts
-// (vehicle/ground_contact.hpp): a one-sided holonomic normal row (gap g along the normal n, which
-// points from body a into body b: b is pushed along +n, a along -n), compliance n_points /
-// stiffness (the points share the stiffness) and damping time tau, and two velocity rows along the
-// plane with box-linearised Coulomb friction |lambda_t| <= mu lambda_n. The rows are there every
-// step; an inactive contact bounds them all to zero force, so the sparsity of the vehicle system
-// never changes when the aggregate comes and goes.
+// (vehicle/ground_contact.hpp): a one-sided holonomic normal row (the point's gap g along the
+// normal n, which points from body a into body b: b is pushed along +n, a along -n), compliance
+// n_points / stiffness (the points share the stiffness) and damping time tau, and two velocity rows
+// along the plane with box-linearised Coulomb friction |lambda_t| <= mu lambda_n. The rows are
+// there every step; an inactive contact bounds them all to zero force, so the sparsity of the
+// vehicle system never changes when the aggregate comes and goes. Each point has its own gap (the
+// terrain's support under the bucket, terrain/bucket_support, meets the surface at each corner
+// apart); a point whose gap is +infinity has nothing under it and carries no force.
 #pragma once
 #include <vector>
 
@@ -23,7 +25,9 @@ struct PlaneContactGeometry {
   bool active = false;
   std::vector<Vec3> points;     // world [m]: as many as the contact was made with
   Vec3 normal = Vec3::UnitZ();  // world, unit, from body a into body b
-  double gap = 0.0;             // separation along the normal [m], negative = overlap
+  // each point's separation along the normal [m], negative = overlap, +infinity = nothing there;
+  // as many as points
+  std::vector<double> gaps;
 };
 
 struct PlaneContactParameters {
@@ -38,7 +42,8 @@ class PlaneContact : public Constraint {
   // body indices of the system, or kWorld for either side; a patch of `points` points (at least 1);
   // throws talus::Error as set_parameters
   PlaneContact(int body_a, int body_b, int points, PlaneContactParameters p);
-  // throws talus::Error when the geometry has another number of points than the contact
+  // throws talus::Error when the geometry has another number of points or gaps than the contact,
+  // or a gap that is NaN or -infinity
   void set_geometry(const PlaneContactGeometry& g);
   int points() const { return points_; }
   // throws talus::Error for a stiffness that is not positive and finite

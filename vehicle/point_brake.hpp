@@ -24,6 +24,7 @@ class PointBrake : public Constraint {
   // the force the brake gave the body along -direction in the last solve [N] (>= 0)
   double force() const { return forces_.empty() ? 0.0 : -forces_[0]; }
   double max_force() const { return max_force_; }
+  const Vec3& direction() const { return direction_; }
 
  private:
   int body_;

@@ -173,9 +173,7 @@ void WheelLoader::add_driveline(const MachineDescription& m,
   // the bucket's bottom corners on the ground: both ends of the cutting edge and of the heel
   // (where the flat bottom meets the corner arc), in the bucket body's frame
   std::vector<Vec3> corners;
-  const double half_width = 0.5 * mesh_.inner_width;
-  for (double x : {0.0, -m.bucket.geometry.bottom_length})
-    for (double y : {-half_width, half_width}) corners.push_back(profile_to_body_ * Vec3(x, y, 0.0));
+  for (const Vec3& c : bottom_corners(mesh_)) corners.push_back(profile_to_body_ * c);
   bucket_ground_ = &system_.add_constraint(
       std::make_unique<PointGroundContact>(bucket_, corners, m.bucket_ground));
   bucket_ground_->name = "bucket_ground";

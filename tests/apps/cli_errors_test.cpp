@@ -272,9 +272,10 @@ TEST(CliErrors, StepCountsAndLoadsOutsideTheirRangeAreRefused) {
     EXPECT_NE(o.err.find(fix), std::string::npos) << cmd << ": " << o.err;
     EXPECT_FALSE(std::filesystem::exists("/tmp/talus_cli_seed")) << cmd;
   }
-  // the bucket's content by its weight alone, and a factor on the cutting edge's resistance: a
-  // pile scenario at a G level only
-  for (const char* option : {" --no-content-inertia", " --edge-resistance 0"}) {
+  // the bucket's content by its weight alone, a factor on the cutting edge's resistance and the
+  // soil under the bucket giving way: a pile scenario at a G level only
+  for (const char* option :
+       {" --no-content-inertia", " --edge-resistance 0", " --no-bucket-support"}) {
     for (const char* cmd :
          {"run --scenario hd27 --fidelity D400", "run --scenario load-carry --fidelity G400"}) {
       const Outcome o = run("", std::string(cmd) + " --out /tmp/talus_cli_seed" + option);

@@ -119,6 +119,22 @@ TEST(DiggingRunTest, Hd27AtD400WritesTheRunContractSnapshotsAndFigures) {
     EXPECT_TRUE(std::filesystem::exists(dir / "snapshots" / ("particles_" + std::to_string(k) + ".vtp"))) << k;
   for (const char* file : {"particles.pvd", "scan.csv", "channels.png", "trajectory.png", "power.png", "side.png"})
     EXPECT_GT(std::filesystem::file_size(dir / file), 100u) << file;
+  // the soil's force on the bucket, one row a step (450 of 20 ms), each finite
+  std::ifstream soil(dir / "bucket_soil.csv");
+  std::getline(soil, line);
+  EXPECT_EQ(line, "t,fx,fy,fz,mx,my,mz");
+  int steps = 0;
+  while (std::getline(soil, line)) {
+    std::istringstream cells(line);
+    int columns = 0;
+    for (std::string cell; std::getline(cells, cell, ',');) {
+      EXPECT_TRUE(std::isfinite(std::stod(cell))) << line;
+      ++columns;
+    }
+    EXPECT_EQ(columns, 7) << line;
+    ++steps;
+  }
+  EXPECT_EQ(steps, 450);
 }
 
 // the damping-time study (issue 11: a halved timestep also halved the contacts' SPOOK damping
@@ -174,12 +190,16 @@ TEST(DiggingRunTest, Hd27AtG400WritesTheRunContractAndTheTerrain) {
   std::getline(csv, header);
   EXPECT_NE(header.find(",cx,cy,cz,"), std::string::npos) << header;
   EXPECT_NE(header.find(",qx,qy,qz,qw,i1,i2,i3"), std::string::npos) << header;
+  // then the terrain's support, the held load and the soil's whole force on the bucket
+  EXPECT_NE(header.find(",i3,fx_support,fy_support,fz_support,held_mass,fx_soil,fy_soil,fz_soil"),
+            std::string::npos)
+      << header;
   int rows = 0, posed = 0;
   while (std::getline(csv, row)) {
     std::vector<double> v;
     std::istringstream cells(row);
     for (std::string cell; std::getline(cells, cell, ',');) v.push_back(std::stod(cell));
-    ASSERT_EQ(v.size(), 23u) << row;
+    ASSERT_EQ(v.size(), 30u) << row;
     const double norm = std::hypot(std::hypot(v[16], v[17]), std::hypot(v[18], v[19]));
     EXPECT_NEAR(norm, 1.0, 1e-6) << row;
     EXPECT_LE(v[20], v[21]) << row;

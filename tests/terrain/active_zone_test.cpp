@@ -2,7 +2,7 @@
 // equation on a level bed (depth, rake, failure angle, reaches, soil mass); the same wedge turned
 // a quarter round; excavation hands the zone's soil on with its swell and keeps the mass balance;
 // a slow tool or one above the surface turns nothing dynamic; the soil a tool's body overlaps is
-// pushed aside down to the body's underside.
+// pushed aside down to the body's underside, unless it stands less than the pressed depth above it.
 #include <gtest/gtest.h>
 
 #include <array>
@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <vector>
 
+#include "host/error.hpp"
 #include "terrain/active_zone.hpp"
 #include "terrain/earthmoving_equation.hpp"
 
@@ -204,6 +205,33 @@ TEST(ActiveZone, TheSoilABodyOverlapsIsPushedAsideDownToItsUnderside) {
   EXPECT_NEAR(stuck.left.mass, 100 * 0.4 * h * h * kFieldBulkDensity, 1e-9);
   EXPECT_NEAR(stuck.left.volume, soil.swell * stuck.left.bank_volume, 1e-12);
   EXPECT_NEAR(full.total_mass() + stuck.left.mass, full_mass, 1e-12 * full_mass);
+}
+
+// with a pressed depth (the digs' kPressedDepth, where the terrain's support holds the bucket up)
+// soil standing less than it above the plate stays where it is; deeper, the column is cut to the
+// plate as without one; a negative depth is refused
+TEST(ActiveZone, SoilWithinThePressedDepthOfTheUndersideIsPressedNotPushed) {
+  const BulkSoil soil;
+  const double h = 0.1;
+  for (double sink : {0.5 * kPressedDepth, 2.0 * kPressedDepth}) {
+    VoxelTerrain t = level_bed(h, 1.0);
+    const Plate p = plate_at(1.0 - sink);
+    const std::vector<double> under = tool_underside(t, p.vertices, p.triangles);
+    const PushedSoil pushed = push_aside(t, under, soil, kPressedDepth);
+    const double top = t.surface_height(t.nx() / 2, t.ny() / 2);
+    std::printf("[ measured ] plate %.3f m into the bed: %.3f kg pushed, column top %.4f m\n", sink,
+                pushed.moved, top);
+    if (sink < kPressedDepth) {
+      EXPECT_EQ(pushed.moved, 0.0);
+      EXPECT_NEAR(top, 1.0, 1e-12);
+    } else {
+      EXPECT_NEAR(pushed.moved, 100 * sink * h * h * kFieldBulkDensity, 1e-9);
+      EXPECT_NEAR(top, 1.0 - sink, 1e-12);
+    }
+  }
+  VoxelTerrain t = level_bed(h, 1.0);
+  const Plate p = plate_at(0.9);
+  EXPECT_THROW(push_aside(t, tool_underside(t, p.vertices, p.triangles), soil, -0.01), Error);
 }
 
 }  // namespace

@@ -1,10 +1,12 @@
 // terrain/voxel_terrain: the solid soil of the type-G terrain. The pile of a profile at bank
 // density; soil taken out of and laid onto columns keeps the mass balance and the columns'
 // filled-from-the-bottom invariant under fresh random operations; loose soil swells; the surface
-// heightmap stands where the columns' soil ends.
+// heightmap stands where the columns' soil ends, and the surface at any point is the heightmap's
+// piecewise-linear surface through the columns' tops.
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <optional>
 #include <random>
 #include <string>
 
@@ -125,6 +127,37 @@ TEST(VoxelTerrain, TheSurfaceHeightmapStandsOnTheColumns) {
       ASSERT_TRUE(z.has_value());
       EXPECT_NEAR(*z, t.surface_height(i, j), 1e-6);
     }
+}
+
+// the surface at fresh random points of a random terrain is the heightmap's interpolation (the
+// same triangles, the same law), exactly at the column centres, and nothing outside them
+TEST(VoxelTerrain, TheSurfaceAtAPointIsTheHeightmapsThroughTheColumnTops) {
+  std::random_device rd;
+  const unsigned seed = rd();
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const double h = 0.2;
+  VoxelTerrain t(-1.0, -0.6, 0.0, h, 10, 6, 10, kFieldBulkDensity);
+  for (int j = 0; j < t.ny(); ++j)
+    for (int i = 0; i < t.nx(); ++i)
+      t.deposit(i, j, 1.5 * unit(rng) * h * h * kFieldBulkDensity, 1.0);
+  const Heightmap map = t.surface();
+  for (int k = 0; k < 200; ++k) {
+    const double x = -1.1 + 2.2 * unit(rng), y = -0.7 + 1.4 * unit(rng);
+    const std::optional<double> z = t.surface_at(x, y), m = map.interpolate(x, y);
+    ASSERT_EQ(z.has_value(), m.has_value()) << "seed " << seed << " at " << x << ", " << y;
+    if (z) {
+      EXPECT_NEAR(*z, *m, 1e-12) << "seed " << seed;
+    }
+  }
+  for (int j = 0; j < t.ny(); ++j)
+    for (int i = 0; i < t.nx(); ++i)
+      EXPECT_NEAR(*t.surface_at(t.column_x(i), t.column_y(j)), t.surface_height(i, j), 1e-12);
+  // outside the columns' centres (half a cell in from the grid's edge) there is no surface
+  EXPECT_FALSE(t.surface_at(-1.0 + 0.4 * h, 0.0).has_value());
+  EXPECT_FALSE(t.surface_at(0.0, 0.6).has_value());
+  VoxelTerrain one(0.0, 0.0, 0.0, h, 1, 4, 4, kFieldBulkDensity);
+  EXPECT_FALSE(one.surface_at(0.5 * h, 0.3).has_value());
 }
 
 // bad sizes are named: a cell out of range, a profile in millimetres, a column that would

@@ -1,6 +1,7 @@
 // vehicle/plane_contact: a block on an inclined plane held by a four-point patch. Below the
 // friction angle it stays, with the normal force m g cos(theta); above it, it slides down with
-// the acceleration g (sin theta - mu cos theta); an inactive patch lets it fall freely.
+// the acceleration g (sin theta - mu cos theta); an inactive patch lets it fall freely; a point
+// with nothing under it (gap +infinity) carries nothing, so a block on half its patch tips.
 #include "vehicle/plane_contact.hpp"
 
 #include <gtest/gtest.h>
@@ -48,7 +49,8 @@ Incline on_incline(double theta_deg, double mu, bool active = true) {
     g.normal = n;
     for (double u : {-0.5, 0.5})
       for (double w : {-0.5, 0.5}) g.points.push_back(s.body(b).point_to_world(Vec3(u, w, -0.5)));
-    g.gap = (s.body(b).position - 0.5 * n).dot(n);
+    // each corner's own gap from the plane through the origin
+    for (const Vec3& x : g.points) g.gaps.push_back(x.dot(n));
     c.set_geometry(g);
     s.step(0.01);
     if (k == 49) v_half = s.body(b).velocity.dot(down);
@@ -85,12 +87,71 @@ TEST(PlaneContact, ABlockHoldsBelowTheFrictionAngleAndSlidesAbove) {
               1e-6);  // free fall, along the slope's direction
 }
 
+// a 100 kg cube on level ground whose patch has its two corners at x = -0.5 over nothing (gap
+// +infinity): the other two carry the whole weight and the cube tips about their edge (the
+// terrain's support under a bucket whose heel hangs over the pit); with all four it stands still
+TEST(PlaneContact, APointWithNothingUnderItCarriesNothing) {
+  for (bool half : {false, true}) {
+    MultibodySystem s;
+    RigidBody block;
+    block.mass = 100.0;
+    block.inertia = Mat3::Identity() * (100.0 / 6.0);
+    block.position = Vec3(0.0, 0.0, 0.5);
+    const int b = s.add_body(block);
+    PlaneContactParameters p;
+    p.stiffness = 1e8;
+    p.friction = 0.5;
+    auto& c = s.add_constraint(std::make_unique<PlaneContact>(kWorld, b, 4, p));
+    c.name = "ground";
+    double fall = 0.0;
+    for (int k = 0; k < 20; ++k) {
+      PlaneContactGeometry g;
+      g.active = true;
+      for (double u : {-0.5, 0.5})
+        for (double w : {-0.5, 0.5}) {
+          const Vec3 x = s.body(b).point_to_world(Vec3(u, w, -0.5));
+          g.points.push_back(x);
+          g.gaps.push_back(half && u < 0.0 ? std::numeric_limits<double>::infinity() : x.z());
+        }
+      c.set_geometry(g);
+      s.step(0.01);
+    }
+    fall = s.body(b).angular_velocity.y();
+    std::printf("[ measured ] %s patch: spin about y %.3f 1/s, normal force %.1f N\n",
+                half ? "half" : "whole", fall, c.normal_force());
+    if (half) {
+      // tipping towards -x: the spin about y is negative (x cross z = -y)
+      EXPECT_LT(fall, -0.5);
+    } else {
+      EXPECT_NEAR(fall, 0.0, 1e-6);
+      EXPECT_NEAR(c.normal_force(), 100.0 * 9.81, 1.0);
+    }
+  }
+}
+
 TEST(PlaneContact, APatchOfTheWrongSizeIsRefused) {
   PlaneContact c(kWorld, 0, 4, PlaneContactParameters{});
   PlaneContactGeometry g;
   g.points.assign(3, Vec3::Zero());
+  g.gaps.assign(3, 0.0);
   EXPECT_THROW(c.set_geometry(g), Error);
+  g.points.assign(4, Vec3::Zero());
+  EXPECT_THROW(c.set_geometry(g), Error);  // three gaps for four points
   EXPECT_THROW(PlaneContact(kWorld, 0, 0, PlaneContactParameters{}), Error);
+}
+
+// a gap that is NaN or -infinity says nothing about where the plane is: refused (+infinity is
+// "nothing under the point")
+TEST(PlaneContact, AGapThatIsNaNOrMinusInfinityIsRefused) {
+  PlaneContact c(kWorld, 0, 2, PlaneContactParameters{});
+  PlaneContactGeometry g;
+  g.points.assign(2, Vec3::Zero());
+  for (double bad : {std::nan(""), -std::numeric_limits<double>::infinity()}) {
+    g.gaps = {0.0, bad};
+    EXPECT_THROW(c.set_geometry(g), Error) << bad;
+  }
+  g.gaps = {0.0, std::numeric_limits<double>::infinity()};
+  EXPECT_NO_THROW(c.set_geometry(g));
 }
 
 // a stiffness of zero is an infinite compliance in the machine's system even while the patch is
