@@ -13,21 +13,14 @@
 #include "host/error.hpp"
 #include "terrain/active_zone.hpp"
 #include "terrain/earthmoving_equation.hpp"
+#include "tests/terrain/voxel_test_util.hpp"
 
 namespace talus {
 namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 
-// a level bed `height` high on a square grid of cells h over [-3, 3] m in x and y
-VoxelTerrain level_bed(double h, double height) {
-  const int n = static_cast<int>(std::lround(6.0 / h));
-  VoxelTerrain t(-3.0, -3.0, 0.0, h, n, n, static_cast<int>(std::ceil((height + 1.0) / h)),
-                 kFieldBulkDensity);
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i) t.deposit(i, j, height * h * h * kFieldBulkDensity, 1.0);
-  return t;
-}
+using test::level_bed;
 
 // a tool 2 m wide cutting `depth` deep into a bed 1 m high, moving along `forward` (horizontal,
 // unit) at 0.5 m/s, its top edge 1 m from the tip at `rake` degrees behind it

@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <limits>
 
+#include "tests/terrain/voxel_test_util.hpp"
 #include "vehicle/multibody.hpp"
 
 namespace talus {
@@ -19,15 +20,7 @@ namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 
-// a level bed `height` high on a grid of cells h over [-3, 3] m in x and y
-VoxelTerrain level_bed(double h, double height) {
-  const int n = static_cast<int>(std::lround(6.0 / h));
-  VoxelTerrain t(-3.0, -3.0, 0.0, h, n, n, static_cast<int>(std::ceil((height + 1.0) / h)),
-                 kFieldBulkDensity);
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i) t.deposit(i, j, height * h * h * kFieldBulkDensity, 1.0);
-  return t;
-}
+using test::level_bed;
 
 TEST(BucketSupport, ItsPointsAreOnTheBottomBehindTheEdgeAndInsideTheWidth) {
   const vehicle::BucketGeometry g;
