@@ -325,6 +325,7 @@ void DiggingSimulation::multiscale_step() {
   a.edge_force = aggregate_->edge_force();
   if (support_) a.support_force = support_->force_on_bucket();
   a.held_mass = held_mass;
+  a.particle_force = terrain_->last_step().bucket_wrench.head<3>();
   a.soil_force = a.force_on_bucket + aggregate_->edge_force_on_bucket() + a.support_force +
                  held_mass * loader_->system().gravity();
   a.depth_a = aggregate_->depth_a();
@@ -348,6 +349,7 @@ void write_aggregate_sample(ByteWriter& w, const AggregateSample& a) {
   write_matrix(w, a.support_force);
   w.f64(a.held_mass);
   write_matrix(w, a.soil_force);
+  write_matrix(w, a.particle_force);
   write_matrix(w, a.orientation.coeffs());
   write_matrix(w, a.principal_moments);
 }
@@ -364,12 +366,14 @@ AggregateSample read_aggregate_sample(ByteReader& r) {
   read_matrix(r, a.support_force, "aggregate log");
   a.held_mass = r.f64("aggregate log");
   read_matrix(r, a.soil_force, "aggregate log");
+  read_matrix(r, a.particle_force, "aggregate log");
   read_matrix(r, a.orientation.coeffs(), "aggregate log");
   read_matrix(r, a.principal_moments, "aggregate log");
   return a;
 }
 // bytes write_aggregate_sample writes
-constexpr std::uint64_t kAggregateSampleBytes = 8 * (1 + 1 + 1 + 3 + 3 + 3 + 4 + 3 + 1 + 3 + 4 + 3);
+constexpr std::uint64_t kAggregateSampleBytes =
+    8 * (1 + 1 + 1 + 3 + 3 + 3 + 4 + 3 + 1 + 3 + 3 + 4 + 3);
 }  // namespace
 
 void DiggingSimulation::save_state(ByteWriter& w) const {

@@ -124,6 +124,10 @@ struct AggregateSample {
   // the soil's whole force on the bucket [N]: interface A, the cutting edge's brake, the support
   // and the held load's weight (not its inertia); a type-D run's SoilForceSample::force
   Vec3 soil_force = Vec3::Zero();
+  // the zone's and the bucket's particles' own force on the kinematic bucket in the terrain's DEM
+  // step [N] (MultiscaleStep::bucket_wrench: recorded, not applied; the aggregate and the held
+  // load stand for it in the machine's solve)
+  Vec3 particle_force = Vec3::Zero();
   double depth_a = 0.0, depth_b = 0.0;  // the interfaces' depths [m]
   // its principal axes of inertia (a rotation from the world, terrain/aggregate principal_axes)
   // and the moments about them [kg m^2]: the orientation of its pose
