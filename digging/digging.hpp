@@ -70,11 +70,11 @@ struct DiggingOptions {
   // talus's own (the paper gives none) and moves a type-G dig more than anything else measured
   // (docs/validation.md "Type G against type D"); refused at a type-D level unless 1
   double edge_resistance = 1.0;
-  // type G: the resting soil holds the bucket's bottom up (terrain/bucket_support: its four
-  // corners on the voxel surface, solved with the machine; push_aside then leaves the soil the
-  // bottom presses in by less than kPressedDepth); off, the soil under the bucket gives way to any
-  // force as before 2026-11-29 (a study; refused at a type-D level, whose particles hold the
-  // bucket up themselves)
+  // type G: the resting soil holds the bucket's bottom up (terrain/bucket_support: four points
+  // on its bottom against the voxel surface, solved with the machine; push_aside then leaves the
+  // soil the bottom presses in by less than kPressedDepth); off, the soil under the bucket gives
+  // way to any force as before 2026-11-29 (a study; refused at a type-D level, whose particles hold
+  // the bucket up themselves)
   bool bucket_support = true;
   // a type-D dig's sweeps end early once the particle rows' RMS residual is below this [m/s]
   // (DemSettings::tolerance; the level's N_it is the cap). 0: always N_it, as the paper's presets

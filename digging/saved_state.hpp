@@ -24,8 +24,10 @@ namespace talus {
 // contacts' colours (2026-11-27, issue 13); 5: type G's full particle diameters (growth) and the
 // aggregate log's principal axes (2026-11-29, issue 14); 6: type G's bucket content a body by
 // default, a machine of one more body (2026-11-29, issue 14: a version-5 type-G state would meet
-// a machine it does not fit)
-inline constexpr std::uint32_t kStateFormatVersion = 6;
+// a machine it does not fit); 7: type G's terrain support under the bucket by default (one more
+// machine constraint), the aggregate log's support force, held mass, soil force and particle
+// force, type D's soil force log (2026-11-29, issue 14)
+inline constexpr std::uint32_t kStateFormatVersion = 7;
 
 struct SavedStateHeader {
   std::string key;     // "name=value" lines: what the simulation was made from

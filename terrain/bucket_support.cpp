@@ -10,7 +10,7 @@
 namespace talus {
 
 std::vector<Vec3> support_points(const vehicle::BucketMesh& mesh) {
-  // the heel from the bottom's corners (tip left, tip right, heel left, heel right)
+  // the heel from the bottom's corners (the tip's two ends, then the heel's)
   const double heel = vehicle::bottom_corners(mesh)[2].x();
   const double quarter = 0.25 * mesh.inner_width;
   std::vector<Vec3> points;

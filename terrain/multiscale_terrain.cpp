@@ -120,6 +120,11 @@ MultiscaleTerrain::MultiscaleTerrain(Device& dev, const PileProfile& profile,
   if (!(options.growth_speed > 0.0 && std::isfinite(options.growth_speed)))
     throw InputError("multiscale terrain: growth_speed " + std::to_string(options.growth_speed) +
                      " m/s is not a positive speed");
+  if (!(options.pressed_depth >= 0.0 && options.pressed_depth < level.diameter))
+    throw InputError("multiscale terrain: pressed_depth " + std::to_string(options.pressed_depth) +
+                     " m is not a depth in [0, a cell): how far the bucket may press into the "
+                     "voxels before push_aside moves the soil (0, or kPressedDepth with the "
+                     "terrain's support)");
   DemSettings settings;
   settings.dt = level.dt;
   settings.iterations = level.iterations;

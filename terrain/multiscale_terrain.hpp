@@ -75,7 +75,7 @@ struct MultiscaleOptions {
   double front_margin = 2.0;              // voxels ahead of the toe [m] (VoxelTerrainOptions)
   // [m] how far the bucket may press into the voxels before push_aside moves the soil: 0 without
   // the terrain's support under the bucket (a kinematic bucket), kPressedDepth with it
-  // (terrain/bucket_support, the digs')
+  // (terrain/bucket_support, the digs'); in [0, a cell)
   double pressed_depth = 0.0;
   double max_particle_speed = 4.0;        // [m/s] DemSettings::max_speed of the zone's particles
   int one_group_rows = kPgsOneGroupRows;  // DemSettings::one_group_rows of the zone's sweeps
@@ -123,7 +123,8 @@ class MultiscaleTerrain {
  public:
   // the terrain of a pile profile (placed where the pile stands) at a type-G level, with the
   // bucket's mesh (its profile frame) where `start` puts it. Throws InputError for a level that
-  // is not type G
+  // is not type G and for options outside their ranges (seed_diameter, growth_speed,
+  // pressed_depth)
   MultiscaleTerrain(Device& dev, const PileProfile& profile, const FidelityPreset& level,
                     const vehicle::BucketMesh& bucket, const KinematicBucket& start,
                     const MultiscaleOptions& options = {},

@@ -12,7 +12,7 @@
 // along the plane with box-linearised Coulomb friction |lambda_t| <= mu lambda_n. The rows are
 // there every step; an inactive contact bounds them all to zero force, so the sparsity of the
 // vehicle system never changes when the aggregate comes and goes. Each point has its own gap (the
-// terrain's support under the bucket, terrain/bucket_support, meets the surface at each corner
+// terrain's support under the bucket, terrain/bucket_support, meets the surface at each point
 // apart); a point whose gap is +infinity has nothing under it and carries no force.
 #pragma once
 #include <vector>

@@ -153,6 +153,14 @@ TEST(VoxelTerrain, TheSurfaceAtAPointIsTheHeightmapsThroughTheColumnTops) {
   for (int j = 0; j < t.ny(); ++j)
     for (int i = 0; i < t.nx(); ++i)
       EXPECT_NEAR(*t.surface_at(t.column_x(i), t.column_y(j)), t.surface_height(i, j), 1e-12);
+  // by hand: between four column centres, the point a quarter cell right of and a tenth of a cell
+  // above the lower-left one lies in the lower triangle (u >= v): h00 + u (h10 - h00) + v (h11 -
+  // h10)
+  const double u = 0.25, v = 0.1;
+  const double h00 = t.surface_height(3, 2), h10 = t.surface_height(4, 2),
+               h11 = t.surface_height(4, 3);
+  EXPECT_NEAR(*t.surface_at(t.column_x(3) + u * h, t.column_y(2) + v * h),
+              h00 + u * (h10 - h00) + v * (h11 - h10), 1e-12);
   // outside the columns' centres (half a cell in from the grid's edge) there is no surface
   EXPECT_FALSE(t.surface_at(-1.0 + 0.4 * h, 0.0).has_value());
   EXPECT_FALSE(t.surface_at(0.0, 0.6).has_value());
