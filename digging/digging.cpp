@@ -273,9 +273,11 @@ void DiggingSimulation::multiscale_step() {
   // the aggregate from the terrain's last step, on the bucket where it stands (a profiled run's
   // stages: the aggregate, the machine's direct solve, then the terrain's own)
   std::optional<StageScope> stage(std::in_place, dev_, "aggregate");
-  aggregate_->update(*terrain_, loader_->bucket_mesh(), kinematic_bucket(*loader_), h);
+  // (the bucket where the step starts: what follows before the machine's step moves other bodies)
+  const KinematicBucket start = kinematic_bucket(*loader_);
+  aggregate_->update(*terrain_, loader_->bucket_mesh(), start, h);
   // the resting soil under the bucket's bottom
-  if (support_) support_->update(terrain_->voxels(), kinematic_bucket(*loader_));
+  if (support_) support_->update(terrain_->voxels(), start);
   // the soil in the bucket and outside the zone: a body welded to the bucket that carries its
   // weight and its inertia (content_inertia, the default), or its weight alone on the bucket (a
   // study; docs/multiscale.md)
@@ -303,7 +305,6 @@ void DiggingSimulation::multiscale_step() {
   // the machine's step with the aggregate, then the terrain's with the bucket as it moved: from
   // its pose at the step's start with the twist the machine solved (the terrain moves its tool by
   // h times that twist, so both end the step where the machine's bucket is)
-  const KinematicBucket start = kinematic_bucket(*loader_);
   stage.emplace(dev_, "direct_solve");
   loader_->step(h);
   stage.emplace(dev_, "aggregate");

@@ -1,11 +1,8 @@
 #include "terrain/bucket_support.hpp"
 
-#include <cmath>
 #include <limits>
 #include <memory>
 #include <optional>
-
-#include "host/error.hpp"
 
 namespace talus {
 

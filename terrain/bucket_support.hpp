@@ -36,16 +36,17 @@
 #include "terrain/multiscale_terrain.hpp"
 #include "terrain/voxel_terrain.hpp"
 #include "vehicle/bucket_mesh.hpp"
+#include "vehicle/ground_contact.hpp"
 #include "vehicle/multibody.hpp"
 #include "vehicle/plane_contact.hpp"
 
 namespace talus {
 
 struct BucketSupportParameters {
-  // [N/m] of the whole patch: four points of 1e8 N/m, the bucket's ground-contact stiffness
-  // (vehicle/ground_contact GroundContactParameters)
-  double stiffness = 4.0e8;
-  double damping_time = 0.05;  // [s], the ground contact's
+  // [N/m] of the whole patch: its four points each as stiff as the bucket's ground contact
+  // (vehicle/ground_contact GroundContactParameters: 1e8 N/m)
+  double stiffness = 4.0 * vehicle::GroundContactParameters{}.stiffness;
+  double damping_time = vehicle::GroundContactParameters{}.damping_time;  // [s], the ground's
 };
 
 // the support's points in the bucket's profile frame (see the header)
