@@ -352,12 +352,17 @@ __kernel void row_residual(__global const TlRow* rows, int n_rows, __global cons
     float3 lr_new = rolling_impulse(lr, wrel, n, inv_dr, ROW_ROLLING_LIMIT(row) * (ln + cohesion));
     rr = length(lr_new - lr) / inv_dr * length(row.arm_a.xyz);
   }
-  residual[k] = rn * rn + rt * rt + rr * rr;
+  // the entry: the squared residual of a row that acts (it holds a normal impulse or the step
+  // would move it), -1 for one that does not, so sum_residual_blocks need not read the rows
+  float r2 = rn * rn + rt * rt + rr * rr;
+  residual[k] = r2 > 0.0f || ln != 0.0f ? r2 : -1.0f;
 }
 
 // each block of `block` consecutive rows: the sum of their squared residuals and the number of
-// rows that act (a normal impulse, or a residual: a step of the projection would move them), one
-// work-item a block, in index order. The RMS divides by the rows that act, not by every row: a
+// rows that act (a normal impulse, or a residual: a step of the projection would move them; the
+// rows that do not are -1 in `residual`, so the rows themselves are not read again: that second
+// read cost a look at D100 a fifth of its time, bench/RESULTS.md 2026-11-29), one work-item a
+// block, in index order. The RMS divides by the rows that act, not by every row: a
 // speculative row whose pair stays apart holds no impulse and has no residual, and counted it
 // would make the same tolerance looser the more such rows a step has (the fastest grain's reach
 // against each pair's own, docs/dem.md). The host reads two floats per block instead of one per row
@@ -365,8 +370,8 @@ __kernel void row_residual(__global const TlRow* rows, int n_rows, __global cons
 // bench/RESULTS.md). A plain loop and no work-group reduction: the order of the sum is fixed by
 // `block` alone, whatever the device, and PoCL pays for barriers (a local-memory tree cost the CPU
 // a third more than this)
-__kernel void sum_residual_blocks(__global const float* residual, __global const TlRow* rows, int n,
-                                  int block, __global float2* sums) {
+__kernel void sum_residual_blocks(__global const float* residual, int n, int block,
+                                  __global float2* sums) {
   int g = get_global_id(0);
   int begin = g * block;
   if (begin >= n) return;
@@ -375,8 +380,10 @@ __kernel void sum_residual_blocks(__global const float* residual, __global const
   float acting = 0.0f;
   for (int i = begin; i < end; ++i) {
     float r = residual[i];
-    s += r;
-    if (r > 0.0f || ROW_IMPULSE_N(rows[i]) != 0.0f) acting += 1.0f;
+    if (r >= 0.0f) {
+      s += r;
+      acting += 1.0f;
+    }
   }
   sums[g] = (float2)(s, acting);
 }

@@ -706,7 +706,7 @@ double DemWorld::residual() {
   b.residual_block_sums.resize(blocks);
   set_args(k_residual_, b.rows, nc, b.velocity, b.omega, params_.relaxation, b.residual);
   launch(dev_, k_residual_, nc, "row_residual");
-  set_args(k_sum_blocks_, b.residual, b.rows, nc, kResidualBlock, b.residual_block_sums);
+  set_args(k_sum_blocks_, b.residual, nc, kResidualBlock, b.residual_block_sums);
   launch(dev_, k_sum_blocks_, blocks, "sum_residual_blocks");
   auto sums = b.residual_block_sums.download(blocks);
   double sum = 0.0, acting = 0.0;

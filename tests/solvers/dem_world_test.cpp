@@ -462,14 +462,22 @@ TEST(DemWorld, TheResidualCountsOnlyTheRowsThatAct) {
   world.sweep_fixed(5);
   const double rms = world.residual();
   const DemBuffers& b = world.buffers();
-  const std::vector<float> squared = b.residual.download(b.n_contacts);
+  // each row's entry: its squared residual, or -1 when it does not act (kernels/solver.cl
+  // row_residual)
+  const std::vector<float> entry = b.residual.download(b.n_contacts);
   const std::vector<TlRow> rows = b.rows.download(b.n_contacts);
   double sum = 0.0;
   int acting = 0;
   for (size_t k = 0; k < rows.size(); ++k) {
-    sum += squared[k];
     // the normal impulse is impulse_t.w (kernels/dem_types.h ROW_IMPULSE_N)
-    if (squared[k] > 0.0f || rows[k].impulse_t.s[3] != 0.0f) ++acting;
+    const bool acts = entry[k] > 0.0f || rows[k].impulse_t.s[3] != 0.0f;
+    if (acts) {
+      EXPECT_GE(entry[k], 0.0f) << "row " << k;
+      ++acting;
+    } else {
+      EXPECT_EQ(entry[k], -1.0f) << "row " << k;
+    }
+    sum += std::max(entry[k], 0.0f);
   }
   std::printf("[ measured ] %zu rows, %d act; RMS over them %.3e m/s, over all %.3e m/s\n",
               rows.size(), acting, rms, std::sqrt(sum / static_cast<double>(rows.size())));
