@@ -7,6 +7,7 @@
 
 #include "host/error.hpp"
 #include "solvers/contact_law.hpp"
+#include "solvers/tolerance_schedule.hpp"
 
 namespace talus::reference {
 
@@ -717,11 +718,14 @@ void step(ReferenceWorld& world) {
       sweeps(world, s.iterations);
       world.iterations = s.iterations;
     } else {
+      // up to each look of DemWorld::sweep's schedule, until the residual is below it
+      ToleranceSchedule schedule(s.tolerance);
       while (world.iterations < s.iterations) {
-        int chunk = std::min(kToleranceCheckInterval, s.iterations - world.iterations);
+        const int chunk = std::min(schedule.next_look(), s.iterations) - world.iterations;
         sweeps(world, chunk);
         world.iterations += chunk;
-        if (residual(world.rows, world.particles, p.relaxation) < s.tolerance) break;
+        if (schedule.look(world.iterations, residual(world.rows, world.particles, p.relaxation)))
+          break;
       }
     }
   }

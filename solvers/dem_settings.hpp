@@ -13,11 +13,6 @@ const char* sweep_name(SweepKind kind);
 // "pgs" or "jacobi"; throws InputError naming `field` otherwise
 SweepKind parse_sweep(const std::string& text, const std::string& field);
 
-// sweeps between two looks at the residual when a tolerance is set (each look is one residual
-// kernel and a download, a host wait): DemWorld::sweep, its reference twin and the coupled dig's
-// passes (solvers/split_solver)
-inline constexpr int kToleranceCheckInterval = 10;
-
 // A carried colouring grows: a persisting contact keeps its colour and a new one takes the
 // smallest its neighbours leave, which over many steps spreads a bed's colours towards the
 // contact graph's degree (settle10k: 10 colours fresh, 19 after 300 carried steps), and each
@@ -46,8 +41,8 @@ struct DemSettings {
   double dt = 1.0e-3;       // timestep h [s]
   int iterations = 50;      // sweeps per step (upper bound when tolerance > 0)
   bool warm_start = true;   // start from last step's impulses of persistent contacts
-  // stop early once the RMS row residual [m/s] falls below this (checked every
-  // kToleranceCheckInterval sweeps); 0 runs all iterations, as the paper's fixed N_it. The coupled
+  // stop early once the RMS row residual [m/s] falls below this (looked at where
+  // solvers/tolerance_schedule says); 0 runs all iterations, as the paper's fixed N_it. The coupled
   // dig (solvers/split_solver) applies it to each outer pass's sweeps
   double tolerance = 0.0;
   SweepKind sweep = SweepKind::Pgs;

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "host/stage_times.hpp"
+#include "solvers/tolerance_schedule.hpp"
 
 namespace talus {
 
@@ -664,13 +665,16 @@ int DemWorld::sweep(int iterations) {
     sweep_->iterate(buffers_, iterations);
     return iterations;
   }
-  // with a tolerance: sweep in chunks and stop once the residual is small enough
+  // with a tolerance: sweep up to each look of the schedule and stop once the residual is below
+  // it (a last look at the cap, for the step's stats)
+  ToleranceSchedule schedule(settings_.tolerance);
   int done = 0;
   while (done < iterations) {
-    int chunk = std::min(kToleranceCheckInterval, iterations - done);
+    const int chunk = std::min(schedule.next_look(), iterations) - done;
     sweep_->iterate(buffers_, chunk);
     done += chunk;
-    if (residual() < settings_.tolerance) break;
+    stats_.residual = residual();
+    if (schedule.look(done, stats_.residual)) break;
   }
   return done;
 }
@@ -809,8 +813,8 @@ void DemWorld::step_impl(std::vector<double>* history) {
       }
       stats_.iterations = settings_.iterations;
     }
+    // with a tolerance sweep() left its last look's residual in the stats
     if (history != nullptr) stats_.residual = history->back();
-    else if (settings_.tolerance > 0.0) stats_.residual = residual();
   }
   end_step();
 }

@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
 
 #include "host/error.hpp"
 #include "host/stage_times.hpp"
+#include "solvers/tolerance_schedule.hpp"
 
 namespace talus {
 
@@ -174,10 +176,12 @@ Vec6 SplitSolver::solve_coupled(std::vector<ContactRow>& rows, const Vec6& warm_
   Vec6 impulse = warm_impulse;
   for (int pass = 0; pass < settings_.max_passes; ++pass) {
     // the pass's sweeps, particle rows and bucket rows in turn; with a tolerance
-    // (DemSettings::tolerance) the particle rows' residual, looked at every
-    // kToleranceCheckInterval sweeps, ends them early
+    // (DemSettings::tolerance) the particle rows' residual, looked at where the schedule puts
+    // the looks (solvers/tolerance_schedule), ends them early
     const int sweeps = pass == 0 ? iterations : pass_sweeps;
     const double tolerance = dem_.settings().tolerance;
+    std::optional<ToleranceSchedule> schedule;
+    if (tolerance > 0.0) schedule.emplace(tolerance);
     for (int it = 0; it < sweeps; ++it) {
       {
         StageScope stage(dev_, "particle_sweeps");
@@ -188,9 +192,9 @@ Vec6 SplitSolver::solve_coupled(std::vector<ContactRow>& rows, const Vec6& warm_
         block_.sweep(dem_.buffers().velocity, dem_.buffers().omega);
       }
       ++stats_.sweeps;
-      if (tolerance > 0.0 && (it + 1) % kToleranceCheckInterval == 0 && it + 1 < sweeps) {
+      if (schedule && it + 1 == schedule->next_look() && it + 1 < sweeps) {
         StageScope stage(dev_, "tolerance_check");
-        if (dem_.residual() < tolerance) break;
+        if (schedule->look(it + 1, dem_.residual())) break;
       }
     }
     ++stats_.passes;
