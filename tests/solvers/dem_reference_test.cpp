@@ -982,8 +982,7 @@ void compare_residuals(SweepStart& s, const std::string& label) {
     // an entry is a squared residual, or -1 for a row without normal impulse or step (zero)
     ASSERT_TRUE(got[k] >= 0.0f || got[k] == -1.0f) << "row " << k << ": " << got[k];
     const double r = std::sqrt(std::max(want[k], 0.0));
-    t.scalar(std::max(got[k], 0.0f), want[k], 1e-3, 1e-10 + 2.0 * r * kVelocityFloor,
-             at("row", k));
+    t.scalar(std::max(got[k], 0.0f), want[k], 1e-3, 1e-10 + 2.0 * r * kVelocityFloor, at("row", k));
   }
   t.expect_within();
   EXPECT_NEAR(device_rms, ref::residual(s.rows, s.bodies, relaxation), 1e-3 * device_rms + 1e-6);
