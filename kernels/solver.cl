@@ -314,6 +314,12 @@ __kernel void jacobi_bodies(__global const TlRow* rows, __global const float4* d
   omega[i] = (float4)(w.xyz + w.w * dw, w.w);
 }
 
+// a row's entry in the residual buffer: the squared residual r2 of a row that acts (it holds a
+// normal impulse ln or the step would move it), -1 for one that does not, so sum_residual_blocks
+// need not read the rows. A NaN residual stays in (and makes the RMS NaN: no early stop on a bad
+// state)
+float residual_entry(float r2, float ln) { return r2 != 0.0f || ln != 0.0f ? r2 : -1.0f; }
+
 // the natural-map residual of each contact (velocity units): how far one more projection step
 // would move the normal, friction and rolling impulses, times their effective masses (rolling
 // times the lever arm's length); zero at the exact solution. The step is plain Gauss-Seidel's
@@ -325,8 +331,13 @@ __kernel void row_residual(__global const TlRow* rows, int n_rows, __global cons
   int k = get_global_id(0);
   if (k >= n_rows) return;
   TlRow row = rows[k];
-  float4 va4, wa4, vb4, wb4;
-  load_bodies(&row, velocity, omega, &va4, &wa4, &vb4, &wb4);
+  // the bodies loaded inline, as in pgs_row (load_bodies' out-pointers cost PoCL)
+  int a = row.a;
+  int b = row.b;
+  float4 va4 = velocity[a];
+  float4 wa4 = omega[a];
+  float4 vb4 = b >= 0 ? velocity[b] : (float4)(0.0f);
+  float4 wb4 = b >= 0 ? omega[b] : (float4)(0.0f);
   float3 n = row.normal.xyz;
   float ln = ROW_IMPULSE_N(row);
   float un = dot(n, vb4.xyz - va4.xyz);
@@ -336,6 +347,14 @@ __kernel void row_residual(__global const TlRow* rows, int n_rows, __global cons
   float inv_dr = ROW_INV_DR(row) / relaxation;
   float rn =
       (normal_impulse(ln, ROW_RHS(row), un, ROW_SIGMA(row), inv_dn, -cohesion) - ln) / inv_dn;
+  // a row that carries no load and holds no friction or rolling impulse: their discs have radius
+  // zero and project zero onto zero (solve_contact's skip), so its residual is the normal one's,
+  // bit for bit, without the friction and rolling work (speculative rows whose pairs stay apart)
+  if (ln + cohesion == 0.0f && all(row.impulse_t.xyz == (float3)(0.0f)) &&
+      all(row.impulse_r.xyz == (float3)(0.0f))) {
+    residual[k] = residual_entry(rn * rn, ln);
+    return;
+  }
   float3 u = (vb4.xyz + cross(wb4.xyz, row.arm_b.xyz)) - (va4.xyz + cross(wa4.xyz, row.arm_a.xyz));
   float3 ut = u - dot(u, n) * n;
   float rt = 0.0f;
@@ -352,17 +371,13 @@ __kernel void row_residual(__global const TlRow* rows, int n_rows, __global cons
     float3 lr_new = rolling_impulse(lr, wrel, n, inv_dr, ROW_ROLLING_LIMIT(row) * (ln + cohesion));
     rr = length(lr_new - lr) / inv_dr * length(row.arm_a.xyz);
   }
-  // the entry: the squared residual of a row that acts (it holds a normal impulse or the step
-  // would move it), -1 for one that does not, so sum_residual_blocks need not read the rows
-  float r2 = rn * rn + rt * rt + rr * rr;
-  residual[k] = r2 > 0.0f || ln != 0.0f ? r2 : -1.0f;
+  residual[k] = residual_entry(rn * rn + rt * rt + rr * rr, ln);
 }
 
 // each block of `block` consecutive rows: the sum of their squared residuals and the number of
 // rows that act (a normal impulse, or a residual: a step of the projection would move them; the
-// rows that do not are -1 in `residual`, so the rows themselves are not read again: that second
-// read cost a look at D100 a fifth of its time, bench/RESULTS.md 2026-11-29), one work-item a
-// block, in index order. The RMS divides by the rows that act, not by every row: a
+// rows that do not are -1 in `residual`, residual_entry, so the rows are not read again), one
+// work-item a block, in index order. The RMS divides by the rows that act, not by every row: a
 // speculative row whose pair stays apart holds no impulse and has no residual, and counted it
 // would make the same tolerance looser the more such rows a step has (the fastest grain's reach
 // against each pair's own, docs/dem.md). The host reads two floats per block instead of one per row
@@ -380,7 +395,7 @@ __kernel void sum_residual_blocks(__global const float* residual, int n, int blo
   float acting = 0.0f;
   for (int i = begin; i < end; ++i) {
     float r = residual[i];
-    if (r >= 0.0f) {
+    if (r != -1.0f) {
       s += r;
       acting += 1.0f;
     }

@@ -103,7 +103,8 @@ struct DemBuffers {
   // rows and the Jacobi impulse changes
   Buffer<TlRow> rows;
   Buffer<cl_float4> delta_lin, delta_ang;
-  // each row's squared residual, and per block their sum and the number of rows that act
+  // each row's squared residual (-1 for a row that does not act: kernels/solver.cl
+  // residual_entry), and per block their sum and the number of rows that act
   // (DemWorld::residual)
   Buffer<float> residual;
   Buffer<cl_float2> residual_block_sums;

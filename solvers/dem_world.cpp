@@ -113,6 +113,10 @@ void DemWorld::set_geoms(std::vector<StaticGeom> geoms, GeomChange change) {
 void DemWorld::update_params() {
   // the settings a caller may have changed through settings(), checked before the params change
   check_relaxation(settings_.relaxation, settings_.sweep, "DemSettings.relaxation");
+  if (!(settings_.tolerance >= 0.0) || !std::isfinite(settings_.tolerance))
+    throw InputError(
+        "DemSettings.tolerance: must be finite and not negative [m/s]; use 0 for no "
+        "early stop");
   if (settings_.narrow_phase_slots < 0 || settings_.narrow_phase_slots > kMaxNarrowPhaseSlots)
     throw InputError(
         "DemSettings.narrow_phase_slots: " + std::to_string(settings_.narrow_phase_slots) +
@@ -660,7 +664,11 @@ void DemWorld::warm_start() {
 }
 
 int DemWorld::sweep(int iterations) {
-  if (buffers_.n_contacts == 0) return 0;
+  // no contacts: nothing to sweep, and with a tolerance a residual of zero
+  if (buffers_.n_contacts == 0) {
+    if (settings_.tolerance > 0.0) stats_.residual = 0.0;
+    return 0;
+  }
   if (settings_.tolerance <= 0.0) {
     sweep_->iterate(buffers_, iterations);
     return iterations;

@@ -456,6 +456,27 @@ TEST(DemWorld, ToleranceStopsTheSweepsEarly) {
   EXPECT_EQ(world.stats().residual, history[looked]);
 }
 
+// a tolerance that is negative or not finite is refused by the step that would use it, before
+// it changes the particles, naming the field
+TEST(DemWorld, AToleranceThatIsNegativeOrNotFiniteIsRefused) {
+  Device dev;
+  Scene scene = small_bed();
+  DemWorld world(dev, scene.material, scene.settings, scene.bounds, scene.geoms);
+  world.set_particles(scene.particles);
+  const auto before = world.buffers().position.download(world.size());
+  for (double bad : {-1.0e-4, std::nan(""), std::numeric_limits<double>::infinity()}) {
+    world.settings().tolerance = bad;
+    try {
+      world.step();
+      FAIL() << "expected an InputError for " << bad;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("DemSettings.tolerance"), std::string::npos) << e.what();
+    }
+  }
+  const auto after = world.buffers().position.download(world.size());
+  EXPECT_EQ(0, std::memcmp(before.data(), after.data(), before.size() * sizeof(before[0])));
+}
+
 // the RMS residual divides by the rows that act (an impulse or a residual), not by every row: a
 // bed at rest with the fastest grain's speculative reach holds rows whose pairs stay apart, and
 // counted they would make the same tolerance looser the more of them a step has (docs/dem.md)

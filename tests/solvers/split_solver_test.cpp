@@ -1,7 +1,6 @@
 // The coupled type-D step (solvers/split_solver): particles against the wheel loader's bucket.
 // Each test measures a balance or a bound that a wrong coupling breaks.
 #include "solvers/split_solver.hpp"
-#include "solvers/tolerance_schedule.hpp"
 
 #include <gtest/gtest.h>
 
@@ -9,6 +8,7 @@
 #include <memory>
 #include <random>
 
+#include "solvers/tolerance_schedule.hpp"
 #include "terrain/bucket_fill.hpp"
 #include "tests/solvers/dem_test_util.hpp"
 #include "vehicle/data_file.hpp"
@@ -157,7 +157,7 @@ TEST(SplitSolver, ParticlesAtRestInTheBucketWeighTheirMass) {
 }
 
 // a tolerance on the particle rows' residual (DemSettings::tolerance) ends each pass's sweeps
-// once it is met, at a look of solvers/tolerance_schedule (the first after kFirstLookInterval
+// once it is met, at a look of solvers/tolerance_schedule (never before kFirstLookInterval
 // sweeps): the gravel held in the standing bucket needs fewer than the 100 sweeps allowed, and
 // still weighs its mass on it
 TEST(SplitSolver, AToleranceEndsTheSweepsEarlyAndTheBucketStillWeighsItsLoad) {
@@ -179,7 +179,7 @@ TEST(SplitSolver, AToleranceEndsTheSweepsEarlyAndTheBucketStillWeighsItsLoad) {
     loader.set_tilt_speed(t < 0.6 ? loader.tilt_spec().max_speed : 0.0);
     split.step();
     const CouplingStats& s = split.stats();
-    // a pass's sweeps end at a look (the first after kFirstLookInterval) or at its own count
+    // a pass's sweeps end at a look (never before kFirstLookInterval sweeps) or at its own count
     if (s.passes == 1 && s.sweeps < kIterations) {
       EXPECT_GE(s.sweeps, kFirstLookInterval) << k;
     }
