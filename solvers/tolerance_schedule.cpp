@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "host/error.hpp"
 
@@ -13,21 +14,19 @@ ToleranceSchedule::ToleranceSchedule(double tolerance) : tolerance_(tolerance) {
 }
 
 bool ToleranceSchedule::look(int sweeps, double residual) {
-  // the look, kept with the one before it
-  previous_sweeps_ = last_sweeps_;
-  previous_residual_ = last_residual_;
-  last_sweeps_ = sweeps;
-  last_residual_ = residual;
+  // the look before this one, and this one kept for the next
+  const int previous_sweeps = std::exchange(last_sweeps_, sweeps);
+  const double previous_residual = std::exchange(last_residual_, residual);
   if (residual < tolerance_) return true;
 
   // the next look: ten sweeps on after the first look or a residual that did not fall (or was
   // not finite)
   int stride = kFirstLookInterval;
-  if (previous_sweeps_ > 0 && sweeps > previous_sweeps_ && std::isfinite(previous_residual_) &&
-      residual < previous_residual_) {
+  if (previous_sweeps > 0 && sweeps > previous_sweeps && std::isfinite(previous_residual) &&
+      residual < previous_residual) {
     // the power law r = A n^-p through the two looks, and the sweeps where it meets the tolerance
-    const double p = std::log(previous_residual_ / residual) /
-                     std::log(static_cast<double>(sweeps) / previous_sweeps_);
+    const double p = std::log(previous_residual / residual) /
+                     std::log(static_cast<double>(sweeps) / previous_sweeps);
     const double reach = sweeps * std::pow(residual / tolerance_, 1.0 / p);
     // the first whole sweep past the crossing (at it the residual would equal the tolerance)
     const double ahead = std::floor(reach - sweeps) + 1.0;
