@@ -323,6 +323,7 @@ void DiggingSimulation::multiscale_step() {
   a.velocity = loader_->system().body(aggregate_->body()).velocity;
   a.force_on_bucket = aggregate_->force_on_bucket();
   a.terrain_normal_force = aggregate_->interface_b().normal_force();
+  a.terrain_force = aggregate_->terrain_force();
   a.edge_force = aggregate_->edge_force();
   if (support_) a.support_force = support_->force_on_bucket();
   a.held_mass = held_mass;
@@ -353,6 +354,7 @@ void write_aggregate_sample(ByteWriter& w, const AggregateSample& a) {
   write_matrix(w, a.particle_force);
   write_matrix(w, a.orientation.coeffs());
   write_matrix(w, a.principal_moments);
+  write_matrix(w, a.terrain_force);
 }
 AggregateSample read_aggregate_sample(ByteReader& r) {
   AggregateSample a;
@@ -370,11 +372,12 @@ AggregateSample read_aggregate_sample(ByteReader& r) {
   read_matrix(r, a.particle_force, "aggregate log");
   read_matrix(r, a.orientation.coeffs(), "aggregate log");
   read_matrix(r, a.principal_moments, "aggregate log");
+  read_matrix(r, a.terrain_force, "aggregate log");
   return a;
 }
 // bytes write_aggregate_sample writes
 constexpr std::uint64_t kAggregateSampleBytes =
-    8 * (1 + 1 + 1 + 3 + 3 + 3 + 4 + 3 + 1 + 3 + 3 + 4 + 3);
+    8 * (1 + 1 + 1 + 3 + 3 + 3 + 4 + 3 + 1 + 3 + 3 + 4 + 3 + 3);
 }  // namespace
 
 void DiggingSimulation::save_state(ByteWriter& w) const {

@@ -26,8 +26,9 @@ namespace talus {
 // default, a machine of one more body (2026-11-29, issue 14: a version-5 type-G state would meet
 // a machine it does not fit); 7: type G's terrain support under the bucket by default (one more
 // machine constraint), the aggregate log's support force, held mass, soil force and particle
-// force, type D's soil force log (2026-11-29, issue 14)
-inline constexpr std::uint32_t kStateFormatVersion = 7;
+// force, type D's soil force log (2026-11-29, issue 14); 8: the aggregate log's terrain force,
+// interface B's whole force on the aggregate (2026-11-30, issue 14)
+inline constexpr std::uint32_t kStateFormatVersion = 8;
 
 struct SavedStateHeader {
   std::string key;     // "name=value" lines: what the simulation was made from

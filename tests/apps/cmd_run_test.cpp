@@ -190,10 +190,10 @@ TEST(DiggingRunTest, Hd27AtG400WritesTheRunContractAndTheTerrain) {
   std::getline(csv, header);
   EXPECT_NE(header.find(",cx,cy,cz,"), std::string::npos) << header;
   EXPECT_NE(header.find(",qx,qy,qz,qw,i1,i2,i3"), std::string::npos) << header;
-  // then the terrain's support, the held load, the soil's whole force on the bucket and the
-  // particles' own in the terrain's DEM
+  // then the terrain's support, the held load, the soil's whole force on the bucket, the
+  // particles' own in the terrain's DEM and interface B's on the aggregate
   EXPECT_NE(header.find(",i3,fx_support,fy_support,fz_support,held_mass,fx_soil,fy_soil,fz_soil,"
-                        "fx_particles,fy_particles,fz_particles"),
+                        "fx_particles,fy_particles,fz_particles,fx_terrain,fy_terrain,fz_terrain"),
             std::string::npos)
       << header;
   int rows = 0, posed = 0;
@@ -201,7 +201,7 @@ TEST(DiggingRunTest, Hd27AtG400WritesTheRunContractAndTheTerrain) {
     std::vector<double> v;
     std::istringstream cells(row);
     for (std::string cell; std::getline(cells, cell, ',');) v.push_back(std::stod(cell));
-    ASSERT_EQ(v.size(), 33u) << row;
+    ASSERT_EQ(v.size(), 36u) << row;
     const double norm = std::hypot(std::hypot(v[16], v[17]), std::hypot(v[18], v[19]));
     EXPECT_NEAR(norm, 1.0, 1e-6) << row;
     EXPECT_LE(v[20], v[21]) << row;

@@ -188,6 +188,7 @@ TEST(Digging, ItsLogsGoThroughASavedStateBitForBit) {
       EXPECT_EQ(a[k].held_mass, b[k].held_mass) << level << " " << k;
       EXPECT_EQ(a[k].soil_force, b[k].soil_force) << level << " " << k;
       EXPECT_EQ(a[k].particle_force, b[k].particle_force) << level << " " << k;
+      EXPECT_EQ(a[k].terrain_force, b[k].terrain_force) << level << " " << k;
       EXPECT_EQ(a[k].force_on_bucket, b[k].force_on_bucket) << level << " " << k;
       EXPECT_EQ(a[k].principal_moments, b[k].principal_moments) << level << " " << k;
       support = std::max(support, a[k].support_force.norm());
@@ -217,6 +218,47 @@ TEST(Digging, ItsLogsGoThroughASavedStateBitForBit) {
       EXPECT_GT(soil, 1e3);
     }
   }
+}
+
+// the aggregate's log holds the forces that moved it: over every step the zone stays engaged, its
+// mass times its change of velocity equals interface A's force on it (-force_on_bucket),
+// interface B's (terrain_force) and its weight, the only forces on the body in the machine's solve
+// (it keeps the velocity the last solve gave it; the particles renew its mass and centre). A force
+// logged with a wrong sign, frame or step, or a force on the body left out of the log, breaks it
+TEST(Digging, TheAggregatesLoggedForcesAreTheOnesThatMovedIt) {
+  const vehicle::Scenario sc = vehicle::load_scenario("hd27");
+  const FidelityPreset& g400 = level_preset("G400");
+  const DiggingOptions options;
+  const PileBuild pile = build_scenario_pile(test::shared_device(), sc, scenario_pile_profile(sc),
+                                             g400, options, nullptr);
+  DiggingSimulation sim(test::shared_device(), sc, g400, pile, options);
+  // through the cut and the breakout (the bucket meets the pile at about 2.4 s)
+  while (sim.time() < 6.0) sim.step();
+  const Vec3 g = sim.loader().system().gravity();
+  const std::vector<AggregateSample>& log = sim.aggregate_log();
+  int checked = 0;
+  double worst = 0.0, largest_b = 0.0, largest_a = 0.0;
+  for (size_t k = 1; k < log.size(); ++k) {
+    const AggregateSample& before = log[k - 1];
+    const AggregateSample& a = log[k];
+    if (before.particles == 0 || a.particles == 0) continue;
+    const Vec3 momentum_change = a.mass * (a.velocity - before.velocity) / g400.dt;
+    const Vec3 forces = -a.force_on_bucket + a.terrain_force + a.mass * g;
+    // measured against the largest force in the balance
+    const double scale =
+        std::max({a.force_on_bucket.norm(), a.terrain_force.norm(), a.mass * g.norm()});
+    worst = std::max(worst, (momentum_change - forces).norm() / scale);
+    largest_a = std::max(largest_a, a.force_on_bucket.norm());
+    largest_b = std::max(largest_b, a.terrain_force.norm());
+    ++checked;
+  }
+  std::printf(
+      "[ measured ] HD27-G400 to 6 s: %d engaged steps, largest |A| %.1f kN, |B| %.1f kN, worst "
+      "imbalance %.2e of the step's largest force\n",
+      checked, 1e-3 * largest_a, 1e-3 * largest_b, worst);
+  EXPECT_GT(checked, 10);
+  EXPECT_GT(largest_b, 1e3);
+  EXPECT_LT(worst, 1e-6);
 }
 
 // the cutting edge's penetration resistance, a study factor at type G: the brake's bound each step
