@@ -338,7 +338,7 @@ std::string aggregate_csv(const std::vector<AggregateSample>& log) {
   os << "t,particles,mass,cx,cy,cz,vx,vy,vz,fx_bucket,fy_bucket,fz_bucket,terrain_normal_force,"
         "edge_force,depth_a,depth_b,qx,qy,qz,qw,i1,i2,i3,fx_support,fy_support,fz_support,"
         "held_mass,fx_soil,fy_soil,fz_soil,fx_particles,fy_particles,fz_particles,fx_terrain,"
-        "fy_terrain,fz_terrain\n";
+        "fy_terrain,fz_terrain,vx_zone,vy_zone,vz_zone\n";
   os.precision(9);
   for (const AggregateSample& a : log)
     os << a.t << ',' << a.particles << ',' << a.mass << ',' << a.centre.x() << ',' << a.centre.y()
@@ -352,7 +352,8 @@ std::string aggregate_csv(const std::vector<AggregateSample>& log) {
        << a.held_mass << ',' << a.soil_force.x() << ',' << a.soil_force.y() << ','
        << a.soil_force.z() << ',' << a.particle_force.x() << ',' << a.particle_force.y() << ','
        << a.particle_force.z() << ',' << a.terrain_force.x() << ',' << a.terrain_force.y() << ','
-       << a.terrain_force.z() << '\n';
+       << a.terrain_force.z() << ',' << a.zone_velocity.x() << ',' << a.zone_velocity.y() << ','
+       << a.zone_velocity.z() << '\n';
   return os.str();
 }
 

@@ -321,6 +321,7 @@ void DiggingSimulation::multiscale_step() {
   a.mass = aggregate_->aggregate().mass;
   a.centre = aggregate_->aggregate().centre;
   a.velocity = loader_->system().body(aggregate_->body()).velocity;
+  a.zone_velocity = aggregate_->aggregate().velocity;
   a.force_on_bucket = aggregate_->force_on_bucket();
   a.terrain_normal_force = aggregate_->interface_b().normal_force();
   a.terrain_force = aggregate_->terrain_force();
@@ -355,6 +356,7 @@ void write_aggregate_sample(ByteWriter& w, const AggregateSample& a) {
   write_matrix(w, a.orientation.coeffs());
   write_matrix(w, a.principal_moments);
   write_matrix(w, a.terrain_force);
+  write_matrix(w, a.zone_velocity);
 }
 AggregateSample read_aggregate_sample(ByteReader& r) {
   AggregateSample a;
@@ -373,11 +375,12 @@ AggregateSample read_aggregate_sample(ByteReader& r) {
   read_matrix(r, a.orientation.coeffs(), "aggregate log");
   read_matrix(r, a.principal_moments, "aggregate log");
   read_matrix(r, a.terrain_force, "aggregate log");
+  read_matrix(r, a.zone_velocity, "aggregate log");
   return a;
 }
 // bytes write_aggregate_sample writes
 constexpr std::uint64_t kAggregateSampleBytes =
-    8 * (1 + 1 + 1 + 3 + 3 + 3 + 4 + 3 + 1 + 3 + 3 + 4 + 3 + 3);
+    8 * (1 + 1 + 1 + 3 + 3 + 3 + 4 + 3 + 1 + 3 + 3 + 4 + 3 + 3 + 3);
 }  // namespace
 
 void DiggingSimulation::save_state(ByteWriter& w) const {

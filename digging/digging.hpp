@@ -116,6 +116,9 @@ struct AggregateSample {
   double mass = 0.0;                    // [kg]
   Vec3 centre = Vec3::Zero();           // [m]
   Vec3 velocity = Vec3::Zero();         // as solved with the machine [m/s]
+  // the zone's particles' mean velocity (their momentum over their mass) when the step began
+  // [m/s]: what the aggregate stands for, beside the motion it keeps from the machine's solve
+  Vec3 zone_velocity = Vec3::Zero();
   Vec3 force_on_bucket = Vec3::Zero();  // interface A's on the bucket [N]
   double terrain_normal_force = 0.0;    // interface B's normal force [N]
   // interface B's whole force on the aggregate [N]: its normal force and its friction along the

@@ -27,7 +27,8 @@ namespace talus {
 // a machine it does not fit); 7: type G's terrain support under the bucket by default (one more
 // machine constraint), the aggregate log's support force, held mass, soil force and particle
 // force, type D's soil force log (2026-11-29, issue 14); 8: the aggregate log's terrain force,
-// interface B's whole force on the aggregate (2026-11-30, issue 14)
+// interface B's whole force on the aggregate, and its zone's particles' mean velocity (2026-11-30,
+// issue 14)
 inline constexpr std::uint32_t kStateFormatVersion = 8;
 
 struct SavedStateHeader {

@@ -191,26 +191,31 @@ TEST(DiggingRunTest, Hd27AtG400WritesTheRunContractAndTheTerrain) {
   EXPECT_NE(header.find(",cx,cy,cz,"), std::string::npos) << header;
   EXPECT_NE(header.find(",qx,qy,qz,qw,i1,i2,i3"), std::string::npos) << header;
   // then the terrain's support, the held load, the soil's whole force on the bucket, the
-  // particles' own in the terrain's DEM and interface B's on the aggregate
+  // particles' own in the terrain's DEM, interface B's on the aggregate and the zone's particles'
+  // mean velocity
   EXPECT_NE(header.find(",i3,fx_support,fy_support,fz_support,held_mass,fx_soil,fy_soil,fz_soil,"
-                        "fx_particles,fy_particles,fz_particles,fx_terrain,fy_terrain,fz_terrain"),
+                        "fx_particles,fy_particles,fz_particles,fx_terrain,fy_terrain,fz_terrain,"
+                        "vx_zone,vy_zone,vz_zone"),
             std::string::npos)
       << header;
-  int rows = 0, posed = 0;
+  int rows = 0, posed = 0, moving = 0;
   while (std::getline(csv, row)) {
     std::vector<double> v;
     std::istringstream cells(row);
     for (std::string cell; std::getline(cells, cell, ',');) v.push_back(std::stod(cell));
-    ASSERT_EQ(v.size(), 36u) << row;
+    ASSERT_EQ(v.size(), 39u) << row;
     const double norm = std::hypot(std::hypot(v[16], v[17]), std::hypot(v[18], v[19]));
     EXPECT_NEAR(norm, 1.0, 1e-6) << row;
     EXPECT_LE(v[20], v[21]) << row;
     EXPECT_LE(v[21], v[22]) << row;
     ++rows;
     if (v[1] > 0 && v[20] > 0.0) ++posed;  // particles in the zone: a body with inertia
+    // particles in the zone that move (the bucket pushes them): a mean velocity of theirs
+    if (v[1] > 0 && std::hypot(v[36], v[38]) > 0.0) ++moving;
   }
   EXPECT_GT(rows, 10);
   EXPECT_GT(posed, 0);
+  EXPECT_GT(moving, 0);
 }
 
 TEST(DiggingRunTest, UnknownFidelityIsBadInput) {

@@ -189,6 +189,7 @@ TEST(Digging, ItsLogsGoThroughASavedStateBitForBit) {
       EXPECT_EQ(a[k].soil_force, b[k].soil_force) << level << " " << k;
       EXPECT_EQ(a[k].particle_force, b[k].particle_force) << level << " " << k;
       EXPECT_EQ(a[k].terrain_force, b[k].terrain_force) << level << " " << k;
+      EXPECT_EQ(a[k].zone_velocity, b[k].zone_velocity) << level << " " << k;
       EXPECT_EQ(a[k].force_on_bucket, b[k].force_on_bucket) << level << " " << k;
       EXPECT_EQ(a[k].principal_moments, b[k].principal_moments) << level << " " << k;
       support = std::max(support, a[k].support_force.norm());
