@@ -122,8 +122,8 @@ struct AggregateSample {
   Vec3 force_on_bucket = Vec3::Zero();  // interface A's on the bucket [N]
   double terrain_normal_force = 0.0;    // interface B's normal force [N]
   // interface B's whole force on the aggregate [N]: its normal force and its friction along the
-  // failure plane (with interface A's, -force_on_bucket, and the aggregate's weight it is what
-  // changed the aggregate's momentum over the step)
+  // failure plane (with interface A's, -force_on_bucket, and the aggregate's weight, in a run
+  // without effects, it is the aggregate's mass times the change of its velocity over the step)
   Vec3 terrain_force = Vec3::Zero();
   double edge_force = 0.0;              // the penetration resistance's [N]
   Vec3 support_force = Vec3::Zero();    // the terrain's support's on the bucket [N] (0 without)
