@@ -320,14 +320,24 @@ void write_dig_figures(const std::filesystem::path& dir, const sim2real::Run& ru
 }
 
 // the type-D soil's force on the bucket step by step as CSV (the torque about the bucket's centre
-// of mass; compare a type-G run's aggregate.csv: interface A, the edge, the support, the held load)
+// of mass), then the force by the bucket's face the soil meets: under the bottom, on its inside,
+// across the cutting direction (compare a type-G run's aggregate.csv: the support, the held load,
+// interface A with the edge)
 std::string soil_csv(const std::vector<SoilForceSample>& log) {
   std::ostringstream os;
-  os << "t,fx,fy,fz,mx,my,mz\n";
+  os << "t,fx,fy,fz,mx,my,mz,fx_below,fy_below,fz_below,fx_inside,fy_inside,fz_inside,fx_across,"
+        "fy_across,fz_across\n";
   os.precision(9);
-  for (const SoilForceSample& f : log)
-    os << f.t << ',' << f.force.x() << ',' << f.force.y() << ',' << f.force.z() << ','
-       << f.torque.x() << ',' << f.torque.y() << ',' << f.torque.z() << '\n';
+  const auto vec = [&os](const Vec3& v) { os << ',' << v.x() << ',' << v.y() << ',' << v.z(); };
+  for (const SoilForceSample& f : log) {
+    os << f.t;
+    vec(f.force);
+    vec(f.torque);
+    vec(f.faces.below);
+    vec(f.faces.inside);
+    vec(f.faces.across);
+    os << '\n';
+  }
   return os.str();
 }
 

@@ -208,7 +208,7 @@ void DiggingSimulation::step(double drive, double lift, double tilt) {
   time_ = t_end;
   // coupling bookkeeping, and the soil's force on the bucket
   const CouplingStats& s = split_->stats();
-  soil_log_.push_back({time_, s.wrench.head<3>(), s.wrench.tail<3>()});
+  soil_log_.push_back({time_, s.wrench.head<3>(), s.wrench.tail<3>(), s.faces});
   sweep_sum_ += s.sweeps;
   if (s.bucket_contacts > 0) {
     ++contact_steps_;
@@ -420,6 +420,9 @@ void DiggingSimulation::save_state(ByteWriter& w) const {
       w.f64(f.t);
       write_matrix(w, f.force);
       write_matrix(w, f.torque);
+      write_matrix(w, f.faces.below);
+      write_matrix(w, f.faces.inside);
+      write_matrix(w, f.faces.across);
     }
   }
   w.tag("effects");
@@ -471,12 +474,15 @@ void DiggingSimulation::restore_state(ByteReader& r) {
     r.expect("bucket contacts");
     split_->restore_state(r);
     const std::uint64_t samples = r.u64("soil force log");
-    r.need_elements(samples, 8 * 7, "soil force log");
+    r.need_elements(samples, 8 * 16, "soil force log");
     std::vector<SoilForceSample> log(samples);
     for (SoilForceSample& f : log) {
       f.t = r.f64("soil force log");
       read_matrix(r, f.force, "soil force log");
       read_matrix(r, f.torque, "soil force log");
+      read_matrix(r, f.faces.below, "soil force log");
+      read_matrix(r, f.faces.inside, "soil force log");
+      read_matrix(r, f.faces.across, "soil force log");
     }
     soil_log_ = std::move(log);
   }

@@ -150,6 +150,10 @@ struct SoilForceSample {
   double t = 0.0;              // end of the step [s]
   Vec3 force = Vec3::Zero();   // [N], world
   Vec3 torque = Vec3::Zero();  // about the bucket's centre of mass at the step's start [N m]
+  // `force` by the bucket's face the soil meets (solvers/split_solver BucketFaceForces): under the
+  // bottom (type G: the terrain's support), on the bottom's inside (the held load), across the
+  // cutting direction (interface A and the cutting edge's brake) [N], world
+  BucketFaceForces faces;
 };
 
 // the laser scan of a scenario's pile before loading, as the field tests measured it: the settled

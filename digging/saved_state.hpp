@@ -28,8 +28,8 @@ namespace talus {
 // machine constraint), the aggregate log's support force, held mass, soil force and particle
 // force, type D's soil force log (2026-11-29, issue 14); 8: the aggregate log's terrain force,
 // interface B's whole force on the aggregate, and its zone's particles' mean velocity (2026-11-30,
-// issue 14)
-inline constexpr std::uint32_t kStateFormatVersion = 8;
+// issue 14); 9: type D's soil force log split by the bucket's faces (2026-11-30, issue 14)
+inline constexpr std::uint32_t kStateFormatVersion = 9;
 
 struct SavedStateHeader {
   std::string key;     // "name=value" lines: what the simulation was made from

@@ -29,6 +29,26 @@ double SplitSolver::point_speed_difference(const Vec6& a, const Vec6& b, const V
   return (a.head<3>() - b.head<3>()).norm() + (a.tail<3>() - b.tail<3>()).norm() * reach;
 }
 
+BucketFaceForces bucket_face_forces(const std::vector<ContactRow>& rows,
+                                    const Eigen::Quaterniond& orientation, double h) {
+  // a contact's face from its normal in the bucket's frame: cos 45 deg from +-z, then from +-x
+  // (a unit normal cannot be within 45 deg of both)
+  const double cos45 = std::sqrt(0.5);
+  const Vec3 x = orientation * Vec3::UnitX(), z = orientation * Vec3::UnitZ();
+  BucketFaceForces f;
+  for (const ContactRow& r : rows) {
+    const Vec3 force = (r.impulse_n * r.normal + r.impulse_t) / h;
+    const double nz = r.normal.dot(z);
+    if (nz >= cos45)
+      f.below += force;
+    else if (nz <= -cos45)
+      f.inside += force;
+    else if (std::abs(r.normal.dot(x)) > cos45)
+      f.across += force;
+  }
+  return f;
+}
+
 void SplitSolver::step() {
   stats_ = CouplingStats{};
   const double h = dem_.settings().dt;
@@ -56,6 +76,7 @@ void SplitSolver::step() {
   const Vec6 impulse = solve_coupled(rows, warm_impulse, com);
   stats_.impulse = impulse;
   stats_.wrench = impulse / h;
+  stats_.faces = bucket_face_forces(rows, bucket_body.orientation, h);
 
   // 6. both sides move; the bucket impulses are kept for the next warm start
   if (settings_.record_residual) {

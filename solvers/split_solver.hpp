@@ -43,6 +43,24 @@ struct CouplingSettings {
   bool record_residual = false;
 };
 
+// the particles' mean force on the bucket over a step [N, world], split by the face of the bucket
+// each contact presses on, read from the contact's normal in the bucket's frame (x its cutting
+// direction along the bottom, z the bottom's normal into the bucket): within 45 deg of +z the
+// soil under the bottom bears it up; within 45 deg of -z the soil on the bottom's inside presses
+// on it (the held load); within 45 deg of +-x the soil meets a face across the cutting direction
+// (the cutting edge's face, the back wall's inside). The rest (the side plates, the corner arc)
+// is the whole force less these three. A type-G run's terrain support, held load and interface A
+// with the cutting edge's brake are the same three parts (docs/validation.md "RD21's overfill")
+struct BucketFaceForces {
+  Vec3 below = Vec3::Zero();
+  Vec3 inside = Vec3::Zero();
+  Vec3 across = Vec3::Zero();
+};
+
+// the split of `rows`' impulses over a step of `h` [s], with the bucket at `orientation`
+BucketFaceForces bucket_face_forces(const std::vector<ContactRow>& rows,
+                                    const Eigen::Quaterniond& orientation, double h);
+
 // what one coupled step did
 struct CouplingStats {
   int candidates = 0;          // particles in the bucket's box
@@ -53,6 +71,8 @@ struct CouplingStats {
   double residual = 0.0;       // final bucket point-velocity disagreement [m/s]
   double max_overlap_rel = 0.0;  // deepest particle-bucket overlap at the step's start / radius
   Vec6 wrench = Vec6::Zero();  // mean wrench of the particles on the bucket over the step [N, N m]
+  // wrench's force by the face of the bucket the soil meets (bucket_face_forces)
+  BucketFaceForces faces;
   Vec6 impulse = Vec6::Zero(); // the same as an impulse over the step [N s, N m s]
   double embree_seconds = 0.0; // wall time of the Embree queries
   double particle_residual = -1.0;  // RMS particle-row residual after the sweeps [m/s]; -1 unless recorded

@@ -200,17 +200,25 @@ TEST(Digging, ItsLogsGoThroughASavedStateBitForBit) {
     const auto& c = first.soil_log();
     const auto& d = second.soil_log();
     ASSERT_EQ(c.size(), d.size()) << level;
-    double soil = 0.0;
+    double soil = 0.0, below = 0.0, inside = 0.0, across = 0.0;
     for (size_t k = 0; k < c.size(); ++k) {
       EXPECT_EQ(c[k].t, d[k].t) << level << " " << k;
       EXPECT_EQ(c[k].force, d[k].force) << level << " " << k;
       EXPECT_EQ(c[k].torque, d[k].torque) << level << " " << k;
+      EXPECT_EQ(c[k].faces.below, d[k].faces.below) << level << " " << k;
+      EXPECT_EQ(c[k].faces.inside, d[k].faces.inside) << level << " " << k;
+      EXPECT_EQ(c[k].faces.across, d[k].faces.across) << level << " " << k;
       soil = std::max(soil, c[k].force.norm());
+      below = std::max(below, c[k].faces.below.norm());
+      inside = std::max(inside, c[k].faces.inside.norm());
+      across = std::max(across, c[k].faces.across.norm());
     }
     std::printf(
         "[ measured ] HD27-%s to 3.5 s: %zu aggregate and %zu soil samples, largest "
-        "support %.1f kN, particles' %.1f kN, type D soil %.1f kN\n",
-        level, a.size(), c.size(), 1e-3 * support, 1e-3 * particles, 1e-3 * soil);
+        "support %.1f kN, particles' %.1f kN, type D soil %.1f kN (below the bottom %.1f, on its "
+        "inside %.1f, across the cutting direction %.1f)\n",
+        level, a.size(), c.size(), 1e-3 * support, 1e-3 * particles, 1e-3 * soil, 1e-3 * below,
+        1e-3 * inside, 1e-3 * across);
     // logs with something in them: the type-G zone has pushed the bucket, the type-D pile too
     if (first.multiscale()) {
       EXPECT_GT(a.size(), 0u);
@@ -221,6 +229,8 @@ TEST(Digging, ItsLogsGoThroughASavedStateBitForBit) {
     } else {
       EXPECT_TRUE(a.empty());
       EXPECT_GT(soil, 1e3);
+      EXPECT_GT(across, 1e3);
+      EXPECT_GT(below + inside, 1e2);
     }
   }
 }

@@ -131,6 +131,8 @@ TEST(SplitSolver, ParticlesAtRestInTheBucketWeighTheirMass) {
   loader.set_drive_speed(0.0);
   const int steps = static_cast<int>(2.0 / dt), window = static_cast<int>(0.5 / dt);
   Vec6 mean = Vec6::Zero();
+  // the same window's force by the bucket's faces
+  BucketFaceForces faces;
   int max_passes = 0;
   double max_residual = 0.0;
   for (int k = 0; k < steps; ++k) {
@@ -140,6 +142,9 @@ TEST(SplitSolver, ParticlesAtRestInTheBucketWeighTheirMass) {
     split.step();
     if (k >= steps - window) {
       mean += split.stats().wrench / window;
+      faces.below += split.stats().faces.below / window;
+      faces.inside += split.stats().faces.inside / window;
+      faces.across += split.stats().faces.across / window;
       max_passes = std::max(max_passes, split.stats().passes);
       max_residual = std::max(max_residual, split.stats().residual);
     }
@@ -154,6 +159,45 @@ TEST(SplitSolver, ParticlesAtRestInTheBucketWeighTheirMass) {
   EXPECT_NEAR(-mean.z(), in_bucket * 9.81, 0.02 * in_bucket * 9.81);
   EXPECT_LT(std::abs(mean.x()), 0.05 * weight);
   EXPECT_LT(max_residual, CouplingSettings{}.tolerance);
+  std::printf("[ measured ] by faces, vertical: below %.1f N, inside %.1f N, across %.1f N\n",
+              faces.below.z(), faces.inside.z(), faces.across.z());
+  // the held gravel presses on the bottom's inside and the curled bucket's back wall; nothing
+  // lies under the raised bottom
+  EXPECT_EQ(faces.below.norm(), 0.0);
+  EXPECT_NEAR(-(faces.inside.z() + faces.across.z()), in_bucket * 9.81, 0.05 * in_bucket * 9.81);
+  EXPECT_GT(-faces.inside.z(), 0.5 * in_bucket * 9.81);
+}
+
+// the split by faces reads each contact's normal in the bucket's frame: a bucket turned about
+// its width by a fresh angle, rows with normals at fresh angles from its bottom's normal
+TEST(SplitSolver, TheBucketsFacesAreReadFromTheNormalInItsFrame) {
+  std::mt19937 rng(std::random_device{}());
+  std::uniform_real_distribution<double> tilt(-0.6, 0.6), within(0.0, 0.7), beyond(0.85, 1.5),
+      impulse(0.1, 2.0);
+  const double h = 0.005;
+  const Eigen::Quaterniond orientation(Eigen::AngleAxisd(tilt(rng), Vec3::UnitY()));
+  // a normal at angle a from the bucket's +z towards its +x (the excavation plane), in the world
+  const auto normal = [&](double a) {
+    return Vec3(orientation * Vec3(std::sin(a), 0.0, std::cos(a)));
+  };
+  std::vector<ContactRow> rows(5);
+  rows[0].normal = normal(within(rng));                 // under the bottom
+  rows[1].normal = normal(M_PI - within(rng));          // on the bottom's inside
+  rows[2].normal = normal(M_PI / 2 + 0.1 * tilt(rng));  // the back wall, the edge's face
+  rows[3].normal = normal(beyond(rng));                 // past 45 deg from +z towards +x: across
+  rows[4].normal = orientation * Vec3::UnitY();         // a side plate: none of the three
+  Vec3 expect_below = Vec3::Zero(), expect_inside = Vec3::Zero(), expect_across = Vec3::Zero();
+  for (size_t k = 0; k < rows.size(); ++k) {
+    rows[k].impulse_n = impulse(rng);
+    const Vec3 f = rows[k].impulse_n * rows[k].normal / h;
+    if (k == 0) expect_below += f;
+    if (k == 1) expect_inside += f;
+    if (k == 2 || k == 3) expect_across += f;
+  }
+  const BucketFaceForces faces = bucket_face_forces(rows, orientation, h);
+  EXPECT_LT((faces.below - expect_below).norm(), 1e-9 * expect_below.norm());
+  EXPECT_LT((faces.inside - expect_inside).norm(), 1e-9 * expect_inside.norm());
+  EXPECT_LT((faces.across - expect_across).norm(), 1e-9 * expect_across.norm());
 }
 
 // a tolerance on the particle rows' residual (DemSettings::tolerance) ends each pass's sweeps
