@@ -172,6 +172,7 @@ DiggingOptions digging_options(const RunOptions& o) {
   options.relaxation = o.relaxation;
   options.seed_diameter = o.seed_diameter;
   options.edge_resistance = o.edge_resistance;
+  options.interface_damping_time = o.interface_damping_time;
   options.content_inertia = o.content_inertia;
   options.bucket_support = o.bucket_support;
   if (o.form_speed >= 0.0) options.pile.form_speed = o.form_speed;
@@ -273,6 +274,7 @@ nlohmann::json dig_details(const RunOptions& o, const vehicle::Scenario& sc,
         {"relaxation", options.relaxation},
         {"seed_diameter", options.seed_diameter},
         {"edge_resistance", options.edge_resistance},
+        {"interface_damping_time_s", options.interface_damping_time},
         {"content_inertia", options.content_inertia},
         {"bucket_support", options.bucket_support},
         {"max_passes", sim.max_passes()},
@@ -497,6 +499,9 @@ void run_scenario(const RunOptions& o) {
               "type-G soil to hold the bucket up or give way");
   type_g_only(o.edge_resistance != 1.0, "--edge-resistance " + std::to_string(o.edge_resistance),
               "type-G cutting edge to resist");
+  type_g_only(o.interface_damping_time != 0.0,
+              "--interface-damping-time " + std::to_string(o.interface_damping_time),
+              "type-G aggregate's interfaces to damp");
   if (o.seed_diameter != 1.0 && !is_multiscale(level))
     throw InputError("--seed-diameter " + std::to_string(o.seed_diameter) + " at " + level.name +
                      ": only the type-G levels (G400 ... G50) grow their zone's particles from "
@@ -571,6 +576,13 @@ void add_run_command(CLI::App& app, const std::string& command_line) {
                   "10]; 1 = the law as it stands, 0 = none (docs/multiscale.md \"Penetration "
                   "resistance\": the law is talus's own and moves a dig most)")
       ->check(number_in(0.0, kMaxEdgeResistance, ""))
+      ->capture_default_str();
+  cmd->add_option("--interface-damping-time", opts->interface_damping_time,
+                  "study, type G: the SPOOK damping time of the aggregate's interfaces A and B [s] "
+                  "instead of two of the level's steps (0, the default); at G200 it sets HD27's "
+                  "breakout force (docs/validation.md \"HD27's breakout follows the interfaces' "
+                  "damping time\")")
+      ->check(number_in(0.0, kMaxInterfaceDampingTime, "s"))
       ->capture_default_str();
   cmd->add_option("--seed-diameter", opts->seed_diameter,
                   "study, type G: the zone's particles appear at this fraction of their full "

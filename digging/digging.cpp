@@ -96,6 +96,16 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
                      preset.name +
                      ": only the type-G levels model the cutting edge's penetration resistance; "
                      "at a type-D level the particles resist the edge themselves: leave it at 1");
+  if (!(options.interface_damping_time >= 0.0 &&
+        options.interface_damping_time <= kMaxInterfaceDampingTime))
+    throw InputError("interface_damping_time " + std::to_string(options.interface_damping_time) +
+                     " s: the aggregate's interfaces' damping time must lie in [0, " +
+                     std::to_string(kMaxInterfaceDampingTime) + "] s (0: two of the level's steps)");
+  if (!is_multiscale(preset) && options.interface_damping_time != 0.0)
+    throw InputError("interface_damping_time " + std::to_string(options.interface_damping_time) +
+                     " s at " + preset.name +
+                     ": only the type-G levels have an aggregate with interfaces; at a type-D "
+                     "level leave it at 0 (the particle contacts' own: --damping-time)");
   if (!is_multiscale(preset) && !options.bucket_support)
     throw InputError("bucket_support off at " + preset.name +
                      ": at a type-D level the pile's particles hold the bucket up themselves; the "
@@ -141,6 +151,7 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
                                                    kinematic_bucket(*loader_), terrain);
     AggregateParameters aggregate;
     aggregate.penetration_factor = options.edge_resistance;
+    aggregate.damping_time = options.interface_damping_time;
     aggregate_ = std::make_unique<AggregateCoupling>(loader_->system(), loader_->bucket_body(),
                                                      terrain.soil, aggregate);
     if (options.content_inertia)

@@ -41,6 +41,9 @@ inline constexpr double kDigSweepTolerance = 1.0e-4;
 // law (at 0.5 m of depth the law gives 38 kN; ten times it is four times the machine's traction,
 // about 100 kN, so larger factors only stall the bucket)
 inline constexpr double kMaxEdgeResistance = 10.0;
+// the longest interface damping time DiggingOptions::interface_damping_time takes [s]: the
+// particle contacts' study range (talus run --damping-time)
+inline constexpr double kMaxInterfaceDampingTime = 0.5;
 
 struct DiggingOptions {
   PileBuildOptions pile;         // settling of the pile before the machine starts
@@ -70,6 +73,12 @@ struct DiggingOptions {
   // talus's own (the paper gives none) and moves a type-G dig more than anything else measured
   // (docs/validation.md "Type G against type D"); refused at a type-D level unless 1
   double edge_resistance = 1.0;
+  // type G, a study: the SPOOK damping time of the aggregate's interfaces A and B [s] in
+  // (0, kMaxInterfaceDampingTime]; 0, the default: two of the level's steps (AggregateParameters::
+  // damping_time). At G200 it sets HD27's breakout force where the step does not, and moves
+  // FB35's fill (docs/validation.md "HD27's breakout follows the interfaces' damping time");
+  // refused at a type-D level unless 0
+  double interface_damping_time = 0.0;
   // type G: the resting soil holds the bucket's bottom up (terrain/bucket_support: four points
   // on its bottom against the voxel surface, solved with the machine; push_aside then leaves the
   // soil the bottom presses in by less than kPressedDepth); off, the soil under the bucket gives

@@ -202,6 +202,10 @@ void AggregateCoupling::update(const MultiscaleTerrain& terrain, const vehicle::
     body.angular_velocity = Vec3::Zero();
   }
 
+  // the interfaces' damping time: the study's, or damping_steps of the step
+  const double damping_time =
+      parameters_.damping_time > 0.0 ? parameters_.damping_time : parameters_.damping_steps * dt;
+
   // interface A on the cutting plane, as far up as the soil reaches (or the top edge)
   const double h = terrain.voxels().cell();
   const double e_m = parameters_.youngs_modulus * parameters_.stiffness_multiplier;
@@ -215,7 +219,7 @@ void AggregateCoupling::update(const MultiscaleTerrain& terrain, const vehicle::
     reach = std::max(reach, (particles.position[k] - zone.tip).dot(u_tool) + particles.radius[k]);
   const double length_a = std::clamp(reach, h, top.norm());
   place(*a_, engaged, patch(edges, u_tool, length_a), n_a, depth_a_,
-        e_m * zone.width * length_a / h, parameters_.damping_steps * dt);
+        e_m * zone.width * length_a / h, damping_time);
 
   // interface B on the failure plane, from the cutting edge to where it leaves the surface
   const double beta = zone.failure_angle_deg * kDegree;
@@ -223,7 +227,7 @@ void AggregateCoupling::update(const MultiscaleTerrain& terrain, const vehicle::
   const Vec3 n_b = -std::sin(beta) * zone.forward + std::cos(beta) * Vec3::UnitZ();
   const double length_b = std::max(zone.reach_ahead / std::max(std::cos(beta), 1e-3), h);
   place(*b_, engaged, patch(edges, u_fail, length_b), n_b, depth_b_,
-        e_m * zone.width * length_b / h, parameters_.damping_steps * dt);
+        e_m * zone.width * length_b / h, damping_time);
 
   // constraint C: the cutting edge along the bucket's cutting direction (its profile frame's x),
   // resisted while it is under the soil's surface

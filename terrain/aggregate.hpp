@@ -107,6 +107,10 @@ struct AggregateParameters {
   double youngs_modulus = 4.6e6;       // bulk E [Pa], paper §4.4
   double stiffness_multiplier = 0.01;  // paper §4.4
   double damping_steps = 2.0;          // SPOOK damping time of the interfaces, in timesteps
+  // [s] the interfaces' SPOOK damping time itself, when positive, instead of damping_steps of the
+  // step (a study, DiggingOptions::interface_damping_time: at G200 it, not the step, sets HD27's
+  // breakout force, docs/validation.md "HD27's breakout follows the interfaces' damping time")
+  double damping_time = 0.0;
   // constraint C, the cutting edge's penetration resistance (terrain/penetration), times this
   // factor: 1 the law as it stands, 0 none (a study of its share, DiggingOptions::edge_resistance;
   // docs/validation.md "Type G against type D": the law is talus's own and moves a dig most)

@@ -272,10 +272,11 @@ TEST(CliErrors, StepCountsAndLoadsOutsideTheirRangeAreRefused) {
     EXPECT_NE(o.err.find(fix), std::string::npos) << cmd << ": " << o.err;
     EXPECT_FALSE(std::filesystem::exists("/tmp/talus_cli_seed")) << cmd;
   }
-  // the bucket's content by its weight alone, a factor on the cutting edge's resistance and the
-  // soil under the bucket giving way: a pile scenario at a G level only
-  for (const char* option :
-       {" --no-content-inertia", " --edge-resistance 0", " --no-bucket-support"}) {
+  // the bucket's content by its weight alone, a factor on the cutting edge's resistance, the
+  // soil under the bucket giving way and the aggregate's interfaces' damping time: a pile scenario
+  // at a G level only
+  for (const char* option : {" --no-content-inertia", " --edge-resistance 0",
+                             " --no-bucket-support", " --interface-damping-time 0.01"}) {
     for (const char* cmd :
          {"run --scenario hd27 --fidelity D400", "run --scenario load-carry --fidelity G400"}) {
       const Outcome o = run("", std::string(cmd) + " --out /tmp/talus_cli_seed" + option);
@@ -291,6 +292,12 @@ TEST(CliErrors, StepCountsAndLoadsOutsideTheirRangeAreRefused) {
                            "--edge-resistance 12");
   EXPECT_EQ(edge.code, 2) << edge.err;
   EXPECT_NE(edge.err.find("--edge-resistance"), std::string::npos) << edge.err;
+  const Outcome damping = run("",
+                              "run --scenario hd27 --fidelity G400 --out /tmp/talus_cli_seed "
+                              "--interface-damping-time 0.7");
+  EXPECT_EQ(damping.code, 2) << damping.err;
+  EXPECT_NE(damping.err.find("--interface-damping-time"), std::string::npos) << damping.err;
+  EXPECT_FALSE(std::filesystem::exists("/tmp/talus_cli_seed"));
   // the Jacobi sweep has no relaxation to take
   const Outcome jacobi = run(
       "", "run --scenario hd27 --out /tmp/talus_cli_relaxation --sweep jacobi --relaxation 1.3");
