@@ -100,7 +100,8 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
         options.interface_damping_time <= kMaxInterfaceDampingTime))
     throw InputError("interface_damping_time " + std::to_string(options.interface_damping_time) +
                      " s: the aggregate's interfaces' damping time must lie in [0, " +
-                     std::to_string(kMaxInterfaceDampingTime) + "] s (0: two of the level's steps)");
+                     std::to_string(kMaxInterfaceDampingTime) +
+                     "] s (0: two of the level's steps)");
   if (!is_multiscale(preset) && options.interface_damping_time != 0.0)
     throw InputError("interface_damping_time " + std::to_string(options.interface_damping_time) +
                      " s at " + preset.name +

@@ -333,8 +333,8 @@ TEST(Digging, TheCuttingEdgesResistanceIsTheLawTimesItsStudyFactor) {
 
 // the aggregate's interfaces' damping time, a type-G study: two of the level's steps by default,
 // the study's in seconds when given, on both interfaces every step; and at G200 it, not the step,
-// sets HD27's breakout (docs/validation.md "HD27's breakout follows the interfaces' damping time": on
-// piles 1-3 at G200 the largest lift over 3.1-3.7 s is 263-309 kN with the default 40 ms and
+// sets HD27's breakout (docs/validation.md "HD27's breakout follows the interfaces' damping time":
+// on piles 1-3 at G200 the largest lift over 3.1-3.7 s is 263-309 kN with the default 40 ms and
 // 200-220 kN with 10 ms). Refused at a type-D level and outside (0, 0.5] s
 TEST(Digging, TheInterfacesDampingTimeIsTwoStepsOrTheStudys) {
   const vehicle::Scenario sc = vehicle::load_scenario("hd27");
@@ -345,15 +345,16 @@ TEST(Digging, TheInterfacesDampingTimeIsTwoStepsOrTheStudys) {
       DiggingOptions options;
       options.pile.seed = seed;
       options.interface_damping_time = tau;
-      const PileBuild pile = build_scenario_pile(
-          test::shared_device(), sc, scenario_pile_profile(sc), g200, options, nullptr);
+      const PileBuild pile = build_scenario_pile(test::shared_device(), sc,
+                                                 scenario_pile_profile(sc), g200, options, nullptr);
       DiggingSimulation sim(test::shared_device(), sc, g200, pile, options);
       const double expected = tau > 0.0 ? tau : 2.0 * g200.dt;
       while (sim.time() < 3.7) {
         sim.step();
         ASSERT_EQ(sim.aggregate().interface_a().parameters().damping_time, expected);
         ASSERT_EQ(sim.aggregate().interface_b().parameters().damping_time, expected);
-        if (sim.time() >= 3.1) breakout[tau > 0.0] = std::max(breakout[tau > 0.0], sim.sensors().f_lift);
+        if (sim.time() >= 3.1)
+          breakout[tau > 0.0] = std::max(breakout[tau > 0.0], sim.sensors().f_lift);
       }
     }
     std::printf(
