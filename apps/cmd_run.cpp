@@ -18,6 +18,7 @@
 #include "apps/outputs.hpp"
 #include "apps/run.hpp"
 #include "digging/digging.hpp"
+#include "terrain/aggregate.hpp"
 #include "host/error.hpp"
 #include "host/files.hpp"
 #include "host/interrupt.hpp"
@@ -274,7 +275,12 @@ nlohmann::json dig_details(const RunOptions& o, const vehicle::Scenario& sc,
         {"relaxation", options.relaxation},
         {"seed_diameter", options.seed_diameter},
         {"edge_resistance", options.edge_resistance},
-        {"interface_damping_time_s", options.interface_damping_time},
+        // the aggregate's interfaces' damping time in use (type G; null at type D)
+        {"interface_damping_time_s",
+         sim.multiscale() ? nlohmann::json(options.interface_damping_time > 0.0
+                                               ? options.interface_damping_time
+                                               : AggregateParameters{}.damping_steps * preset.dt)
+                          : nlohmann::json(nullptr)},
         {"content_inertia", options.content_inertia},
         {"bucket_support", options.bucket_support},
         {"max_passes", sim.max_passes()},
@@ -582,7 +588,7 @@ void add_run_command(CLI::App& app, const std::string& command_line) {
                   "instead of two of the level's steps (0, the default); at G200 it sets HD27's "
                   "breakout force (docs/validation.md \"HD27's breakout follows the interfaces' "
                   "damping time\")")
-      ->check(number_in(0.0, kMaxInterfaceDampingTime, "s"))
+      ->check(number_in(kMinDampingTime, kMaxDampingTime, "s", true))
       ->capture_default_str();
   cmd->add_option("--seed-diameter", opts->seed_diameter,
                   "study, type G: the zone's particles appear at this fraction of their full "

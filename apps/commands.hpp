@@ -119,11 +119,8 @@ inline constexpr double kMaxContactCoefficient = 2.0;
 // (SPEC §2.6)
 inline constexpr double kMinTimestep = 1e-4;
 inline constexpr double kMaxTimestep = 0.05;
-// SPOOK damping times a study may ask for [s]: from the shortest timestep to 0.5 s, the time a
-// grain dropped from the bucket's height (1.2 m) takes to land; a contact damped more slowly
-// than that never settles within a dig's phase
-inline constexpr double kMinDampingTime = kMinTimestep;
-inline constexpr double kMaxDampingTime = 0.5;
+// (the SPOOK damping times a study may ask for, kMinDampingTime and kMaxDampingTime: solvers/
+// dem_settings.hpp, where the type-G interfaces' study reads them too)
 
 // a numeric option within a physical range [lo, hi] in `unit` (or exactly 0, where 0 means "off"):
 // beyond such a range a timestep or speed overflows the step count, runs for days or answers

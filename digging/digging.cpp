@@ -96,12 +96,13 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
                      preset.name +
                      ": only the type-G levels model the cutting edge's penetration resistance; "
                      "at a type-D level the particles resist the edge themselves: leave it at 1");
-  if (!(options.interface_damping_time >= 0.0 &&
-        options.interface_damping_time <= kMaxInterfaceDampingTime))
+  if (!(options.interface_damping_time == 0.0 ||
+        (options.interface_damping_time >= kMinDampingTime &&
+         options.interface_damping_time <= kMaxDampingTime)))
     throw InputError("interface_damping_time " + std::to_string(options.interface_damping_time) +
-                     " s: the aggregate's interfaces' damping time must lie in [0, " +
-                     std::to_string(kMaxInterfaceDampingTime) +
-                     "] s (0: two of the level's steps)");
+                     " s: the aggregate's interfaces' damping time must lie in [" +
+                     std::to_string(kMinDampingTime) + ", " + std::to_string(kMaxDampingTime) +
+                     "] s, or be 0 for two of the level's steps");
   if (!is_multiscale(preset) && options.interface_damping_time != 0.0)
     throw InputError("interface_damping_time " + std::to_string(options.interface_damping_time) +
                      " s at " + preset.name +
@@ -390,6 +391,9 @@ AggregateSample read_aggregate_sample(ByteReader& r) {
   read_matrix(r, a.zone_velocity, "aggregate log");
   return a;
 }
+// bytes a soil force sample takes in a saved state: t, then force, torque and the three faces'
+// forces, three doubles each
+constexpr std::uint64_t kSoilForceSampleBytes = 8 * (1 + 3 * 5);
 // bytes write_aggregate_sample writes
 constexpr std::uint64_t kAggregateSampleBytes =
     8 * (1 + 1 + 1 + 3 + 3 + 3 + 4 + 3 + 1 + 3 + 3 + 4 + 3 + 3 + 3);
@@ -486,7 +490,7 @@ void DiggingSimulation::restore_state(ByteReader& r) {
     r.expect("bucket contacts");
     split_->restore_state(r);
     const std::uint64_t samples = r.u64("soil force log");
-    r.need_elements(samples, 8 * 16, "soil force log");
+    r.need_elements(samples, kSoilForceSampleBytes, "soil force log");
     std::vector<SoilForceSample> log(samples);
     for (SoilForceSample& f : log) {
       f.t = r.f64("soil force log");

@@ -41,9 +41,6 @@ inline constexpr double kDigSweepTolerance = 1.0e-4;
 // law (at 0.5 m of depth the law gives 38 kN; ten times it is four times the machine's traction,
 // about 100 kN, so larger factors only stall the bucket)
 inline constexpr double kMaxEdgeResistance = 10.0;
-// the longest interface damping time DiggingOptions::interface_damping_time takes [s]: the
-// particle contacts' study range (talus run --damping-time)
-inline constexpr double kMaxInterfaceDampingTime = 0.5;
 
 struct DiggingOptions {
   PileBuildOptions pile;         // settling of the pile before the machine starts
@@ -74,7 +71,8 @@ struct DiggingOptions {
   // (docs/validation.md "Type G against type D"); refused at a type-D level unless 1
   double edge_resistance = 1.0;
   // type G, a study: the SPOOK damping time of the aggregate's interfaces A and B [s] in
-  // (0, kMaxInterfaceDampingTime]; 0, the default: two of the level's steps (AggregateParameters::
+  // [kMinDampingTime, kMaxDampingTime] (solvers/dem_settings); 0, the default: two of the level's
+  // steps (AggregateParameters::
   // damping_time). At G200 it sets HD27's breakout force where the step does not, and moves
   // FB35's fill (docs/validation.md "HD27's breakout follows the interfaces' damping time");
   // refused at a type-D level unless 0

@@ -30,6 +30,13 @@ inline bool carry_colours_after(int colours, int fresh_colours) {
 // loss at 30,370; bench/RESULTS.md, 2026-11-27)
 inline constexpr int kPgsOneGroupRows = 4096;
 
+// SPOOK damping times a study may ask for [s] (talus run --damping-time for the particle contacts,
+// --interface-damping-time for the type-G aggregate's interfaces): from 0.1 ms, the shortest
+// timestep a study may take, to 0.5 s, the time a grain dropped from the bucket's height (1.2 m)
+// takes to land; a contact damped more slowly than that never settles within a dig's phase
+inline constexpr double kMinDampingTime = 1e-4;
+inline constexpr double kMaxDampingTime = 0.5;
+
 // partners per particle the narrow phase's count pass keeps for its write pass
 // (DemSettings::narrow_phase_slots; measured in docs/dem.md "Narrow phase")
 inline constexpr int kNarrowPhaseSlots = 12;

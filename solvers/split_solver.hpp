@@ -48,9 +48,11 @@ struct CouplingSettings {
 // direction along the bottom, z the bottom's normal into the bucket): within 45 deg of +z the
 // soil under the bottom bears it up; within 45 deg of -z the soil on the bottom's inside presses
 // on it (the held load); within 45 deg of +-x the soil meets a face across the cutting direction
-// (the cutting edge's face, the back wall's inside). The rest (the side plates, the corner arc)
-// is the whole force less these three. A type-G run's terrain support, held load and interface A
-// with the cutting edge's brake are the same three parts (docs/validation.md "RD21's overfill")
+// (-x: the cutting edge's face, the back wall's inside; +x, rare in a dig: the heel's outside
+// dragged back through soil). The rest (the side plates, the corner arc) is the whole force less
+// these three. A type-G run's terrain support, held load and interface A with the cutting edge's
+// brake are the same three parts (docs/validation.md "RD21's overfill has the same cause,
+// measured")
 struct BucketFaceForces {
   Vec3 below = Vec3::Zero();
   Vec3 inside = Vec3::Zero();

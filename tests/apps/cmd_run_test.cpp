@@ -120,7 +120,7 @@ TEST(DiggingRunTest, Hd27AtD400WritesTheRunContractSnapshotsAndFigures) {
   for (const char* file : {"particles.pvd", "scan.csv", "channels.png", "trajectory.png", "power.png", "side.png"})
     EXPECT_GT(std::filesystem::file_size(dir / file), 100u) << file;
   // the soil's force on the bucket, one row a step (450 of 20 ms), each finite, with its parts
-  // by the bucket's faces: the dig meets soil under the bottom and across the cutting direction
+  // by the bucket's faces
   std::ifstream soil(dir / "bucket_soil.csv");
   std::getline(soil, line);
   EXPECT_EQ(line,
@@ -141,8 +141,11 @@ TEST(DiggingRunTest, Hd27AtD400WritesTheRunContractSnapshotsAndFigures) {
     ++steps;
   }
   EXPECT_EQ(steps, 450);
-  EXPECT_GT(lift_below, 100.0);
-  EXPECT_GT(push_across, 100.0);
+  // HD27-D400's dig: by 3.5 s the soil under the bottom has borne the bucket up by 62 kN and the
+  // faces across the cutting direction taken 163 kN at the most (Digging.
+  // ItsLogsGoThroughASavedStateBitForBit); a tenth of that is far above what a wrong split leaves
+  EXPECT_GT(lift_below, 6e3);
+  EXPECT_GT(push_across, 16e3);
 }
 
 // the damping-time study (issue 11: a halved timestep also halved the contacts' SPOOK damping

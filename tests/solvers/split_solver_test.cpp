@@ -169,35 +169,45 @@ TEST(SplitSolver, ParticlesAtRestInTheBucketWeighTheirMass) {
 }
 
 // the split by faces reads each contact's normal in the bucket's frame: a bucket turned about
-// its width by a fresh angle, rows with normals at fresh angles from its bottom's normal
+// its width by a fresh angle, rows with normals at fresh angles from its bottom's normal and fresh
+// friction impulses; and one row fixed at 40 deg from the bottom's normal in a bucket tilted by 20
+// deg, which the world frame would put past 45 deg (a split read in the world fails there)
 TEST(SplitSolver, TheBucketsFacesAreReadFromTheNormalInItsFrame) {
-  std::mt19937 rng(std::random_device{}());
+  const uint64_t seed = test::fresh_seed();
+  SCOPED_TRACE(test::seed_note(seed));
+  std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> tilt(-0.6, 0.6), within(0.0, 0.7), beyond(0.85, 1.5),
       impulse(0.1, 2.0);
   const double h = 0.005;
-  const Eigen::Quaterniond orientation(Eigen::AngleAxisd(tilt(rng), Vec3::UnitY()));
-  // a normal at angle a from the bucket's +z towards its +x (the excavation plane), in the world
-  const auto normal = [&](double a) {
-    return Vec3(orientation * Vec3(std::sin(a), 0.0, std::cos(a)));
-  };
-  std::vector<ContactRow> rows(5);
-  rows[0].normal = normal(within(rng));                 // under the bottom
-  rows[1].normal = normal(M_PI - within(rng));          // on the bottom's inside
-  rows[2].normal = normal(M_PI / 2 + 0.1 * tilt(rng));  // the back wall, the edge's face
-  rows[3].normal = normal(beyond(rng));                 // past 45 deg from +z towards +x: across
-  rows[4].normal = orientation * Vec3::UnitY();         // a side plate: none of the three
-  Vec3 expect_below = Vec3::Zero(), expect_inside = Vec3::Zero(), expect_across = Vec3::Zero();
-  for (size_t k = 0; k < rows.size(); ++k) {
-    rows[k].impulse_n = impulse(rng);
-    const Vec3 f = rows[k].impulse_n * rows[k].normal / h;
-    if (k == 0) expect_below += f;
-    if (k == 1) expect_inside += f;
-    if (k == 2 || k == 3) expect_across += f;
+  constexpr double kDegree = M_PI / 180.0;
+  for (const double turn : {tilt(rng), 20.0 * kDegree}) {
+    const Eigen::Quaterniond orientation(Eigen::AngleAxisd(turn, Vec3::UnitY()));
+    // a unit vector at angle a from the bucket's +z towards its +x (the excavation plane), world
+    const auto normal = [&](double a) {
+      return Vec3(orientation * Vec3(std::sin(a), 0.0, std::cos(a)));
+    };
+    std::vector<ContactRow> rows(6);
+    rows[0].normal = normal(within(rng));                 // under the bottom
+    rows[1].normal = normal(M_PI - within(rng));          // on the bottom's inside
+    rows[2].normal = normal(M_PI / 2 + 0.1 * tilt(rng));  // the back wall, the edge's face
+    rows[3].normal = normal(beyond(rng));                 // past 45 deg from +z towards +x: across
+    rows[4].normal = orientation * Vec3::UnitY();         // a side plate: none of the three
+    rows[5].normal = normal(40.0 * kDegree);              // under the bottom; 60 deg in the world
+    Vec3 expect_below = Vec3::Zero(), expect_inside = Vec3::Zero(), expect_across = Vec3::Zero();
+    for (size_t k = 0; k < rows.size(); ++k) {
+      rows[k].impulse_n = impulse(rng);
+      // friction along the contact's plane, its force in the part as well
+      rows[k].impulse_t = impulse(rng) * rows[k].normal.cross(Vec3::UnitY() + 0.3 * Vec3::UnitX());
+      const Vec3 f = (rows[k].impulse_n * rows[k].normal + rows[k].impulse_t) / h;
+      if (k == 0 || k == 5) expect_below += f;
+      if (k == 1) expect_inside += f;
+      if (k == 2 || k == 3) expect_across += f;
+    }
+    const BucketFaceForces faces = bucket_face_forces(rows, orientation, h);
+    EXPECT_LT((faces.below - expect_below).norm(), 1e-9 * expect_below.norm()) << turn;
+    EXPECT_LT((faces.inside - expect_inside).norm(), 1e-9 * expect_inside.norm()) << turn;
+    EXPECT_LT((faces.across - expect_across).norm(), 1e-9 * expect_across.norm()) << turn;
   }
-  const BucketFaceForces faces = bucket_face_forces(rows, orientation, h);
-  EXPECT_LT((faces.below - expect_below).norm(), 1e-9 * expect_below.norm());
-  EXPECT_LT((faces.inside - expect_inside).norm(), 1e-9 * expect_inside.norm());
-  EXPECT_LT((faces.across - expect_across).norm(), 1e-9 * expect_across.norm());
 }
 
 // a tolerance on the particle rows' residual (DemSettings::tolerance) ends each pass's sweeps
