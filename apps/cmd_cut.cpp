@@ -14,6 +14,7 @@
 #include "host/files.hpp"
 #include "io/image.hpp"
 #include "io/plot.hpp"
+#include "terrain/aggregate.hpp"
 #include "terrain/cutting_test.hpp"
 #include "terrain/pile.hpp"
 #include "terrain/soil_sample.hpp"
@@ -59,6 +60,11 @@ void add_cut_command(CLI::App& app, const std::string& command_line) {
       ->check(number_in(0.0, kMaxContactCoefficient, ""))
       ->capture_default_str();
   cmd->add_option("--seed", opt->cut.seed, "random seed of the bed")->capture_default_str();
+  cmd->add_option("--interface-damping-time", opt->cut.interface_damping_time,
+                  "study, type G: the SPOOK damping time of the aggregate's interfaces [s] instead "
+                  "of two of the level's steps (0, the default), as talus run's")
+      ->check(number_in(kMinDampingTime, kMaxDampingTime, "s", true))
+      ->capture_default_str();
   cmd->add_flag("--quiet", opt->quiet, "no progress on stderr");
   cmd->callback([opt, command_line] {
     // a type-D level cuts a bed of particles, a type-G one the voxels through the aggregate
@@ -66,6 +72,10 @@ void add_cut_command(CLI::App& app, const std::string& command_line) {
     const bool multiscale = is_multiscale(level);
     const CuttingOptions c = at_level(level, opt->cut);
     check_cutting_options(c);  // bad input leaves no output folder behind
+    if (!multiscale && c.interface_damping_time != 0.0)
+      throw InputError("--interface-damping-time at " + level.name +
+                       ": only the type-G levels cut through an aggregate with interfaces; give "
+                       "--level G400 (or finer) or leave the option out");
     start_output_folder(opt->out);
     check_output_file(opt->json, "--json");
     const auto t0 = std::chrono::steady_clock::now();
@@ -117,6 +127,12 @@ void add_cut_command(CLI::App& app, const std::string& command_line) {
         {"depth_m", c.depth},
         {"width_m", r.width},
         {"speed_m_s", c.speed},
+        // the aggregate's interfaces' damping time in use (type G; null for particles)
+        {"interface_damping_time_s",
+         multiscale ? nlohmann::json(c.interface_damping_time > 0.0
+                                         ? c.interface_damping_time
+                                         : AggregateParameters{}.damping_steps * level.dt)
+                    : nlohmann::json(nullptr)},
         {"force_N", r.force},
         {"force_spread_N", r.force_spread},
         {"fee_force_N", r.fee_force},

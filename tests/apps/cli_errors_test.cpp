@@ -210,6 +210,8 @@ TEST(CliErrors, StepCountsAndLoadsOutsideTheirRangeAreRefused) {
       // a contact damped for longer than a grain takes to land never settles within a dig
       {"--damping-time", "run --scenario hd27 --damping-time 1e30 --out /tmp/talus_unused_range"},
       {"--damping-time", "run --scenario hd27 --damping-time 1e-30 --out /tmp/talus_unused_range"},
+      {"--interface-damping-time",
+       "cut --level G400 --interface-damping-time 1e-30 --out /tmp/talus_unused_range"},
       {"--friction", "soil --test shear --friction 50 --out /tmp/talus_unused_range"},
       {"--form-speed", "run --scenario hd27 --form-speed 1e-4 --out /tmp/talus_unused_range"},
       {"--approach", "sweep --approach 1e30 --out /tmp/talus_unused_range"},
@@ -297,6 +299,11 @@ TEST(CliErrors, StepCountsAndLoadsOutsideTheirRangeAreRefused) {
                               "--interface-damping-time 0.7");
   EXPECT_EQ(damping.code, 2) << damping.err;
   EXPECT_NE(damping.err.find("--interface-damping-time"), std::string::npos) << damping.err;
+  EXPECT_FALSE(std::filesystem::exists("/tmp/talus_cli_seed"));
+  // the blade test takes it at a G level only
+  const Outcome cut = run("", "cut --level D400 --interface-damping-time 0.01 --out /tmp/talus_cli_seed");
+  EXPECT_EQ(cut.code, 2) << cut.err;
+  EXPECT_NE(cut.err.find("--interface-damping-time at D400"), std::string::npos) << cut.err;
   EXPECT_FALSE(std::filesystem::exists("/tmp/talus_cli_seed"));
   // the Jacobi sweep has no relaxation to take
   const Outcome jacobi = run(
