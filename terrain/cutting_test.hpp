@@ -36,8 +36,8 @@ struct CuttingOptions {
   double travel = 1.5;          // blade travel [m]
   double blade_friction = 0.2;  // bucket-soil friction, paper §4.4
   double internal_friction_deg = 32.0;  // phi of the FEE: the type-G soil of the paper (SPEC §2.5)
-  // type G, a study: the aggregate's interfaces' damping time [s]; 0: two steps (AggregateParameters
-  // ::damping_time; talus run --interface-damping-time, the same study on a dig)
+  // type G, a study: the aggregate's interfaces' damping time [s]; 0: two steps
+  // (AggregateParameters::damping_time; talus run --interface-damping-time on a dig)
   double interface_damping_time = 0.0;
 };
 

@@ -301,7 +301,8 @@ TEST(CliErrors, StepCountsAndLoadsOutsideTheirRangeAreRefused) {
   EXPECT_NE(damping.err.find("--interface-damping-time"), std::string::npos) << damping.err;
   EXPECT_FALSE(std::filesystem::exists("/tmp/talus_cli_seed"));
   // the blade test takes it at a G level only
-  const Outcome cut = run("", "cut --level D400 --interface-damping-time 0.01 --out /tmp/talus_cli_seed");
+  const Outcome cut =
+      run("", "cut --level D400 --interface-damping-time 0.01 --out /tmp/talus_cli_seed");
   EXPECT_EQ(cut.code, 2) << cut.err;
   EXPECT_NE(cut.err.find("--interface-damping-time at D400"), std::string::npos) << cut.err;
   EXPECT_FALSE(std::filesystem::exists("/tmp/talus_cli_seed"));
