@@ -119,6 +119,9 @@ void add_cut_command(CLI::App& app, const std::string& command_line) {
     p.shaded.push_back(Range{0.0, r.steady_from});
     fig.write_png(opt->out + "/cut.png", 900, 500);
 
+    // the aggregate's interfaces as the type-G cut set them
+    AggregateParameters interfaces;
+    interfaces.damping_time = c.interface_damping_time;
     nlohmann::json j = {
         {"level", level.name},
         {"diameter_m", level.diameter},
@@ -129,9 +132,7 @@ void add_cut_command(CLI::App& app, const std::string& command_line) {
         {"speed_m_s", c.speed},
         // the aggregate's interfaces' damping time in use (type G; null for particles)
         {"interface_damping_time_s",
-         multiscale ? nlohmann::json(c.interface_damping_time > 0.0
-                                         ? c.interface_damping_time
-                                         : AggregateParameters{}.damping_steps * level.dt)
+         multiscale ? nlohmann::json(interface_damping_time(interfaces, level.dt))
                     : nlohmann::json(nullptr)},
         {"force_N", r.force},
         {"force_spread_N", r.force_spread},

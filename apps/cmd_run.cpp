@@ -239,6 +239,9 @@ nlohmann::json dig_details(const RunOptions& o, const vehicle::Scenario& sc,
                            const DiggingSimulation& sim, double pile_wall, double dig_wall,
                            const Device& dev, const vehicle::EffectSet& effects) {
   const double sim_time = sim.time();
+  // the aggregate's interfaces as the dig set them (type G)
+  AggregateParameters interfaces;
+  interfaces.damping_time = options.interface_damping_time;
   nlohmann::json details = {
       {"particles",
        static_cast<int>(sim.multiscale() ? sim.particle_count() : pile.particles.size())},
@@ -277,9 +280,7 @@ nlohmann::json dig_details(const RunOptions& o, const vehicle::Scenario& sc,
         {"edge_resistance", options.edge_resistance},
         // the aggregate's interfaces' damping time in use (type G; null at type D)
         {"interface_damping_time_s",
-         sim.multiscale() ? nlohmann::json(options.interface_damping_time > 0.0
-                                               ? options.interface_damping_time
-                                               : AggregateParameters{}.damping_steps * preset.dt)
+         sim.multiscale() ? nlohmann::json(interface_damping_time(interfaces, preset.dt))
                           : nlohmann::json(nullptr)},
         {"content_inertia", options.content_inertia},
         {"bucket_support", options.bucket_support},

@@ -96,9 +96,7 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
                      preset.name +
                      ": only the type-G levels model the cutting edge's penetration resistance; "
                      "at a type-D level the particles resist the edge themselves: leave it at 1");
-  if (!(options.interface_damping_time == 0.0 ||
-        (options.interface_damping_time >= kMinDampingTime &&
-         options.interface_damping_time <= kMaxDampingTime)))
+  if (!interface_damping_time_valid(options.interface_damping_time))
     throw InputError("interface_damping_time " + std::to_string(options.interface_damping_time) +
                      " s: the aggregate's interfaces' damping time must lie in [" +
                      std::to_string(kMinDampingTime) + ", " + std::to_string(kMaxDampingTime) +

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "host/error.hpp"
+#include "solvers/dem_settings.hpp"
 
 namespace talus {
 namespace {
@@ -40,6 +41,14 @@ void place(vehicle::PlaneContact& contact, bool engaged, std::vector<Vec3> point
 }
 
 }  // namespace
+
+double interface_damping_time(const AggregateParameters& parameters, double dt) {
+  return parameters.damping_time > 0.0 ? parameters.damping_time : parameters.damping_steps * dt;
+}
+
+bool interface_damping_time_valid(double seconds) {
+  return seconds == 0.0 || (seconds >= kMinDampingTime && seconds <= kMaxDampingTime);
+}
 
 Aggregate aggregate_of(const Particles& p, const std::vector<double>& masses,
                        const std::vector<int>& members) {
@@ -203,8 +212,7 @@ void AggregateCoupling::update(const MultiscaleTerrain& terrain, const vehicle::
   }
 
   // the interfaces' damping time: the study's, or damping_steps of the step
-  const double damping_time =
-      parameters_.damping_time > 0.0 ? parameters_.damping_time : parameters_.damping_steps * dt;
+  const double damping_time = interface_damping_time(parameters_, dt);
 
   // interface A on the cutting plane, as far up as the soil reaches (or the top edge)
   const double h = terrain.voxels().cell();

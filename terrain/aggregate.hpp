@@ -121,6 +121,13 @@ struct AggregateParameters {
   double idle_mass = 1.0;
 };
 
+// the interfaces' damping time in use [s]: parameters.damping_time when positive, else
+// damping_steps of the step `dt` [s]
+double interface_damping_time(const AggregateParameters& parameters, double dt);
+// whether a study may ask for this interface damping time [s]: 0 (two steps), or within
+// [kMinDampingTime, kMaxDampingTime] (solvers/dem_settings), the particle contacts' study range
+bool interface_damping_time_valid(double seconds);
+
 // the aggregate as a body of a machine's multibody system, its two interfaces, and the cutting
 // edge's penetration resistance (a vehicle::PointBrake on the bucket's cutting edge along its
 // cutting direction, bounded by terrain/penetration's force at the zone's depth)

@@ -47,8 +47,7 @@ void check_cutting_options(const CuttingOptions& o) {
       !(o.travel > 0.0) || !(o.blade_friction >= 0.0) || !(o.internal_friction_deg > 0.0))
     throw InputError("cutting test options: diameter, dt, iterations, depth, speed, travel and friction angle "
                      "must be positive");
-  if (!(o.interface_damping_time == 0.0 || (o.interface_damping_time >= kMinDampingTime &&
-                                            o.interface_damping_time <= kMaxDampingTime)))
+  if (!interface_damping_time_valid(o.interface_damping_time))
     throw InputError("cutting test: --interface-damping-time " +
                      std::to_string(o.interface_damping_time) +
                      " s must be 0 (two steps) or lie in [" + std::to_string(kMinDampingTime) +
