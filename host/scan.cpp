@@ -10,12 +10,19 @@ namespace talus {
 namespace {
 // the items one work-group scans (kernels/common.h)
 constexpr size_t kScanBlockItems = size_t{TL_SCAN_GROUP} * TL_SCAN_ITEMS;
+// the longest scan a CPU device runs item after item in one work-item (scan_serial); longer ones
+// take the blocks, whose groups spread over the device's threads
+constexpr size_t kSerialScanItems = 32 * kScanBlockItems;
 }
 
 DeviceScan::DeviceScan(Device& dev) : dev_(dev) {
   const cl::Program& program = dev.program({"scan.cl"});
   blocks_ = dev.kernel(program, "scan_blocks");
   add_ = dev.kernel(program, "scan_add_offsets");
+  serial_ = dev.kernel(program, "scan_serial");
+  cpu_ = cl_checked("querying the device's type", [&] {
+    return (dev.device().getInfo<CL_DEVICE_TYPE>() & CL_DEVICE_TYPE_CPU) != 0;
+  });
   // the kernels scan in groups of exactly TL_SCAN_GROUP work-items
   for (const cl::Kernel* k : {&blocks_, &add_}) {
     const size_t most = cl_checked("querying the scan's work-group size", [&] {
@@ -31,6 +38,18 @@ DeviceScan::DeviceScan(Device& dev) : dev_(dev) {
 void DeviceScan::exclusive(const Buffer<int>& in, Buffer<int>& out, size_t n) {
   // n + 1 outputs: the kernel reads item n as zero, so out[n] is the total
   out.resize(n + 1);
+  // a short scan on a CPU device: one work-item, no barriers (the same sums: integers are exact)
+  if (cpu_ && n + 1 <= kSerialScanItems) {
+    cl_checked("scan_serial", [&] {
+      serial_.setArg(0, in.raw());
+      serial_.setArg(1, out.raw());
+      serial_.setArg(2, static_cast<int>(n));
+      serial_.setArg(3, static_cast<int>(n + 1));
+      return dev_.queue().enqueueNDRangeKernel(serial_, cl::NullRange, cl::NDRange(1),
+                                               cl::NDRange(1));
+    });
+    return;
+  }
   scan_level(in.raw(), out.raw(), n, n + 1, 0);
 }
 

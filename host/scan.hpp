@@ -1,5 +1,6 @@
 // Exclusive prefix sum of ints on the device (kernels/scan.cl), used to turn per-item counts
-// into offsets. The output has n + 1 entries: offsets, then the total.
+// into offsets. The output has n + 1 entries: offsets, then the total. A CPU device scans a short
+// array in one work-item (scan_serial), anything else in blocks of TL_SCAN_GROUP work-items.
 #pragma once
 #include <deque>
 
@@ -20,6 +21,8 @@ class DeviceScan {
   Device& dev_;
   cl::Kernel blocks_;
   cl::Kernel add_;
+  cl::Kernel serial_;
+  bool cpu_ = false;  // the device runs a work-group's items one after another (a CPU)
   // per level: block totals and their scans (a deque keeps references valid as levels grow)
   std::deque<Buffer<int>> sums_;
   std::deque<Buffer<int>> offsets_;

@@ -61,3 +61,16 @@ __kernel void scan_add_offsets(__global int* out, __global const int* block_offs
     if (i < n) out[i] += offset;
   }
 }
+
+// the whole scan by one work-item, item after item: what a CPU device runs for a short array
+// (host/scan.cpp), where a group's 19 barriers over TL_SCAN_GROUP work-items cost more than the
+// adds themselves (a G200 step's five scans of a few thousand items)
+__kernel void scan_serial(__global const int* in, __global int* out, int n_in, int n_out) {
+  if (get_global_id(0) != 0) return;
+  int running = 0;
+  for (int i = 0; i < n_out; ++i) {
+    int value = i < n_in ? in[i] : 0;
+    out[i] = running;
+    running += value;
+  }
+}

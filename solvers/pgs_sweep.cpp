@@ -9,8 +9,12 @@ namespace talus {
 
 namespace {
 
-// the work-group of pgs_sweeps_one_group(_tools): as many work-items as the kernel allows on the
-// device, at most this many (a colour of a small system has tens to hundreds of rows)
+// the work-group of pgs_sweeps_one_group(_tools) on a device that runs a group's items side by
+// side (a GPU): as many work-items as the kernel allows there, at most this many (a colour of a
+// small system has tens to hundreds of rows). A CPU device (PoCL) runs a group's items one after
+// another on one core, so there extra items only add their turns at every colour's barrier: one
+// item walks the rows instead (HD27-G200 sweeps 0.95-0.97 ms a step with 1 item, 0.95-0.99 with
+// 8, 1.11-1.16 with 256, the same bits; bench/RESULTS.md 2026-11-30)
 constexpr size_t kOneGroupSize = 256;
 
 class PgsSweep : public ContactSweep {
@@ -81,9 +85,13 @@ class PgsSweep : public ContactSweep {
     }
   }
 
-  // a one-group kernel's work-group: as many work-items as the device allows it, at most
-  // kOneGroupSize
+  // a one-group kernel's work-group: one item on a CPU device, else as many work-items as the
+  // device allows it, at most kOneGroupSize
   size_t group_size(const cl::Kernel& kernel) const {
+    const bool cpu = cl_checked("querying the device's type", [&] {
+      return (dev_.device().getInfo<CL_DEVICE_TYPE>() & CL_DEVICE_TYPE_CPU) != 0;
+    });
+    if (cpu) return 1;
     return std::min(kOneGroupSize, cl_checked("querying the sweep's work-group size", [&] {
                       return kernel.getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(dev_.device());
                     }));

@@ -17,9 +17,15 @@
 
 namespace talus {
 
+// N_q at the failure angle beta for rake, soil-tool friction and internal friction angles, all in
+// [deg]; infinity where the wedge cannot fail along that plane (den <= 0)
+double fee_n_q(double rake_deg, double tool_friction_deg, double internal_friction_deg,
+               double beta_deg);
+
 // the failure plane's angle beta [deg] for rake, soil-tool friction and internal friction angles
-// [deg]: the minimum of N_q over beta, found on a 0.1 deg grid and refined by golden sections to
-// 1e-9 deg. Throws InputError naming the angles when no plane can fail (their sum reaches 180 deg)
+// [deg]: the minimum of N_q over beta, found on a 0.1 deg grid (its best point) and refined by
+// golden sections to 1e-9 deg. Throws InputError naming the angles when no plane can fail (their
+// sum reaches 180 deg)
 double fee_failure_angle(double rake_deg, double tool_friction_deg, double internal_friction_deg);
 
 // the FEE's horizontal force [N] on a tool of width `width` [m] at depth `depth` [m] in a

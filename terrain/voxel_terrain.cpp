@@ -46,6 +46,7 @@ VoxelTerrain::VoxelTerrain(double x0, double y0, double z0, double cell, int nx,
   size_t n = static_cast<size_t>(nx) * ny * nz;
   mass_.assign(n, 0.0);
   volume_.assign(n, 0.0);
+  column_volume_.assign(static_cast<size_t>(nx) * ny, 0.0);
 }
 
 VoxelTerrain VoxelTerrain::from_profile(const PileProfile& profile,
@@ -107,9 +108,13 @@ double VoxelTerrain::column_mass(int i, int j) const {
 }
 
 double VoxelTerrain::column_volume(int i, int j) const {
+  return column_volume_[static_cast<size_t>(j) * nx_ + i];
+}
+
+void VoxelTerrain::sum_column_volume(int i, int j) {
   double v = 0.0;
   for (int k = 0; k < nz_; ++k) v += volume_[index(i, j, k)];
-  return v;
+  column_volume_[static_cast<size_t>(j) * nx_ + i] = v;
 }
 
 double VoxelTerrain::total_mass() const {
@@ -145,8 +150,10 @@ void VoxelTerrain::restack(int i, int j, const std::vector<Layer>& layers) {
   double room = cap;
   for (Layer layer : layers) {
     while (layer.volume > 0.0) {
-      if (k >= nz_)
+      if (k >= nz_) {
+        sum_column_volume(i, j);
         throw Error("voxel terrain: a column overflows its " + std::to_string(nz_) + " cells");
+      }
       size_t c = index(i, j, k);
       // the layer fits (to rounding): all of it goes here
       if (layer.volume <= room + kVolumeRounding * cap) {
@@ -170,6 +177,7 @@ void VoxelTerrain::restack(int i, int j, const std::vector<Layer>& layers) {
       }
     }
   }
+  sum_column_volume(i, j);
 }
 
 SoilTaken VoxelTerrain::split(int i, int j, double z_lo, double z_hi, std::vector<Layer>* below,
@@ -206,7 +214,12 @@ SoilTaken VoxelTerrain::soil_between(int i, int j, double z_lo, double z_hi) con
 }
 
 SoilTaken VoxelTerrain::take(int i, int j, double z_lo, double z_hi) {
-  std::vector<Layer> below, above;
+  // the layers in the terrain's scratch lists, kept between calls (a step's avalanche takes from
+  // hundreds of columns, and fresh lists each time were a tenth of its cost)
+  std::vector<Layer>& below = scratch_below_;
+  std::vector<Layer>& above = scratch_above_;
+  below.clear();
+  above.clear();
   const SoilTaken taken = split(i, j, z_lo, z_hi, &below, &above);
   if (taken.volume <= 0.0 && taken.mass <= 0.0) return taken;
   // what lay above drops onto what lay below
@@ -227,7 +240,8 @@ void VoxelTerrain::deposit(int i, int j, double mass, double compaction) {
     throw Error("voxel terrain: column (" + std::to_string(i) + ", " + std::to_string(j) +
                 ") cannot take " + std::to_string(mass) + " kg more: it would rise above the grid");
   // the column's layers as they are (one per cell), the new soil on top
-  std::vector<Layer> layers;
+  std::vector<Layer>& layers = scratch_below_;
+  layers.clear();
   for (int k = 0; k < nz_ && volume_[index(i, j, k)] > 0.0; ++k)
     layers.push_back({mass_[index(i, j, k)], volume_[index(i, j, k)]});
   layers.push_back({mass, volume});
@@ -265,6 +279,8 @@ void VoxelTerrain::restore_state(ByteReader& r) {
                        " kg and volume " + std::to_string(volume[c]) + " m^3 (corrupt)");
   mass_ = std::move(mass);
   volume_ = std::move(volume);
+  for (int j = 0; j < ny_; ++j)
+    for (int i = 0; i < nx_; ++i) sum_column_volume(i, j);
 }
 
 }  // namespace talus

@@ -133,10 +133,19 @@ class VoxelTerrain {
   // for, the layers below and above
   SoilTaken split(int i, int j, double z_lo, double z_hi, std::vector<Layer>* below,
                   std::vector<Layer>* above) const;
+  // column_volume_ of column (i, j) summed afresh from its cells, as every writer of a column
+  // ends with
+  void sum_column_volume(int i, int j);
   std::vector<double> mass_;  // [kg] per cell
   // [m^3] per cell: h^3 exactly in every cell under a column's top one. Volume, not compaction,
   // is stored so that volumes add exactly; compaction is derived, m / (rho_bank V)
   std::vector<double> volume_;
+  // [m^3] per column, index j nx + i: the sum of its cells' volumes, bottom to top, kept by every
+  // writer of a column (restack, restore_state) so that the surface's readers, several a step
+  // over every column, do not add up nz cells each time; the same bits as summing anew
+  std::vector<double> column_volume_;
+  // the layers `take` and `deposit` restack, reused from call to call
+  std::vector<Layer> scratch_below_, scratch_above_;
 };
 
 // the most cells a terrain may have: a 100 m pile (kMaxProfileExtent) at the finest level (G50,

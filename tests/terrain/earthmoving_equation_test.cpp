@@ -1,10 +1,11 @@
 // terrain/earthmoving_equation: the FEE against Rankine's passive thrust where the two coincide
 // (a smooth vertical wall), its growth with tool friction and depth, and its failure angle
-// against the fine grid it refines.
+// against the fine grid it refines, whose best point its search finds.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
+#include <random>
 
 #include "host/error.hpp"
 #include "terrain/earthmoving_equation.hpp"
@@ -56,16 +57,47 @@ TEST(EarthmovingEquation, TheFailureAngleIsTheLeastForceOnAFineGrid) {
                 f);
     for (int k = -500; k <= 500; ++k) {
       const double b = beta + 0.001 * k;
-      const double alpha = rake * kDeg, delta = std::atan(0.2), phi = 40.0 * kDeg;
-      const double den =
-          std::cos(alpha + delta) + std::sin(alpha + delta) / std::tan(b * kDeg + phi);
-      if (den <= 0.0 || b <= 0.0) continue;
-      const double nq = (1.0 / std::tan(alpha) + 1.0 / std::tan(b * kDeg)) / den;
-      const double fb = 1727.0 * 9.81 * 0.125 * nq * std::sin(alpha + delta);
+      const double nq = fee_n_q(rake, std::atan(0.2) / kDeg, 40.0, b);
+      if (b <= 0.0 || std::isinf(nq)) continue;
+      const double fb = 1727.0 * 9.81 * 0.125 * nq * std::sin(rake * kDeg + std::atan(0.2));
       EXPECT_GE(fb, f * (1.0 - 1e-12)) << "rake " << rake << " beta " << b;
     }
   }
   EXPECT_THROW(fee_failure_angle(170.0, 20.0, 40.0), InputError);
+}
+
+// the failure angle's search tries a tenth of the 0.1 deg grid's points first and then the grid
+// near the best of them: on fresh random angles (non-negative, summing below 180 deg) it must end
+// where refining the whole grid's best point ends, N_q no larger than there
+TEST(EarthmovingEquation, TheFailureAnglesSearchEndsAtTheWholeGridsBestPoint) {
+  const unsigned seed = std::random_device{}();
+  std::printf("[ measured ] seed %u\n", seed);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> rake_of(0.5, 178.0), delta_of(0.0, 45.0),
+      phi_of(0.0, 60.0);
+  int draws = 0;
+  while (draws < 300) {
+    const double rake = rake_of(rng), delta = delta_of(rng), phi = phi_of(rng);
+    if (rake + delta + phi >= 180.0) continue;
+    ++draws;
+    // the whole grid's best point
+    double best = INFINITY;
+    int best_k = 0;
+    for (int k = 1; k < 900; ++k)
+      if (const double nq = fee_n_q(rake, delta, phi, 0.1 * k); nq < best) {
+        best = nq;
+        best_k = k;
+      }
+    // (a sum within a tenth of a degree of 180 leaves no plane on the grid: refused)
+    if (best_k == 0) {
+      EXPECT_THROW(fee_failure_angle(rake, delta, phi), InputError);
+      continue;
+    }
+    const double beta = fee_failure_angle(rake, delta, phi);
+    EXPECT_GT(beta, 0.1 * (best_k - 1) - 1e-9) << "rake " << rake << " delta " << delta;
+    EXPECT_LT(beta, 0.1 * (best_k + 1) + 1e-9) << "rake " << rake << " delta " << delta;
+    EXPECT_LE(fee_n_q(rake, delta, phi, beta), best) << "rake " << rake << " phi " << phi;
+  }
 }
 
 }  // namespace
