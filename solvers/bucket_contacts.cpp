@@ -100,7 +100,8 @@ bool closest_point_callback(RTCPointQueryFunctionArguments* args) {
   const int tri = (*q->used)[args->primID];
   const auto& t = (*q->triangles)[tri];
   const auto& v = *q->vertices;
-  const ClosestPoint cp = closest_point_on_triangle(q->centre, v[t[0]], v[t[1]], v[t[2]]);
+  // (the scene holds no degenerate triangle: BucketScene keeps only the others in used_)
+  const ClosestPoint cp = closest_point_on_proper_triangle(q->centre, v[t[0]], v[t[1]], v[t[2]]);
   const double d = (cp.point - q->centre).norm();
   if (d < q->range) q->out->push_back({tri, d, cp});
   return false;  // the query radius is left as it is: we want every triangle in range
@@ -115,6 +116,11 @@ ClosestPoint closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3&
       if ((s.point - p).squaredNorm() < (best.point - p).squaredNorm()) best = s;
     return best;
   }
+  return closest_point_on_proper_triangle(p, a, b, c);
+}
+
+ClosestPoint closest_point_on_proper_triangle(const Vec3& p, const Vec3& a, const Vec3& b,
+                                              const Vec3& c) {
   // voronoi regions of the vertices, edges and face in turn
   const Vec3 ab = b - a, ac = c - a, ap = p - a;
   const double d1 = ab.dot(ap), d2 = ac.dot(ap);
@@ -262,7 +268,7 @@ std::vector<BucketContact> find_bucket_contacts_brute_force(const vehicle::Bucke
     for (int t = 0; t < static_cast<int>(mesh.triangles.size()); ++t) {
       const auto& tri = mesh.triangles[t];
       if (is_degenerate_triangle(w[tri[0]], w[tri[1]], w[tri[2]])) continue;
-      const ClosestPoint cp = closest_point_on_triangle(x, w[tri[0]], w[tri[1]], w[tri[2]]);
+      const ClosestPoint cp = closest_point_on_proper_triangle(x, w[tri[0]], w[tri[1]], w[tri[2]]);
       const double d = (cp.point - x).norm();
       if (d < r * (1.0 + margin_rel)) found.push_back({t, d, cp});
     }

@@ -75,6 +75,10 @@ struct ClosestPoint {
 // the point of triangle (a, b, c) closest to p, in double (Voronoi regions, Ericson 2005 §5.1.5);
 // degenerate triangles fall back to the closest of their edges
 ClosestPoint closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c);
+// the same for a triangle known to have area (is_degenerate_triangle false), without testing it
+// again: the scene's queries call it for every triangle near every candidate
+ClosestPoint closest_point_on_proper_triangle(const Vec3& p, const Vec3& a, const Vec3& b,
+                                              const Vec3& c);
 
 // true when the triangle has (numerically) no area; such triangles are left out of the scene
 // and of the brute-force reference alike (the bucket's side fans have two: they add no surface)
