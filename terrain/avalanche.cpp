@@ -1,6 +1,7 @@
 #include "terrain/avalanche.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -14,10 +15,15 @@ constexpr double kDegree = M_PI / 180.0;
 // the most of a pair's excess one step moves (see the header)
 constexpr double kMaxFraction = 0.25;
 
-// soil leaving one column this step: how thick a layer, and to whom (column index, thickness)
+// the most columns one column gives soil to: its four neighbours
+constexpr int kNeighbours = 4;
+
+// soil leaving one column this step: how thick a layer, and to whom (column index, thickness),
+// in a fixed array (hundreds of columns give soil every step; a list each cost allocations)
 struct Outflow {
   double thickness = 0.0;
-  std::vector<std::pair<int, double>> to;
+  int receivers = 0;
+  std::array<std::pair<int, double>, kNeighbours> to;
 };
 
 }  // namespace
@@ -51,7 +57,7 @@ AvalancheStep avalanche(VoxelTerrain& terrain, double dt, const AvalancheOptions
     if (closed && (*closed)[to]) return;  // nothing slides into a tool's body
     const double t = 0.5 * f * excess;
     out[from].thickness += t;
-    out[from].to.emplace_back(to, t);
+    out[from].to[out[from].receivers++] = {to, t};
   };
   for (int j = 0; j < ny; ++j)
     for (int i = 0; i < nx; ++i) {
@@ -73,11 +79,12 @@ AvalancheStep avalanche(VoxelTerrain& terrain, double dt, const AvalancheOptions
     const double compaction = taken[c].mass / (terrain.bank_density() * taken[c].volume);
     // each receiver its share; the last takes what is left, so the shares add up to the mass
     double left = taken[c].mass;
-    for (size_t k = 0; k < out[c].to.size(); ++k) {
+    const int receivers = out[c].receivers;
+    for (int k = 0; k < receivers; ++k) {
       const auto [to, t] = out[c].to[k];
       // (rounding can leave the last a hair below zero when its share is negligible)
       const double m =
-          k + 1 < out[c].to.size() ? taken[c].mass * (t / out[c].thickness) : std::max(0.0, left);
+          k + 1 < receivers ? taken[c].mass * (t / out[c].thickness) : std::max(0.0, left);
       left -= m;
       if (m > 0.0) terrain.deposit(to % nx, to / nx, m, std::min(compaction, kMaxCompaction));
     }
