@@ -47,7 +47,10 @@ std::vector<Candidate> local_minima(const std::vector<Candidate>& cands, const s
     for (size_t j = 0; j < cands.size() && !drop; ++j) {
       if (j == i || !better(cands[j], cands[i])) continue;
       const auto& t = tris[cands[j].tri];
-      const Vec3 q = closest_point_on_triangle(cands[i].cp.point, v[t[0]], v[t[1]], v[t[2]]).point;
+      // (candidates come from triangles with area alone: the scene and the brute force skip
+      // the others)
+      const Vec3 q =
+          closest_point_on_proper_triangle(cands[i].cp.point, v[t[0]], v[t[1]], v[t[2]]).point;
       drop = (q - cands[i].cp.point).norm() <= kTouch;
     }
     if (!drop) kept.push_back(cands[i]);
