@@ -142,6 +142,9 @@ Device::Device(const DeviceChoice& choice) {
   const Candidate& c = candidates[candidate_order(kinds, choice.in_host_thread).front()];
   device_ = c.device;
   is_gpu_ = c.kind.gpu;
+  is_cpu_ = cl_checked("querying the device's type", [&] {
+    return (device_.getInfo<CL_DEVICE_TYPE>() & CL_DEVICE_TYPE_CPU) != 0;
+  });
   cl_checked("creating the context and queue", [&] {
     context_ = cl::Context(device_);
     queue_ = cl::CommandQueue(context_, device_);

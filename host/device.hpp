@@ -74,6 +74,10 @@ class Device {
   const cl::CommandQueue& queue() const { return queue_; }
   const cl::Device& device() const { return device_; }
   bool is_gpu() const { return is_gpu_; }
+  // a CPU device (CL_DEVICE_TYPE_CPU, PoCL here): it runs a work-group's items one after another
+  // on one core, so a barrier costs a turn of every item, and kernels with barriers over mostly
+  // idle items (the one-group sweeps, short scans) take one work-item there instead
+  bool is_cpu() const { return is_cpu_; }
   // "platform / device (compute units, global memory)"
   std::string description() const { return description_; }
   // the device's global memory [bytes] (CL_DEVICE_GLOBAL_MEM_SIZE), what its buffers share
@@ -103,6 +107,7 @@ class Device {
   cl::Device device_;
   cl::CommandQueue queue_;
   bool is_gpu_ = false;
+  bool is_cpu_ = false;
   std::string description_;
   // the platform's and device's names and versions and the driver's: what a program binary is
   // built for (host/program_cache.hpp)

@@ -20,9 +20,6 @@ DeviceScan::DeviceScan(Device& dev) : dev_(dev) {
   blocks_ = dev.kernel(program, "scan_blocks");
   add_ = dev.kernel(program, "scan_add_offsets");
   serial_ = dev.kernel(program, "scan_serial");
-  cpu_ = cl_checked("querying the device's type", [&] {
-    return (dev.device().getInfo<CL_DEVICE_TYPE>() & CL_DEVICE_TYPE_CPU) != 0;
-  });
   // the kernels scan in groups of exactly TL_SCAN_GROUP work-items
   for (const cl::Kernel* k : {&blocks_, &add_}) {
     const size_t most = cl_checked("querying the scan's work-group size", [&] {
@@ -39,7 +36,7 @@ void DeviceScan::exclusive(const Buffer<int>& in, Buffer<int>& out, size_t n) {
   // n + 1 outputs: the kernel reads item n as zero, so out[n] is the total
   out.resize(n + 1);
   // a short scan on a CPU device: one work-item, no barriers (the same sums: integers are exact)
-  if (cpu_ && n + 1 <= kSerialScanItems) {
+  if (dev_.is_cpu() && n + 1 <= kSerialScanItems) {
     cl_checked("scan_serial", [&] {
       serial_.setArg(0, in.raw());
       serial_.setArg(1, out.raw());

@@ -22,7 +22,6 @@ class DeviceScan {
   cl::Kernel blocks_;
   cl::Kernel add_;
   cl::Kernel serial_;
-  bool cpu_ = false;  // the device runs a work-group's items one after another (a CPU)
   // per level: block totals and their scans (a deque keeps references valid as levels grow)
   std::deque<Buffer<int>> sums_;
   std::deque<Buffer<int>> offsets_;

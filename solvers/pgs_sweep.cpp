@@ -88,10 +88,7 @@ class PgsSweep : public ContactSweep {
   // a one-group kernel's work-group: one item on a CPU device, else as many work-items as the
   // device allows it, at most kOneGroupSize
   size_t group_size(const cl::Kernel& kernel) const {
-    const bool cpu = cl_checked("querying the device's type", [&] {
-      return (dev_.device().getInfo<CL_DEVICE_TYPE>() & CL_DEVICE_TYPE_CPU) != 0;
-    });
-    if (cpu) return 1;
+    if (dev_.is_cpu()) return 1;
     return std::min(kOneGroupSize, cl_checked("querying the sweep's work-group size", [&] {
                       return kernel.getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(dev_.device());
                     }));

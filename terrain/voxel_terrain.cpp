@@ -215,7 +215,7 @@ SoilTaken VoxelTerrain::soil_between(int i, int j, double z_lo, double z_hi) con
 
 SoilTaken VoxelTerrain::take(int i, int j, double z_lo, double z_hi) {
   // the layers in the terrain's scratch lists, kept between calls (a step's avalanche takes from
-  // hundreds of columns, and fresh lists each time were a tenth of its cost)
+  // hundreds of columns, and each fresh list was an allocation)
   std::vector<Layer>& below = scratch_below_;
   std::vector<Layer>& above = scratch_above_;
   below.clear();
