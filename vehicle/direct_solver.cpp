@@ -41,8 +41,8 @@ struct DirectSolver::Impl {
   // lower triangle of A in compressed columns, the diagonal first in each column and always stored
   std::vector<int> lower_outer, lower_inner;
   std::vector<double> lower_value;
-  std::vector<int> next_outer, next_inner;  // set_matrix's scratch, kept to reuse its memory
-  std::vector<double> next_value;
+  std::vector<int> lower_from;                // per entry, its index in A's values (-1: zero)
+  std::vector<int> input_outer, input_inner;  // A's pattern when the lower triangle was made
   // the analyses of the free sets met since A's pattern last changed, least recently used evicted
   std::vector<Analysis> kept;
   int current = -1;                    // the analysis whose factor the solves use
@@ -101,33 +101,69 @@ struct DirectSolver::Impl {
   // if the pattern changed, and a new values generation starts unless the matrix is the last one
   // entry for entry
   void set_matrix(const Eigen::SparseMatrix<double>& A) {
+    // an uncompressed A (one a caller inserted into) is read through a compressed copy
+    if (!A.isCompressed()) {
+      Eigen::SparseMatrix<double> compressed = A;
+      compressed.makeCompressed();
+      set_matrix(compressed);
+      return;
+    }
+    // A's pattern as last given: each of its entries' place in lower_value is known, so only the
+    // values are copied (the machine's pattern holds for hundreds of steps; rebuilding the lower
+    // triangle entry by entry each solve was a tenth of a load-carry simulation)
+    if (!same_input_pattern(A)) {
+      set_pattern(A);
+      forget_analyses();
+      ++values;
+    }
+    const double* from = A.valuePtr();
+    bool same_values = true;
+    a_max = 0.0;
+    for (std::size_t e = 0; e < lower_from.size(); ++e) {
+      const double v = lower_from[e] >= 0 ? from[lower_from[e]] : 0.0;
+      same_values = same_values && v == lower_value[e];
+      lower_value[e] = v;
+      a_max = std::max(a_max, std::abs(v));
+    }
+    if (!same_values) ++values;
+  }
+
+  // whether A's pattern (compressed) is the one set_pattern last read
+  bool same_input_pattern(const Eigen::SparseMatrix<double>& A) const {
+    if (A.rows() + 1 != static_cast<Eigen::Index>(input_outer.size())) return false;
+    const int* outer = A.outerIndexPtr();
+    return std::equal(input_outer.begin(), input_outer.end(), outer) &&
+           std::equal(input_inner.begin(), input_inner.end(), A.innerIndexPtr(),
+                      A.innerIndexPtr() + outer[A.rows()]);
+  }
+
+  // the lower triangle's pattern from A's (compressed): the diagonal first in each column and
+  // always stored, then the rows below it in ascending order, and where each entry comes from in
+  // A's values (-1: a diagonal A does not store, zero)
+  void set_pattern(const Eigen::SparseMatrix<double>& A) {
     const int n = static_cast<int>(A.rows());
-    next_outer.assign(n + 1, 0);
-    next_inner.clear();
-    next_value.clear();
+    const int* outer = A.outerIndexPtr();
+    const int* inner = A.innerIndexPtr();
+    lower_outer.assign(n + 1, 0);
+    lower_inner.clear();
+    lower_from.clear();
     for (int j = 0; j < n; ++j) {
-      // the diagonal first, then the rows below it in Eigen's ascending order
-      next_inner.push_back(j);
-      next_value.push_back(0.0);
-      const std::size_t diagonal = next_value.size() - 1;
-      for (Eigen::SparseMatrix<double>::InnerIterator it(A, j); it; ++it) {
-        if (it.row() == j) {
-          next_value[diagonal] += it.value();
-        } else if (it.row() > j) {
-          next_inner.push_back(static_cast<int>(it.row()));
-          next_value.push_back(it.value());
+      lower_inner.push_back(j);
+      lower_from.push_back(-1);
+      const std::size_t diagonal = lower_from.size() - 1;
+      for (int k = outer[j]; k < outer[j + 1]; ++k) {
+        if (inner[k] == j) {
+          lower_from[diagonal] = k;
+        } else if (inner[k] > j) {
+          lower_inner.push_back(inner[k]);
+          lower_from.push_back(k);
         }
       }
-      next_outer[j + 1] = static_cast<int>(next_inner.size());
+      lower_outer[j + 1] = static_cast<int>(lower_inner.size());
     }
-    const bool same_pattern = next_outer == lower_outer && next_inner == lower_inner;
-    if (!(same_pattern && next_value == lower_value)) ++values;
-    std::swap(lower_outer, next_outer);
-    std::swap(lower_inner, next_inner);
-    std::swap(lower_value, next_value);
-    a_max = 0.0;
-    for (const double v : lower_value) a_max = std::max(a_max, std::abs(v));
-    if (!same_pattern) forget_analyses();
+    lower_value.assign(lower_from.size(), 0.0);
+    input_outer.assign(outer, outer + n + 1);
+    input_inner.assign(inner, inner + outer[n]);
   }
 
   // the kept analysis of this free set, or a new one (evicting the least recently used)

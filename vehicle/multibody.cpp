@@ -132,12 +132,10 @@ void MultibodySystem::assemble_schur_complement() {
   // structural (which rows share a body), not the values' zeros, so the direct solver's symbolic
   // analysis is reused while the machine's rows stay the same, and A is exactly symmetric
   const int m = static_cast<int>(rows_.size());
-  // per moving body, the blocks acting on it (in row order) with M_b⁻¹ J_bᵀ beside each
-  struct BodyBlock {
-    int row;
-    Vec6 jacobian, mobility;
-  };
-  std::vector<std::vector<BodyBlock>> on_body(bodies_.size());
+  // per moving body, the blocks acting on it (in row order) with M_b⁻¹ J_bᵀ beside each; the
+  // lists keep their memory from step to step
+  on_body_.resize(bodies_.size());
+  for (auto& blocks : on_body_) blocks.clear();
   for (int r = 0; r < m; ++r) {
     for (const auto& blk : rows_[r].blocks) {
       if (blk.body == kWorld || column_.at(blk.body) < 0) continue;  // no columns
@@ -145,63 +143,79 @@ void MultibodySystem::assemble_schur_complement() {
       Vec6 w;
       w.head<3>() = blk.jacobian.head<3>() / body.mass;
       w.tail<3>() = inverse_inertia_[blk.body] * blk.jacobian.tail<3>();
-      on_body[blk.body].push_back({r, blk.jacobian, w});
-    }
-  }
-  // the lower triangle, dense while it is summed (m is the machine's row count, about 100)
-  schur_.setZero(m, m);
-  for (const auto& blocks : on_body) {
-    for (size_t p = 0; p < blocks.size(); ++p) {
-      for (size_t q = p; q < blocks.size(); ++q) {
-        const int i = std::max(blocks[p].row, blocks[q].row);
-        const int j = std::min(blocks[p].row, blocks[q].row);
-        const double v = blocks[p].jacobian.dot(blocks[q].mobility);
-        // two blocks of one row on one body: the cross term appears as (p, q) and (q, p)
-        schur_(i, j) += p != q && i == j ? 2.0 * v : v;
-      }
+      on_body_[blk.body].push_back({r, blk.jacobian, w});
     }
   }
   // the pattern (which rows share a moving body, both triangles, the diagonal always stored since
   // it carries Σ) changes only when the rows' bodies do: kept from the last step while they agree
-  std::vector<int> row_bodies;
+  row_bodies_.clear();
   for (const auto& row : rows_) {
     for (const auto& blk : row.blocks) {
-      if (blk.body != kWorld && column_[blk.body] >= 0) row_bodies.push_back(blk.body);
+      if (blk.body != kWorld && column_[blk.body] >= 0) row_bodies_.push_back(blk.body);
     }
-    row_bodies.push_back(kWorld);  // end of the row
+    row_bodies_.push_back(kWorld);  // end of the row
   }
   Eigen::SparseMatrix<double>& A = mcp_.A;
-  if (row_bodies != pattern_row_bodies_ || A.rows() != m) {
-    std::vector<char> coupled(static_cast<size_t>(m) * m, 0);
-    for (const auto& blocks : on_body) {
-      for (const BodyBlock& a : blocks) {
-        for (const BodyBlock& b : blocks) coupled[static_cast<size_t>(a.row) * m + b.row] = 1;
+  if (row_bodies_ != pattern_row_bodies_ || A.rows() != m) build_schur_pattern();
+  // the values: each pair of blocks on one body adds J_p M_b⁻¹ J_qᵀ to its lower entry and, off
+  // the diagonal, to the mirrored upper one, in the same order for both, so A is exactly symmetric
+  double* value = A.valuePtr();
+  std::fill_n(value, A.nonZeros(), 0.0);
+  const SchurTerm* term = schur_terms_.data();
+  for (const auto& blocks : on_body_) {
+    for (size_t p = 0; p < blocks.size(); ++p) {
+      for (size_t q = p; q < blocks.size(); ++q, ++term) {
+        const double v = blocks[p].jacobian.dot(blocks[q].mobility);
+        // two blocks of one row on one body: the cross term appears as (p, q) and (q, p)
+        const double add = p != q && term->lower == term->upper ? 2.0 * v : v;
+        value[term->lower] += add;
+        if (term->upper != term->lower) value[term->upper] += add;
       }
     }
-    std::vector<Eigen::Triplet<double>> t;
-    for (int j = 0; j < m; ++j) {
-      for (int i = 0; i < m; ++i) {
-        if (i == j || coupled[static_cast<size_t>(j) * m + i]) t.emplace_back(i, j, 0.0);
-      }
-    }
-    A.resize(m, m);
-    A.setFromTriplets(t.begin(), t.end());
-    pattern_row_bodies_ = std::move(row_bodies);
   }
-  // the values, column by column, from the dense lower triangle
+  // Σ on the stored diagonal
+  for (int j = 0; j < m; ++j) value[schur_diagonal_[j]] += sigma_[j];
+}
+
+void MultibodySystem::build_schur_pattern() {
+  const int m = static_cast<int>(rows_.size());
+  Eigen::SparseMatrix<double>& A = mcp_.A;
+  std::vector<char> coupled(static_cast<size_t>(m) * m, 0);
+  for (const auto& blocks : on_body_) {
+    for (const BodyBlock& a : blocks) {
+      for (const BodyBlock& b : blocks) coupled[static_cast<size_t>(a.row) * m + b.row] = 1;
+    }
+  }
+  std::vector<Eigen::Triplet<double>> t;
+  for (int j = 0; j < m; ++j) {
+    for (int i = 0; i < m; ++i) {
+      if (i == j || coupled[static_cast<size_t>(j) * m + i]) t.emplace_back(i, j, 0.0);
+    }
+  }
+  A.resize(m, m);
+  A.setFromTriplets(t.begin(), t.end());
+  A.makeCompressed();
+  // where each entry (i, j) lives in A's values
   const int* outer = A.outerIndexPtr();
   const int* inner = A.innerIndexPtr();
-  double* value = A.valuePtr();
-  for (int j = 0; j < m; ++j) {
-    for (int k = outer[j]; k < outer[j + 1]; ++k) {
-      const int i = inner[k];
-      value[k] = i >= j ? schur_(i, j) : schur_(j, i);
-    }
-    // the diagonal is stored: add Σ to it
-    for (int k = outer[j]; k < outer[j + 1]; ++k) {
-      if (inner[k] == j) value[k] += sigma_[j];
+  auto entry = [&](int i, int j) {
+    const int* at = std::lower_bound(inner + outer[j], inner + outer[j + 1], i);
+    return static_cast<int>(at - inner);
+  };
+  schur_diagonal_.resize(m);
+  for (int j = 0; j < m; ++j) schur_diagonal_[j] = entry(j, j);
+  // each pair of blocks on one body, in the order the values loop visits them
+  schur_terms_.clear();
+  for (const auto& blocks : on_body_) {
+    for (size_t p = 0; p < blocks.size(); ++p) {
+      for (size_t q = p; q < blocks.size(); ++q) {
+        const int i = std::max(blocks[p].row, blocks[q].row);
+        const int j = std::min(blocks[p].row, blocks[q].row);
+        schur_terms_.push_back({entry(i, j), entry(j, i)});
+      }
     }
   }
+  pattern_row_bodies_ = row_bodies_;
 }
 
 void MultibodySystem::solve() {

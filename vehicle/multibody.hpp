@@ -78,6 +78,19 @@ class MultibodySystem {
  private:
   // mcp_.A = G M⁻¹ Gᵀ + Σ from this step's rows, Σ and the bodies' inverse masses
   void assemble_schur_complement();
+  // mcp_.A's pattern and the entries each pair of blocks adds to, from on_body_ and row_bodies_
+  void build_schur_pattern();
+
+  // one Jacobian block on a moving body: its row, J_b and M_b⁻¹ J_bᵀ
+  struct BodyBlock {
+    int row;
+    Vec6 jacobian, mobility;
+  };
+  // where one pair of blocks on a body adds J_p M_b⁻¹ J_qᵀ in mcp_.A's values: its entry in the
+  // lower triangle and the mirrored upper one (the same on the diagonal)
+  struct SchurTerm {
+    int lower, upper;
+  };
 
   std::vector<RigidBody> bodies_;
   std::vector<std::unique_ptr<Constraint>> constraints_;
@@ -94,8 +107,11 @@ class MultibodySystem {
   Eigen::SparseMatrix<double> minv_;
   std::vector<Mat3> inverse_inertia_;  // per body, world frame, this step (unset for fixed bodies)
   Eigen::VectorXd sigma_, rhs_;
-  Eigen::MatrixXd schur_;                // lower triangle of G M⁻¹ Gᵀ while it is summed
-  std::vector<int> pattern_row_bodies_;  // each row's moving bodies (row ends: kWorld) of mcp_.A
+  std::vector<std::vector<BodyBlock>> on_body_;  // per body, this step's blocks (scratch)
+  std::vector<int> row_bodies_;          // each row's moving bodies, row ends kWorld (this step)
+  std::vector<int> pattern_row_bodies_;  // row_bodies_ of the step mcp_.A's pattern was built for
+  std::vector<SchurTerm> schur_terms_;   // per pair of blocks on a body, in on_body_ order
+  std::vector<int> schur_diagonal_;      // per row, its diagonal entry in mcp_.A's values
   BoundedMcp mcp_;
   // the impulse bounds as assembled: solve() starts from them, so bounds that a previous solve
   // of the same step lowered (the engine's speed-dependent torque limit) do not stick when the
