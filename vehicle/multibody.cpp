@@ -56,32 +56,13 @@ void MultibodySystem::assemble(double h) {
     c->add_rows(bodies_, rows_);
   }
   const int m = static_cast<int>(rows_.size());
-  // Jacobian G, block-diagonal M⁻¹
-  std::vector<Eigen::Triplet<double>> t;
-  for (int r = 0; r < m; ++r) {
-    for (const auto& blk : rows_[r].blocks) {
-      const int c0 = blk.body == kWorld ? -1 : column_.at(blk.body);
-      if (c0 < 0) continue;  // the world and fixed bodies have no columns
-      for (int k = 0; k < 6; ++k) {
-        if (blk.jacobian[k] != 0.0) t.emplace_back(r, c0 + k, blk.jacobian[k]);
-      }
-    }
-  }
-  G_.resize(m, columns_);
-  G_.setFromTriplets(t.begin(), t.end());
-  t.clear();
+  // Jacobian G and block-diagonal M⁻¹ in compressed columns
+  assemble_jacobian();
   inverse_inertia_.resize(bodies_.size());
   for (size_t i = 0; i < bodies_.size(); ++i) {
-    const int c0 = column_[i];
-    if (c0 < 0) continue;
-    for (int k = 0; k < 3; ++k) t.emplace_back(c0 + k, c0 + k, 1.0 / bodies_[i].mass);
-    const Mat3& iinv = inverse_inertia_[i] = bodies_[i].inverse_inertia_world();
-    for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 3; ++c) t.emplace_back(c0 + 3 + r, c0 + 3 + c, iinv(r, c));
-    }
+    if (column_[i] >= 0) inverse_inertia_[i] = bodies_[i].inverse_inertia_world();
   }
-  minv_.resize(columns_, columns_);
-  minv_.setFromTriplets(t.begin(), t.end());
+  assemble_inverse_mass();
   // SPOOK: Σ per row and the constraint right-hand side
   Eigen::VectorXd v(columns_);
   for (size_t i = 0; i < bodies_.size(); ++i) {
@@ -123,6 +104,81 @@ void MultibodySystem::assemble(double h) {
   }
   assembled_ = true;
   solved_ = false;
+}
+
+void MultibodySystem::assemble_jacobian() {
+  // the entries setFromTriplets made of one triplet per non-zero block entry, written straight
+  // into compressed columns (the triplets and their transposed copy were a tenth of a load-carry
+  // simulation): two blocks of one row on one body sum into one entry in block order, zeros are
+  // not stored, and each column's rows ascend. The same matrix, so the products keep their bits
+  const int m = static_cast<int>(rows_.size());
+  // each row's entries (column, value), its blocks merged, rows one after another
+  jacobian_entries_.clear();
+  jacobian_row_start_.assign(m + 1, 0);
+  for (int r = 0; r < m; ++r) {
+    const std::size_t first = jacobian_entries_.size();
+    for (const auto& blk : rows_[r].blocks) {
+      const int c0 = blk.body == kWorld ? -1 : column_.at(blk.body);
+      if (c0 < 0) continue;  // the world and fixed bodies have no columns
+      for (int k = 0; k < 6; ++k) {
+        if (blk.jacobian[k] == 0.0) continue;
+        auto same = std::find_if(jacobian_entries_.begin() + first, jacobian_entries_.end(),
+                                 [&](const JacobianEntry& e) { return e.column == c0 + k; });
+        if (same != jacobian_entries_.end()) {
+          same->value += blk.jacobian[k];
+        } else {
+          jacobian_entries_.push_back({c0 + k, blk.jacobian[k]});
+        }
+      }
+    }
+    jacobian_row_start_[r + 1] = static_cast<int>(jacobian_entries_.size());
+  }
+  // counted per column, then placed row by row, so each column's rows ascend
+  const int nnz = static_cast<int>(jacobian_entries_.size());
+  G_.resize(m, columns_);
+  G_.resizeNonZeros(nnz);
+  int* outer = G_.outerIndexPtr();
+  std::fill_n(outer, columns_ + 1, 0);
+  for (const JacobianEntry& e : jacobian_entries_) ++outer[e.column + 1];
+  for (int c = 0; c < columns_; ++c) outer[c + 1] += outer[c];
+  jacobian_fill_.assign(outer, outer + columns_);
+  for (int r = 0; r < m; ++r) {
+    for (int e = jacobian_row_start_[r]; e < jacobian_row_start_[r + 1]; ++e) {
+      const int at = jacobian_fill_[jacobian_entries_[e].column]++;
+      G_.innerIndexPtr()[at] = r;
+      G_.valuePtr()[at] = jacobian_entries_[e].value;
+    }
+  }
+}
+
+void MultibodySystem::assemble_inverse_mass() {
+  // per moving body six columns: 1/m on the linear diagonal, then the 3x3 world inverse inertia
+  // (every entry stored, zeros too, as the triplets did)
+  const int bodies_moving = columns_ / 6;
+  minv_.resize(columns_, columns_);
+  minv_.resizeNonZeros(bodies_moving * 12);
+  int* outer = minv_.outerIndexPtr();
+  int* inner = minv_.innerIndexPtr();
+  double* value = minv_.valuePtr();
+  int at = 0;
+  for (size_t i = 0; i < bodies_.size(); ++i) {
+    const int c0 = column_[i];
+    if (c0 < 0) continue;
+    for (int k = 0; k < 3; ++k) {
+      outer[c0 + k] = at;
+      inner[at] = c0 + k;
+      value[at++] = 1.0 / bodies_[i].mass;
+    }
+    const Mat3& iinv = inverse_inertia_[i];
+    for (int c = 0; c < 3; ++c) {
+      outer[c0 + 3 + c] = at;
+      for (int r = 0; r < 3; ++r) {
+        inner[at] = c0 + 3 + r;
+        value[at++] = iinv(r, c);
+      }
+    }
+  }
+  outer[columns_] = at;
 }
 
 void MultibodySystem::assemble_schur_complement() {

@@ -76,6 +76,9 @@ class MultibodySystem {
   double max_joint_angle_violation() const;
 
  private:
+  // G_ from this step's rows, minv_ from the bodies' masses and inverse_inertia_
+  void assemble_jacobian();
+  void assemble_inverse_mass();
   // mcp_.A = G M⁻¹ Gᵀ + Σ from this step's rows, Σ and the bodies' inverse masses
   void assemble_schur_complement();
   // mcp_.A's pattern and the entries each pair of blocks adds to, from on_body_ and row_bodies_
@@ -85,6 +88,11 @@ class MultibodySystem {
   struct BodyBlock {
     int row;
     Vec6 jacobian, mobility;
+  };
+  // one non-zero entry of a row of G: its velocity column and value
+  struct JacobianEntry {
+    int column;
+    double value;
   };
   // where one pair of blocks on a body adds J_p M_b⁻¹ J_qᵀ in mcp_.A's values: its entry in the
   // lower triangle and the mirrored upper one (the same on the diagonal)
@@ -104,6 +112,9 @@ class MultibodySystem {
   std::vector<int> column_;             // first velocity column of each body, -1 if fixed
   int columns_ = 0;
   Eigen::SparseMatrix<double> G_;
+  std::vector<JacobianEntry> jacobian_entries_;  // G's rows' entries, row after row (scratch)
+  std::vector<int> jacobian_row_start_;          // per row, its first entry (scratch)
+  std::vector<int> jacobian_fill_;               // per column, its next free place (scratch)
   Eigen::SparseMatrix<double> minv_;
   std::vector<Mat3> inverse_inertia_;  // per body, world frame, this step (unset for fixed bodies)
   Eigen::VectorXd sigma_, rhs_;
