@@ -112,27 +112,42 @@ void MultibodySystem::assemble_jacobian() {
   // simulation): two blocks of one row on one body sum into one entry in block order, zeros are
   // not stored, and each column's rows ascend. The same matrix, so the products keep their bits
   const int m = static_cast<int>(rows_.size());
-  // each row's entries (column, value), its blocks merged, rows one after another
-  jacobian_entries_.clear();
+  // each row's entries (column, value), its blocks merged, rows one after another; written by
+  // index into room for every block entry (a push_back of the pair stalled on its store)
+  std::size_t room = 0;
+  for (const auto& row : rows_) room += 6 * row.blocks.size();
+  jacobian_entries_.resize(room);
   jacobian_row_start_.assign(m + 1, 0);
+  int n = 0;
   for (int r = 0; r < m; ++r) {
-    const std::size_t first = jacobian_entries_.size();
-    for (const auto& blk : rows_[r].blocks) {
+    const int first = n;
+    const auto& blocks = rows_[r].blocks;
+    for (std::size_t b = 0; b < blocks.size(); ++b) {
+      const JacobianBlock& blk = blocks[b];
       const int c0 = blk.body == kWorld ? -1 : column_.at(blk.body);
       if (c0 < 0) continue;  // the world and fixed bodies have no columns
+      // only a body met earlier in the row (the driveline's shared frames) can repeat a column
+      const bool repeated = std::any_of(blocks.begin(), blocks.begin() + b,
+                                        [&](const JacobianBlock& e) { return e.body == blk.body; });
       for (int k = 0; k < 6; ++k) {
-        if (blk.jacobian[k] == 0.0) continue;
-        auto same = std::find_if(jacobian_entries_.begin() + first, jacobian_entries_.end(),
-                                 [&](const JacobianEntry& e) { return e.column == c0 + k; });
-        if (same != jacobian_entries_.end()) {
-          same->value += blk.jacobian[k];
+        const double v = blk.jacobian[k];
+        if (v == 0.0) continue;
+        int same = -1;
+        for (int e = first; repeated && e < n && same < 0; ++e) {
+          if (jacobian_entries_[e].column == c0 + k) same = e;
+        }
+        if (same >= 0) {
+          jacobian_entries_[same].value += v;
         } else {
-          jacobian_entries_.push_back({c0 + k, blk.jacobian[k]});
+          jacobian_entries_[n].column = c0 + k;
+          jacobian_entries_[n].value = v;
+          ++n;
         }
       }
     }
-    jacobian_row_start_[r + 1] = static_cast<int>(jacobian_entries_.size());
+    jacobian_row_start_[r + 1] = n;
   }
+  jacobian_entries_.resize(n);
   // counted per column, then placed row by row, so each column's rows ascend
   const int nnz = static_cast<int>(jacobian_entries_.size());
   G_.resize(m, columns_);
