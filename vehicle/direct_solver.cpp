@@ -112,8 +112,10 @@ struct DirectSolver::Impl {
     // values are copied (the machine's pattern holds for hundreds of steps; rebuilding the lower
     // triangle entry by entry each solve was a tenth of a load-carry simulation)
     if (!same_input_pattern(A)) {
+      // the analyses hold while the lower triangle's pattern does (A's upper entries may differ)
+      const std::vector<int> old_outer = std::move(lower_outer), old_inner = std::move(lower_inner);
       set_pattern(A);
-      forget_analyses();
+      if (lower_outer != old_outer || lower_inner != old_inner) forget_analyses();
       ++values;
     }
     const double* from = A.valuePtr();

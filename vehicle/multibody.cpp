@@ -149,9 +149,8 @@ void MultibodySystem::assemble_jacobian() {
   }
   jacobian_entries_.resize(n);
   // counted per column, then placed row by row, so each column's rows ascend
-  const int nnz = static_cast<int>(jacobian_entries_.size());
   G_.resize(m, columns_);
-  G_.resizeNonZeros(nnz);
+  G_.resizeNonZeros(n);
   int* outer = G_.outerIndexPtr();
   std::fill_n(outer, columns_ + 1, 0);
   for (const JacobianEntry& e : jacobian_entries_) ++outer[e.column + 1];
