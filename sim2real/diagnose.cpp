@@ -17,6 +17,7 @@
 #include "host/error.hpp"
 #include "host/interrupt.hpp"
 #include "host/parallel.hpp"
+#include "sim2real/response_surface.hpp"
 
 namespace talus::sim2real {
 
@@ -301,6 +302,9 @@ struct Scanned {
   std::vector<double> x;
   Score score;
   int parameters = 0;
+  // one parameter: every scan point's value and score, in scan order (the fit's window reuses
+  // those inside it)
+  std::vector<std::pair<double, Score>> line;
 };
 
 // a task of a parallel loop that failed with an exception other than an interrupt: what it said
@@ -1109,9 +1113,11 @@ class Search {
         failed(dr, c->label(), failure->what);
         continue;
       }
-      Scanned best{c, points[begin].x, Score{}, parameters[k]};
+      Scanned best{c, points[begin].x, Score{}, parameters[k], {}};
       for (std::size_t p = begin; p < end; ++p)
-        if (scores[p] < best.score) best = {c, points[p].x, scores[p], parameters[k]};
+        if (scores[p] < best.score) best = {c, points[p].x, scores[p], parameters[k], {}};
+      if (parameters[k] == 1)
+        for (std::size_t p = begin; p < end; ++p) best.line.emplace_back(points[p].x[0], scores[p]);
       say("  scan " + c->label() + ": best excess " + message_number(best.score.excess) + " (now " +
           message_number(current_cal_) + ", " + std::to_string(end - begin) + " points)");
       scanned.push_back(best);
@@ -1120,8 +1126,41 @@ class Search {
     return scanned;
   }
 
+  // a one-parameter candidate's window around its best scan point: the new points sampled on the
+  // calibration runs, the best sample taken as the scan's best if it scores better, and the
+  // parabola through the likelihood (log-ratio) of every sample in the window with the samples'
+  // number of local minima
+  struct WindowTrend {
+    LocalParabola parabola;
+    int local_minima = 0;
+  };
+  template <class ScoreFn>
+  WindowTrend window_trend(Scanned& s, ScoreFn& score) {
+    std::vector<double> axis;
+    for (const auto& [u, sc] : s.line) axis.push_back(u);
+    std::sort(axis.begin(), axis.end());
+    const FitWindow w = fit_window(axis, s.x[0], kWindowPointsPerSide);
+    std::vector<double> u, y;
+    for (const auto& [v, sc] : s.line)
+      if (v >= w.lo && v <= w.hi) {
+        u.push_back(v);
+        y.push_back(sc.log_ratio);
+      }
+    for (double v : w.new_points) {
+      const Score sc = score(d_.calibration, std::vector<double>{v});
+      u.push_back(v);
+      y.push_back(sc.log_ratio);
+      if (sc < s.score) {
+        s.x = {v};
+        s.score = sc;
+      }
+    }
+    return {fit_parabola(u, y, w.lo, w.hi), local_minima(u, y)};
+  }
+
   // 3. and 4.: the likelihood's optimum from the best scan point (kept only if its excess is no
-  // worse), then its excess on the held-out runs, the share it explains and its penalised score
+  // worse), then its excess on the held-out runs, the share it explains and its penalised score.
+  // One parameter: the window's trend first; a rough one's vertex is the estimate (window_trend)
   FittedEffect fit(Scanned& s) {
     int simulations = 0;  // counted here: other fits run beside this one
     const auto score = [&](const std::vector<std::size_t>& which, const std::vector<double>& x) {
@@ -1129,15 +1168,32 @@ class Search {
       return score_runs(which, s.c, x);
     };
     const bool disjoint = d_.validation != d_.calibration;
-    const double step = 0.5 / (s.parameters == 1 ? kScanPoints : kScanPointsPerAxis2);
+    double step = 0.5 / (s.parameters == 1 ? kScanPoints : kScanPointsPerAxis2);
     std::vector<double> x = s.x;
-    const int evaluations =
-        s.parameters == 1 ? kFitEvaluations : kFitEvaluationsPerParameter * s.parameters;
-    minimise([&](const std::vector<double>& y) { return score(d_.calibration, y).log_ratio; }, x,
-             step, evaluations);
-    const Score fitted = score(d_.calibration, x);
-    if (fitted.excess <= s.score.excess) s.x = x;
     FittedEffect f;
+    Score fitted;
+    // one parameter: the likelihood's trend in the window around the best scan point
+    if (s.parameters == 1) {
+      const WindowTrend trend = window_trend(s, score);
+      f.local_minima = trend.local_minima;
+      f.roughness = trend.parabola.roughness();
+      f.smoothed = trend.parabola.convex && trend.local_minima > 1;
+      x = trend.parabola.convex ? std::vector<double>{trend.parabola.vertex} : s.x;
+      step = 0.5 / kScanPoints / (kWindowPointsPerSide + 1);
+    }
+    if (f.smoothed) {
+      // rough: the trend's minimum is the estimate, whatever single samples happen to score
+      fitted = score(d_.calibration, x);
+      s.x = x;
+      s.score = fitted;
+    } else {
+      const int evaluations =
+          s.parameters == 1 ? kFitEvaluations : kFitEvaluationsPerParameter * s.parameters;
+      minimise([&](const std::vector<double>& y) { return score(d_.calibration, y).log_ratio; }, x,
+               step, evaluations);
+      fitted = score(d_.calibration, x);
+      if (fitted.excess <= s.score.excess) s.x = x;
+    }
     f.candidate = *s.c;
     const auto effect = make_candidate(*s.c, s.x, options_.plugins);
     f.effect = effect->to_json();
@@ -1164,7 +1220,11 @@ class Search {
   void say_fit(const FittedEffect& f) const {
     say("  fit " + f.spec + ": excess calibration " + message_number(f.excess_calibration) +
         ", validation " + message_number(f.excess_validation) + " (explains " +
-        message_number(100.0 * f.explained) + " % on the " + f.explained_on + " runs)");
+        message_number(100.0 * f.explained) + " % on the " + f.explained_on + " runs" +
+        (f.local_minima == 0 ? std::string()
+                             : "; window: " + std::to_string(f.local_minima) + " local minima, " +
+                                   (f.smoothed ? "the trend's minimum taken" : "refined")) +
+        ")");
   }
 
   // run i simulated with the effects found so far plus the candidates at their normalised values
@@ -1481,11 +1541,21 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
                 {"variance_share_after", share_after}};
   };
   auto fitted_json = [](const FittedEffect& f) {
-    return json{{"candidate", f.candidate.label()}, {"effect", f.effect}, {"spec", f.spec},
-                {"parameters", f.parameters}, {"excess_calibration", f.excess_calibration},
-                {"excess_validation", f.excess_validation}, {"explained", f.explained},
-                {"explained_on", f.explained_on}, {"score", f.score},
-                {"simulations", f.simulations}};
+    return json{
+        {"candidate", f.candidate.label()},
+        {"effect", f.effect},
+        {"spec", f.spec},
+        {"parameters", f.parameters},
+        {"excess_calibration", f.excess_calibration},
+        {"excess_validation", f.excess_validation},
+        {"explained", f.explained},
+        {"explained_on", f.explained_on},
+        {"score", f.score},
+        {"simulations", f.simulations},
+        {"window_local_minima", f.local_minima},
+        {"roughness",
+         std::isnan(f.roughness) || std::isinf(f.roughness) ? json(nullptr) : json(f.roughness)},
+        {"smoothed", f.smoothed}};
   };
   json found = json::array();
   for (const auto& f : d.found) found.push_back({{"name", f.effect["name"]}, {"params", f.effect["params"]}});

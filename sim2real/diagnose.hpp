@@ -17,7 +17,11 @@
 //     (derivative free, bounded; Powell 2009) in a box normalised to [0, 1] (logarithmic for
 //     ranges spanning a decade or more), at most kFitEvaluations simulations for one parameter and
 //     until convergence for more (a guard of 100 per parameter); the fit
-//     maximises the likelihood (Residuals::log_ratio), the scan and the decisions use the excess
+//     maximises the likelihood (Residuals::log_ratio), the scan and the decisions use the excess.
+//     One parameter: the window between the best scan point's neighbours is sampled first
+//     (kWindowPointsPerSide more on each side) and a parabola fitted to the likelihood there
+//     (sim2real/response_surface.hpp); where the samples have more than one local minimum (a
+//     chaotic dig) its vertex is the estimate, else BOBYQA starts from it
 //  4. validation: each fitted candidate on the held-out runs; its score is the validation excess
 //     plus kParameterPenalty per fitted parameter, so a richer effect must earn its parameters
 //     (the calibration excess when the held-out runs show nothing to explain, see 5)
@@ -53,6 +57,7 @@
 #pragma once
 #include <cstddef>
 #include <functional>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -76,6 +81,10 @@ inline constexpr int kFitted = 3;
 // singles each taken as the first of a pair when none explains enough alone
 inline constexpr int kPairCandidates = 2;
 inline constexpr int kFitEvaluations = 24;
+// a one-parameter fit samples the window between the best scan point's neighbours at this many
+// more points on each side of it (sim2real/response_surface.hpp): with the three scan points
+// there, nine samples at a quarter of the scan's spacing
+inline constexpr int kWindowPointsPerSide = 3;
 // a winner must remove this share of the excess left (on the validation runs)
 inline constexpr double kMinExplained = 0.5;
 // the excess one fitted parameter must pay for, per run (in the units of Residuals::excess: one
@@ -148,6 +157,13 @@ struct FittedEffect {
   double score = 0.0;          // excess_validation + penalty
   int simulations = 0;
   std::vector<double> x;  // its parameters in the box normalised to [0, 1] (the fit's variables)
+  // one parameter: the window's samples' local minima and their scatter about their parabola
+  // against its rise (LocalParabola::roughness; NaN for more parameters, infinite where the
+  // parabola has no minimum), and whether the estimate is the parabola's vertex (more than one
+  // minimum: rough) or the optimiser's
+  int local_minima = 0;
+  double roughness = std::numeric_limits<double>::quiet_NaN();
+  bool smoothed = false;
 };
 
 // two candidates fitted jointly (when no single one explains enough): the first taken

@@ -155,9 +155,16 @@ std::string diagnosis_report(const Diagnosis& d, const std::vector<MeasuredRun>&
                                    " % of the residual. UNEXPLAINED.\n"
                              : "None added: the baseline residual is within the noise of the data.\n");
   } else {
-    for (const auto& f : d.found)
+    for (const auto& f : d.found) {
       report << "- " << f.spec << " (explains " << std::setprecision(3) << 100.0 * f.explained
-             << " % of the excess of the " << f.explained_on << " runs)\n";
+             << " % of the excess of the " << f.explained_on << " runs)";
+      // a value read off the likelihood's trend rather than found by the optimiser
+      if (f.smoothed)
+        report << "; its value is the minimum of the likelihood's trend over the fit's window, "
+               << "whose samples had " << f.local_minima << " local minima (a rough likelihood: a "
+               << "chaotic dig)";
+      report << "\n";
+    }
     report << (d.unexplained ? "\nAn excess beyond noise remains: UNEXPLAINED in part.\n" : "\nWhat remains is within noise.\n");
   }
   report << chaos_check_note(d);

@@ -58,6 +58,28 @@ TEST(Report, NamesTheResidualTheScanWarningAndTheVerdict) {
   EXPECT_EQ(rows, 1 + kSignatureCells);  // the separator line and the cells
 }
 
+// an effect whose value is the trend's minimum over a rough window says so beside it; one the
+// optimiser found says nothing more
+TEST(Report, SaysWhenAnEffectsValueIsTheTrendOfARoughWindow) {
+  const MeasuredRun measured = reference_run();
+  Diagnosis d = one_run_diagnosis(measured, simulated_run());
+  FittedEffect f;
+  f.spec = "cylinder_friction:force=12100";
+  f.explained = 0.6;
+  f.explained_on = "validation";
+  f.local_minima = 1;
+  d.found = {f};
+  EXPECT_EQ(diagnosis_report(d, {measured}).find("local minima"), std::string::npos);
+  d.found[0].local_minima = 3;
+  d.found[0].smoothed = true;
+  const std::string report = diagnosis_report(d, {measured});
+  EXPECT_NE(report.find("- cylinder_friction:force=12100 (explains 60 % of the excess of the "
+                        "validation runs); its value is the minimum of the likelihood's trend over "
+                        "the fit's window, whose samples had 3 local minima"),
+            std::string::npos)
+      << report;
+}
+
 // a residual judged against a simulation's spread says so under its table, with the spread's
 // share per channel (and its degrees of freedom, where estimated); one judged against the sensor
 // noise alone says nothing more
