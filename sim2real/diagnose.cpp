@@ -12,6 +12,7 @@
 #include <exception>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <sstream>
 
 #include "host/error.hpp"
@@ -304,7 +305,7 @@ struct Scanned {
   int parameters = 0;
   // one parameter: every scan point's value and score, in scan order (the fit's window reuses
   // those inside it)
-  std::vector<std::pair<double, Score>> line;
+  std::vector<std::pair<double, Score>> scan_line;
 };
 
 // a task of a parallel loop that failed with an exception other than an interrupt: what it said
@@ -1117,7 +1118,8 @@ class Search {
       for (std::size_t p = begin; p < end; ++p)
         if (scores[p] < best.score) best = {c, points[p].x, scores[p], parameters[k], {}};
       if (parameters[k] == 1)
-        for (std::size_t p = begin; p < end; ++p) best.line.emplace_back(points[p].x[0], scores[p]);
+        for (std::size_t p = begin; p < end; ++p)
+          best.scan_line.emplace_back(points[p].x[0], scores[p]);
       say("  scan " + c->label() + ": best excess " + message_number(best.score.excess) + " (now " +
           message_number(current_cal_) + ", " + std::to_string(end - begin) + " points)");
       scanned.push_back(best);
@@ -1127,21 +1129,13 @@ class Search {
   }
 
   // a one-parameter candidate's window around its best scan point: the new points sampled on the
-  // calibration runs, the best sample taken as the scan's best if it scores better, and the
-  // parabola through the likelihood (log-ratio) of every sample in the window with the samples'
-  // number of local minima
-  struct WindowTrend {
-    LocalParabola parabola;
-    int local_minima = 0;
-  };
+  // calibration runs (the best sample taken as the scan's best if it scores better) and the trend
+  // of the likelihood (log-ratio) over every sample in the window; none where a sample's
+  // likelihood is not finite. `s.x` must be a scan point: fit() calls this once per Scanned
   template <class ScoreFn>
-  WindowTrend window_trend(Scanned& s, ScoreFn& score) {
-    std::vector<double> axis;
-    for (const auto& [u, sc] : s.line) axis.push_back(u);
-    std::sort(axis.begin(), axis.end());
-    const FitWindow w = fit_window(axis, s.x[0], kWindowPointsPerSide);
+  std::optional<WindowTrend> sample_window(Scanned& s, const FitWindow& w, ScoreFn& score) {
     std::vector<double> u, y;
-    for (const auto& [v, sc] : s.line)
+    for (const auto& [v, sc] : s.scan_line)
       if (v >= w.lo && v <= w.hi) {
         u.push_back(v);
         y.push_back(sc.log_ratio);
@@ -1155,12 +1149,14 @@ class Search {
         s.score = sc;
       }
     }
-    return {fit_parabola(u, y, w.lo, w.hi), local_minima(u, y)};
+    if (!std::all_of(y.begin(), y.end(), [](double v) { return std::isfinite(v); }))
+      return std::nullopt;
+    return window_trend(u, y, w);
   }
 
   // 3. and 4.: the likelihood's optimum from the best scan point (kept only if its excess is no
   // worse), then its excess on the held-out runs, the share it explains and its penalised score.
-  // One parameter: the window's trend first; a rough one's vertex is the estimate (window_trend)
+  // One parameter: the window's trend first; a rough one's vertex is the estimate (sample_window)
   FittedEffect fit(Scanned& s) {
     int simulations = 0;  // counted here: other fits run beside this one
     const auto score = [&](const std::vector<std::size_t>& which, const std::vector<double>& x) {
@@ -1172,16 +1168,24 @@ class Search {
     std::vector<double> x = s.x;
     FittedEffect f;
     Score fitted;
-    // one parameter: the likelihood's trend in the window around the best scan point
+    // one parameter: the likelihood's trend in the window around the best scan point; the
+    // optimiser's first step half the window's spacing between samples
     if (s.parameters == 1) {
-      const WindowTrend trend = window_trend(s, score);
-      f.local_minima = trend.local_minima;
-      f.roughness = trend.parabola.roughness();
-      f.smoothed = trend.parabola.convex && trend.local_minima > 1;
-      x = trend.parabola.convex ? std::vector<double>{trend.parabola.vertex} : s.x;
-      step = 0.5 / kScanPoints / (kWindowPointsPerSide + 1);
+      std::vector<double> axis;
+      for (const auto& [u, sc] : s.scan_line) axis.push_back(u);
+      std::sort(axis.begin(), axis.end());
+      const FitWindow w = fit_window(axis, s.x[0], kWindowPointsPerSide);
+      const std::optional<WindowTrend> trend = sample_window(s, w, score);
+      x = s.x;
+      if (trend) {
+        f.local_minima = trend->local_minima;
+        f.roughness = trend->parabola.roughness();
+        f.trend_estimate = trend->rough();
+        if (trend->parabola.convex) x = {trend->parabola.vertex};
+      }
+      step = 0.5 * w.spacing;
     }
-    if (f.smoothed) {
+    if (f.trend_estimate) {
       // rough: the trend's minimum is the estimate, whatever single samples happen to score
       fitted = score(d_.calibration, x);
       s.x = x;
@@ -1221,9 +1225,10 @@ class Search {
     say("  fit " + f.spec + ": excess calibration " + message_number(f.excess_calibration) +
         ", validation " + message_number(f.excess_validation) + " (explains " +
         message_number(100.0 * f.explained) + " % on the " + f.explained_on + " runs" +
-        (f.local_minima == 0 ? std::string()
-                             : "; window: " + std::to_string(f.local_minima) + " local minima, " +
-                                   (f.smoothed ? "the trend's minimum taken" : "refined")) +
+        (f.parameters != 1 || f.local_minima == 0
+             ? std::string()
+             : "; window: " + std::to_string(f.local_minima) + " local minima, " +
+                   (f.trend_estimate ? "the trend's minimum taken" : "refined")) +
         ")");
   }
 
@@ -1555,7 +1560,7 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
         {"window_local_minima", f.local_minima},
         {"roughness",
          std::isnan(f.roughness) || std::isinf(f.roughness) ? json(nullptr) : json(f.roughness)},
-        {"smoothed", f.smoothed}};
+        {"trend_estimate", f.trend_estimate}};
   };
   json found = json::array();
   for (const auto& f : d.found) found.push_back({{"name", f.effect["name"]}, {"params", f.effect["params"]}});

@@ -157,13 +157,13 @@ struct FittedEffect {
   double score = 0.0;          // excess_validation + penalty
   int simulations = 0;
   std::vector<double> x;  // its parameters in the box normalised to [0, 1] (the fit's variables)
-  // one parameter: the window's samples' local minima and their scatter about their parabola
-  // against its rise (LocalParabola::roughness; NaN for more parameters, infinite where the
-  // parabola has no minimum), and whether the estimate is the parabola's vertex (more than one
-  // minimum: rough) or the optimiser's
+  // one parameter: the window's samples' local minima (0: no window) and their scatter about
+  // their parabola against its rise (LocalParabola::roughness; NaN without a window, infinite
+  // where the parabola has no minimum; JSON null for both), and whether the estimate is the
+  // parabola's vertex (WindowTrend::rough) or the optimiser's
   int local_minima = 0;
   double roughness = std::numeric_limits<double>::quiet_NaN();
-  bool smoothed = false;
+  bool trend_estimate = false;
 };
 
 // two candidates fitted jointly (when no single one explains enough): the first taken

@@ -159,7 +159,7 @@ std::string diagnosis_report(const Diagnosis& d, const std::vector<MeasuredRun>&
       report << "- " << f.spec << " (explains " << std::setprecision(3) << 100.0 * f.explained
              << " % of the excess of the " << f.explained_on << " runs)";
       // a value read off the likelihood's trend rather than found by the optimiser
-      if (f.smoothed)
+      if (f.trend_estimate)
         report << "; its value is the minimum of the likelihood's trend over the fit's window, "
                << "whose samples had " << f.local_minima << " local minima (a rough likelihood: a "
                << "chaotic dig)";

@@ -24,6 +24,7 @@ FitWindow fit_window(const std::vector<double>& axis, double best, int per_side)
   for (int k = 1; k <= per_side; ++k)
     w.new_points.push_back(best + (w.hi - best) * k / (per_side + 1));
   if (at + 1 == axis.end() && w.hi > best) w.new_points.push_back(w.hi);
+  w.spacing = std::min(best - w.lo, w.hi - best) / (per_side + 1);
   return w;
 }
 
@@ -55,7 +56,9 @@ LocalParabola fit_parabola(const std::vector<double>& u, const std::vector<doubl
   p.convex = coef(2) > 0.0;
   if (!p.convex) return p;
   // its minimum in the window, and how far it climbs from there to the farther end
-  const double t_min = std::clamp(-coef(1) / (2.0 * coef(2)), -1.0, 1.0);
+  const double t_free = -coef(1) / (2.0 * coef(2));
+  const double t_min = std::clamp(t_free, -1.0, 1.0);
+  p.clamped = t_min != t_free;
   p.vertex = centre + half * t_min;
   p.at_vertex = value(t_min);
   p.rise = std::max(value(-1.0), value(1.0)) - p.at_vertex;
@@ -64,6 +67,8 @@ LocalParabola fit_parabola(const std::vector<double>& u, const std::vector<doubl
 
 int local_minima(const std::vector<double>& u, const std::vector<double>& y) {
   if (u.size() != y.size()) throw Error("local_minima: as many u as y");
+  for (double v : y)
+    if (!std::isfinite(v)) throw Error("local_minima: a sample is not finite");
   // the samples in the order of u
   std::vector<std::size_t> order(u.size());
   for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
@@ -82,6 +87,13 @@ int local_minima(const std::vector<double>& u, const std::vector<double>& y) {
   // after the last sample: as if rising out of it
   if (last < 0) ++minima;
   return minima;
+}
+
+bool WindowTrend::rough() const { return parabola.convex && !parabola.clamped && local_minima > 1; }
+
+WindowTrend window_trend(const std::vector<double>& u, const std::vector<double>& y,
+                         const FitWindow& window) {
+  return {fit_parabola(u, y, window.lo, window.hi), local_minima(u, y)};
 }
 
 }  // namespace talus::sim2real

@@ -71,7 +71,7 @@ TEST(Report, SaysWhenAnEffectsValueIsTheTrendOfARoughWindow) {
   d.found = {f};
   EXPECT_EQ(diagnosis_report(d, {measured}).find("local minima"), std::string::npos);
   d.found[0].local_minima = 3;
-  d.found[0].smoothed = true;
+  d.found[0].trend_estimate = true;
   const std::string report = diagnosis_report(d, {measured});
   EXPECT_NE(report.find("- cylinder_friction:force=12100 (explains 60 % of the excess of the "
                         "validation runs); its value is the minimum of the likelihood's trend over "

@@ -44,6 +44,29 @@ TEST(FitWindow, SpansTheBestPointsNeighboursWithEvenlySpacedNewPoints) {
   EXPECT_TRUE(std::is_sorted(w.new_points.begin(), w.new_points.end()));
 }
 
+TEST(FitWindow, NearZeroTheSpacingIsTheNarrowerSidesAndTheOptimisersStepHalfOfIt) {
+  // a range from zero: three points towards zero, each a quarter of the one before (as
+  // sim2real/diagnose scan_axis makes them), then the nine centres
+  std::vector<double> axis;
+  for (int j = 3; j >= 1; --j) axis.push_back((0.5 / 9.0) / std::pow(4.0, j));
+  for (double c : nine_centres()) axis.push_back(c);
+  const FitWindow w = fit_window(axis, axis[1], 3);
+  EXPECT_DOUBLE_EQ(w.lo, axis[0]);
+  EXPECT_DOUBLE_EQ(w.hi, axis[2]);
+  EXPECT_DOUBLE_EQ(w.spacing, (axis[1] - axis[0]) / 4.0);
+  ASSERT_EQ(w.new_points.size(), 6u);
+  EXPECT_TRUE(std::is_sorted(w.new_points.begin(), w.new_points.end()));
+  EXPECT_GT(w.new_points.front(), w.lo);
+  EXPECT_LT(w.new_points.back(), w.hi);
+  // the first point: the window reaches down to zero, which is sampled
+  const FitWindow first = fit_window(axis, axis[0], 3);
+  EXPECT_EQ(first.lo, 0.0);
+  EXPECT_EQ(first.new_points.front(), 0.0);
+  EXPECT_DOUBLE_EQ(first.spacing, axis[0] / 4.0);
+  // an interior window of the centres: a quarter of the scan's spacing
+  EXPECT_NEAR(fit_window(axis, axis[7], 3).spacing, 1.0 / 36.0, 1e-15);
+}
+
 TEST(FitWindow, AtAnEndOfTheScanTheRangesBoundIsSampled) {
   const std::vector<double> axis = nine_centres();
   const FitWindow first = fit_window(axis, axis.front(), 3);
@@ -85,6 +108,8 @@ TEST(FitParabola, AConcaveTrendHasNoMinimumAndAVertexOutsideIsClamped) {
   const LocalParabola p = fit_parabola(u, y, 0.0, 1.0);
   ASSERT_TRUE(p.convex);
   EXPECT_DOUBLE_EQ(p.vertex, 1.0);
+  EXPECT_TRUE(p.clamped);
+  EXPECT_FALSE(fit_parabola(u, {0.3, 0.1, 0.0, 0.1, 0.3}, 0.0, 1.0).clamped);
   // fewer than three distinct points determine no parabola
   EXPECT_THROW(fit_parabola({0.2, 0.2, 0.4}, {1.0, 1.0, 2.0}, 0.0, 1.0), Error);
   EXPECT_THROW(fit_parabola({0.2, 0.4}, {1.0, 2.0}, 0.0, 1.0), Error);
@@ -106,6 +131,50 @@ TEST(LocalMinima, OneForATrendHoweverSharpSeveralForARoughOne) {
   EXPECT_EQ(local_minima({0.0, 0.5, 1.0}, {0.0, 1.0, 0.0}), 2);
   EXPECT_EQ(local_minima({0.0, 0.25, 0.5, 0.75, 1.0}, {2.0, 1.0, 1.0, 1.0, 2.0}), 1);
   EXPECT_EQ(local_minima({0.0, 0.5, 1.0}, {1.0, 1.0, 1.0}), 1);
+  EXPECT_THROW(local_minima({0.0, 0.5, 1.0}, {1.0, std::nan(""), 1.0}), Error);
+}
+
+// the fit's decision on the samples of a real window (the scan's three points and six new ones):
+// a smooth trend is refined; the same trend with a rough part takes the vertex, near the trend's
+// minimum; a rough trend still falling at the window's edge, or one without a minimum, is refined
+TEST(WindowTrend, TheVertexIsTheEstimateOnlyForARoughTrendWithItsMinimumInside) {
+  std::mt19937_64 rng = fresh_rng();
+  const std::vector<double> axis = nine_centres();
+  const FitWindow w = fit_window(axis, axis[4], 3);
+  std::vector<double> u = {axis[3], axis[4], axis[5]};
+  u.insert(u.end(), w.new_points.begin(), w.new_points.end());
+  std::uniform_real_distribution<double> where(axis[4] - 0.03, axis[4] + 0.03);
+  const double truth = where(rng);
+  // the likelihood's shape, the log of a squared residual over the noise
+  const auto trend = [&](double v) { return std::log(1.0 + 400.0 * (v - truth) * (v - truth)); };
+  std::vector<double> smooth, rough;
+  for (double v : u) smooth.push_back(trend(v));
+  // a rough part of alternating sign in the order of u (a chaotic dig's), a quarter of the rise
+  std::vector<double> sorted_u = u;
+  std::sort(sorted_u.begin(), sorted_u.end());
+  const double rise = trend(w.hi) > trend(w.lo) ? trend(w.hi) : trend(w.lo);
+  for (double v : u) {
+    const auto rank = std::find(sorted_u.begin(), sorted_u.end(), v) - sorted_u.begin();
+    rough.push_back(trend(v) + (rank % 2 == 0 ? 0.25 : -0.25) * rise);
+  }
+  const WindowTrend refined = window_trend(u, smooth, w);
+  EXPECT_EQ(refined.local_minima, 1);
+  EXPECT_FALSE(refined.rough());
+  const WindowTrend taken = window_trend(u, rough, w);
+  EXPECT_GT(taken.local_minima, 1);
+  ASSERT_TRUE(taken.rough());
+  EXPECT_NEAR(taken.parabola.vertex, truth, 0.25 * (w.hi - w.lo)) << "truth " << truth;
+  // the same rough part on a trend whose minimum lies beyond the window (0.2 above it): refined
+  // from the edge
+  std::vector<double> falling;
+  for (std::size_t k = 0; k < u.size(); ++k) {
+    const double beyond = u[k] - (w.hi + 0.2);
+    falling.push_back(rough[k] - trend(u[k]) + 30.0 * beyond * beyond);
+  }
+  const WindowTrend edge = window_trend(u, falling, w);
+  EXPECT_GT(edge.local_minima, 1);
+  EXPECT_TRUE(edge.parabola.clamped);
+  EXPECT_FALSE(edge.rough());
 }
 
 // what the window is for: on a trend with a rough part as large as a quarter of its rise across
