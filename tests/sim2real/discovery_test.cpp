@@ -12,6 +12,7 @@
 #include <random>
 
 #include "host/error.hpp"
+#include "synthetic_runs.hpp"
 #include "vehicle/learned_correction.hpp"
 #include "vehicle/scenario.hpp"
 
@@ -20,11 +21,7 @@ namespace {
 
 using vehicle::CorrectionKind;
 
-unsigned fresh_seed() {
-  const unsigned seed = std::random_device{}();
-  std::cerr << "seed " << seed << "\n";
-  return seed;
-}
+using test::fresh_rng;
 
 // index of a dictionary feature by name
 Eigen::Index feature_index(CorrectionKind kind, const std::string& name) {
@@ -71,7 +68,7 @@ RegressionData synthetic(std::mt19937_64& rng,
 }
 
 TEST(Discovery, EliminationPathKeepsTheTrueTermsAmongCollinearOnes) {
-  std::mt19937_64 rng(fresh_seed());
+  std::mt19937_64 rng = fresh_rng();
   // a leakage with pressure: Δu = −2e-7 F sign(u); sign(u), u and u|u| are nearly collinear here
   const RegressionData d = synthetic(rng, {{"force_sign_command", -2e-7}}, 0.005);
   const auto path = elimination_path(d.features, d.residual);
@@ -99,7 +96,7 @@ TEST(Discovery, FitFindsASparseTruthAndItsIntervalsCoverIt) {
   // 1.5 s leave sign(u) and the dictionary's dead bands clip(u, ±δ₀) nearly proportional (they
   // differ only on a command held inside ±δ₀), so a dead-band term naming sign(u) as its alias is
   // the right term, and its truth is c sign(u) written in that feature
-  std::mt19937_64 rng(fresh_seed());
+  std::mt19937_64 rng = fresh_rng();
   std::uniform_real_distribution<double> u(0.5, 1.5);
   int covered = 0, coefficients = 0, right = 0;
   for (int draw = 0; draw < 50; ++draw) {
@@ -142,7 +139,7 @@ TEST(Discovery, FeaturesTheDataCannotSeparateAreNamedAsAliases) {
   // the lift under a constant load: f_lift·sign(u) is 1.5e5 sign(u) exactly, so whichever of the
   // two the fit keeps, the other is its alias and the expression says so (commands held outside
   // ±0.01 m/s make a dead band clip(u, ±δ₀) a third such feature: kept, it names both)
-  std::mt19937_64 rng(fresh_seed());
+  std::mt19937_64 rng = fresh_rng();
   RegressionData d = synthetic(rng, {{"sign_command", -0.03}}, 0.005);
   const Eigen::Index sign = feature_index(CorrectionKind::actuator, "sign_command");
   const Eigen::Index force_sign = feature_index(CorrectionKind::actuator, "force_sign_command");
@@ -161,7 +158,7 @@ TEST(Discovery, FeaturesTheDataCannotSeparateAreNamedAsAliases) {
 
 TEST(Discovery, NoiseAloneGivesNoTerms) {
   // over several fresh draws: nothing cuts the held-out error of pure noise by 5 %
-  std::mt19937_64 rng(fresh_seed());
+  std::mt19937_64 rng = fresh_rng();
   for (int draw = 0; draw < 5; ++draw) {
     const RegressionData d = synthetic(rng, {}, 0.01);
     const DiscoveredCorrection c = fit_correction({CorrectionKind::actuator, "tilt"}, d);
@@ -287,7 +284,7 @@ TEST(Discovery, ACylindersFeaturesAreMeansOverItsRatesWindow) {
 }
 
 TEST(Discovery, JsonCarriesTheEquationCoefficientsAndIntervals) {
-  std::mt19937_64 rng(fresh_seed());
+  std::mt19937_64 rng = fresh_rng();
   const RegressionData d = synthetic(rng, {{"force", -1e-7}}, 0.002);
   DiscoveredCorrection c = fit_correction({CorrectionKind::actuator, "tilt"}, d);
   ASSERT_EQ(c.terms.size(), 1u) << c.expression;

@@ -15,12 +15,7 @@
 namespace talus::sim2real {
 namespace {
 
-// a fresh seed every run, printed so that a failure can be replayed
-std::mt19937_64 fresh_rng() {
-  const unsigned seed = std::random_device{}();
-  std::printf("[ seed     ] %u\n", seed);
-  return std::mt19937_64(seed);
-}
+using test::fresh_rng;
 
 // a measured run: the reference series with white noise of `sigma` on every channel but t
 sim2real::Run noisy_reference(double sigma_fraction, std::mt19937_64& rng) {

@@ -12,19 +12,17 @@
 #include <vector>
 
 #include "host/error.hpp"
+#include "synthetic_runs.hpp"
 
 namespace talus::sim2real {
 namespace {
 
-std::mt19937_64 fresh_rng() {
-  const unsigned seed = std::random_device{}();
-  std::printf("[ seed     ] %u\n", seed);
-  return std::mt19937_64(seed);
-}
+using test::fresh_rng;
 
 // the coarse scan's cell centres of nine cells, as sim2real/diagnose scans one parameter
 std::vector<double> nine_centres() {
   std::vector<double> axis;
+  axis.reserve(9);
   for (int i = 0; i < 9; ++i) axis.push_back((i + 0.5) / 9.0);
   return axis;
 }
@@ -100,6 +98,7 @@ TEST(FitParabola, FindsAnExactParabolasMinimumWithNoRoughness) {
 TEST(FitParabola, AConcaveTrendHasNoMinimumAndAVertexOutsideIsClamped) {
   const std::vector<double> u = {0.0, 0.25, 0.5, 0.75, 1.0};
   std::vector<double> y;
+  y.reserve(u.size());
   for (double v : u) y.push_back(-(v - 0.5) * (v - 0.5));
   EXPECT_FALSE(fit_parabola(u, y, 0.0, 1.0).convex);
   // a minimum at 1.5, beyond the window [0, 1]: the estimate stops at the window's end
@@ -120,6 +119,7 @@ TEST(LocalMinima, OneForATrendHoweverSharpSeveralForARoughOne) {
   // parabola, one minimum; samples given out of order
   const std::vector<double> u = {0.5, 0.0, 0.125, 0.25, 0.375, 0.625, 0.75, 0.875, 1.0};
   std::vector<double> y;
+  y.reserve(u.size());
   for (double v : u) y.push_back(std::log(1e-4 + (v - 0.41) * (v - 0.41)));
   EXPECT_EQ(local_minima(u, y), 1);
   // the same with a rough part: a dip beside the optimum is a second minimum

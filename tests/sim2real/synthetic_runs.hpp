@@ -4,7 +4,9 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
+#include <random>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -15,6 +17,13 @@ namespace talus::test {
 
 namespace fs = std::filesystem;
 using sim2real::Channel;
+
+// a generator with a fresh seed every run, the seed printed so that a failure can be replayed
+inline std::mt19937_64 fresh_rng() {
+  const unsigned seed = std::random_device{}();
+  std::printf("[ seed     ] %u\n", seed);
+  return std::mt19937_64(seed);
+}
 
 // a fresh directory per test (ctest may run tests in parallel)
 inline fs::path fresh_temp_dir(const std::string& tag) {
