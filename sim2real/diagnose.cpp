@@ -1546,21 +1546,19 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
                 {"variance_share_after", share_after}};
   };
   auto fitted_json = [](const FittedEffect& f) {
-    return json{
-        {"candidate", f.candidate.label()},
-        {"effect", f.effect},
-        {"spec", f.spec},
-        {"parameters", f.parameters},
-        {"excess_calibration", f.excess_calibration},
-        {"excess_validation", f.excess_validation},
-        {"explained", f.explained},
-        {"explained_on", f.explained_on},
-        {"score", f.score},
-        {"simulations", f.simulations},
-        {"window_local_minima", f.local_minima},
-        {"roughness",
-         std::isnan(f.roughness) || std::isinf(f.roughness) ? json(nullptr) : json(f.roughness)},
-        {"trend_estimate", f.trend_estimate}};
+    return json{{"candidate", f.candidate.label()},
+                {"effect", f.effect},
+                {"spec", f.spec},
+                {"parameters", f.parameters},
+                {"excess_calibration", f.excess_calibration},
+                {"excess_validation", f.excess_validation},
+                {"explained", f.explained},
+                {"explained_on", f.explained_on},
+                {"score", f.score},
+                {"simulations", f.simulations},
+                {"window_local_minima", f.local_minima},
+                {"roughness", std::isfinite(f.roughness) ? json(f.roughness) : json(nullptr)},
+                {"trend_estimate", f.trend_estimate}};
   };
   json found = json::array();
   for (const auto& f : d.found) found.push_back({{"name", f.effect["name"]}, {"params", f.effect["params"]}});
