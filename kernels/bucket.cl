@@ -164,9 +164,12 @@ void bucket_twist_change3(const float* M, int stride, float3 x, float3* dv, floa
 // solve_contact, with the bucket's side through W instead of a diagonal mass (G and G n of the
 // row above, the rolling part through W's last three columns). The row's impulses, the
 // particle's velocity and omega (w: inverse mass and inertia) and the bucket's twist are
-// updated in place.
-void bucket_row_solve(TlRow* row, float4* velocity, float4* omega, const float* W, const float* G,
-                      float3* vb, float3* wb) {
+// updated in place. A kinematic tool (`moves` 0, a literal where it is inlined) skips the
+// twist's updates, which for W = 0 add zero products: W and G are not read (may be null) and
+// the twist stays as given, up to the sign of a zero (issue 14: a fifth of the type-G sweeps'
+// time went to those products and to zeroing W and G for every particle and sweep)
+TL_INLINE void tool_row_solve(TlRow* row, float4* velocity, float4* omega, const float* W,
+                              const float* G, float3* vb, float3* wb, int moves) {
   float3 va = velocity->xyz, wa = omega->xyz;
   float ima = velocity->w, iia = omega->w;
   float3 n = row->normal.xyz;
@@ -180,8 +183,10 @@ void bucket_row_solve(TlRow* row, float4* velocity, float4* omega, const float* 
   float ln_new = normal_impulse(ln, ROW_RHS(*row), un, ROW_SIGMA(*row), ROW_INV_DN(*row), 0.0f);
   float dln = ln_new - ln;
   va -= ima * dln * n;
-  *vb += dln * (float3)(G[18], G[19], G[20]);
-  *wb += dln * (float3)(G[21], G[22], G[23]);
+  if (moves) {
+    *vb += dln * (float3)(G[18], G[19], G[20]);
+    *wb += dln * (float3)(G[21], G[22], G[23]);
+  }
   ln = ln_new;
 
   // friction on the disc mu lambda_n
@@ -192,7 +197,7 @@ void bucket_row_solve(TlRow* row, float4* velocity, float4* omega, const float* 
   float3 dlt = lt_new - lt;
   va -= ima * dlt;
   wa -= iia * cross(arm_a, dlt);
-  bucket_twist_change3(G, 3, dlt, vb, wb);
+  if (moves) bucket_twist_change3(G, 3, dlt, vb, wb);
 
   // rolling (on the disc) and twist (about n), both bounded by mu_r R* lambda_n
   float3 wrel = *wb - wa;
@@ -200,12 +205,18 @@ void bucket_row_solve(TlRow* row, float4* velocity, float4* omega, const float* 
   float3 lr_new = rolling_impulse(lr, wrel, n, ROW_INV_DR(*row), ROW_ROLLING_LIMIT(*row) * ln);
   float3 dlr = lr_new - lr;
   wa -= iia * dlr;
-  bucket_twist_change3(W + 3, 6, dlr, vb, wb);
+  if (moves) bucket_twist_change3(W + 3, 6, dlr, vb, wb);
 
   row->impulse_t = (float4)(lt_new, ln);
   row->impulse_r = (float4)(lr_new, ROW_INV_DT(*row));
   *velocity = (float4)(va, ima);
   *omega = (float4)(wa, iia);
+}
+
+// one row against the loaded bucket (its mobility W, the row's coupling G)
+void bucket_row_solve(TlRow* row, float4* velocity, float4* omega, const float* W, const float* G,
+                      float3* vb, float3* wb) {
+  tool_row_solve(row, velocity, omega, W, G, vb, wb, 1);
 }
 
 // one sweep over the bucket rows in order (bucket_row_solve each), chunk by chunk as above.
@@ -265,7 +276,7 @@ __kernel void bucket_sweep(__global TlRow* rows, int n_rows, __global float4* ve
 // particles cannot move the tool, so a row changes its particle alone and the rows of different
 // particles do not depend on one another. The serial walk above is then only a walk per particle:
 // each particle's rows (of every kinematic tool, in the walk's order: tool by tool, row by row)
-// are a group, and a work-item per group walks them with bucket_row_solve, W and G zero and the
+// are a group, and a work-item per group walks them with tool_row_solve, W and G not read and the
 // tool's twist as given (the serial walk adds W's zero products to it). The particle's arithmetic
 // is the serial walk's, so the results are its bits (up to the sign of a zero velocity), with as
 // many work-items as particles touch a tool (solvers/kinematic_tool_rows).
@@ -281,16 +292,12 @@ void kinematic_group_sweep(int g, __global TlRow* rows, __global const int* grou
   int a = rows[begin].a;
   float4 va = velocity[a];
   float4 wa = omega[a];
-  // what the tool's mobility and the rows' couplings are for a kinematic tool
-  float W[36];
-  float G[TL_COUPLING_FLOATS];
-  for (int i = 0; i < 36; ++i) W[i] = 0.0f;
-  for (int i = 0; i < TL_COUPLING_FLOATS; ++i) G[i] = 0.0f;
   for (int r = begin; r < end; ++r) {
     TlRow row = rows[r];
     float3 vb = tools[row_tool[r]].velocity.xyz;
     float3 wb = tools[row_tool[r]].omega.xyz;
-    bucket_row_solve(&row, &va, &wa, W, G, &vb, &wb);
+    // a kinematic tool: no mobility, no coupling, the twist as given
+    tool_row_solve(&row, &va, &wa, 0, 0, &vb, &wb, 0);
     rows[r].impulse_t = row.impulse_t;
     rows[r].impulse_r = row.impulse_r;
   }

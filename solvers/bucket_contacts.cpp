@@ -36,6 +36,14 @@ bool better(const Candidate& x, const Candidate& y) {
   return x.dist < y.dist || (x.dist == y.dist && x.tri < y.tri);
 }
 
+// whether p lies outside triangle t's bounds grown by kTouch: then it is farther than kTouch
+// from the triangle, a cheaper test than its closest point that decides the same
+bool beyond_touch(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 lo = a.cwiseMin(b).cwiseMin(c).array() - kTouch;
+  const Vec3 hi = a.cwiseMax(b).cwiseMax(c).array() + kTouch;
+  return (p.array() < lo.array()).any() || (p.array() > hi.array()).any();
+}
+
 // keeps the local minima of the distance over the surface: a candidate whose closest point lies
 // on a better candidate's triangle (a shared edge or vertex with a nearer neighbour, or the same
 // point found twice) is not one. `cands` sorted by triangle index; vertices in the query's frame.
@@ -47,6 +55,9 @@ std::vector<Candidate> local_minima(const std::vector<Candidate>& cands, const s
     for (size_t j = 0; j < cands.size() && !drop; ++j) {
       if (j == i || !better(cands[j], cands[i])) continue;
       const auto& t = tris[cands[j].tri];
+      // most better candidates are far triangles of a large bucket's range (issue 14: a type-G
+      // step spent a tenth of its host time on their closest points)
+      if (beyond_touch(cands[i].cp.point, v[t[0]], v[t[1]], v[t[2]])) continue;
       // (candidates come from triangles with area alone: the scene and the brute force skip
       // the others)
       const Vec3 q =

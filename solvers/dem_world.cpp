@@ -100,6 +100,7 @@ void DemWorld::set_material(const Material& material) {
 
 void DemWorld::set_geoms(std::vector<StaticGeom> geoms, GeomChange change) {
   geoms_ = std::move(geoms);
+  ++geoms_version_;
   std::vector<TlGeom> g;
   for (auto& s : geoms_) g.push_back(to_device(s));
   if (g.empty()) g.push_back(TlGeom{});  // keep the buffer non-empty; params.geoms stays 0
@@ -168,6 +169,11 @@ void DemWorld::update_params() {
 void DemWorld::bin_geoms() {
   const TlStepParams& p = params_;
   const int nx = p.grid_nx, ny = p.grid_ny;
+  // the lists on the device are those of this geometry and these columns already
+  const GeomBinning key{geoms_version_,     p.cell_size, p.grid_origin.s[0],
+                        p.grid_origin.s[1], nx,          ny};
+  if (binned_for_ == key) return;
+  binned_for_ = key;
   const double cell = p.cell_size;
   const Vec3 origin(p.grid_origin.s[0], p.grid_origin.s[1], p.grid_origin.s[2]);
   // the columns a geometry can reach: its bounds grown by one cell, which holds the farthest a

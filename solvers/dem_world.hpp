@@ -6,7 +6,9 @@
 // double-precision twin in solvers/dem_reference.hpp.
 #pragma once
 #include <chrono>
+#include <cstdint>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "host/binary.hpp"
@@ -142,6 +144,21 @@ class DemWorld {
   DemSettings settings_;
   Bounds bounds_;
   std::vector<StaticGeom> geoms_;
+  // what the columns' lists were binned for: the geometry (set_geoms counts its versions) and the
+  // grid's columns. update_params runs at every change of particles, geometry or settings and
+  // at every step; binning only when these changed saves a type-G step two of its three binnings
+  // of the same boxes (issue 14)
+  struct GeomBinning {
+    std::uint64_t geoms_version = 0;
+    float cell_size = 0.0f, origin_x = 0.0f, origin_y = 0.0f;
+    int nx = 0, ny = 0;
+    bool operator==(const GeomBinning& o) const {
+      return geoms_version == o.geoms_version && cell_size == o.cell_size &&
+             origin_x == o.origin_x && origin_y == o.origin_y && nx == o.nx && ny == o.ny;
+    }
+  };
+  std::uint64_t geoms_version_ = 0;
+  std::optional<GeomBinning> binned_for_;
   TlStepParams params_{};
   size_t particle_count_ = 0;
   double max_radius_ = 0.0;

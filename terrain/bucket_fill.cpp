@@ -99,8 +99,16 @@ bool in_heaped_volume(const vehicle::BucketMesh& mesh, const Vec3& local) {
 std::vector<int> particles_in_bucket(const Particles& particles, const vehicle::BucketMesh& mesh,
                                      const BucketPose& pose) {
   std::vector<int> out;
-  for (size_t i = 0; i < particles.size(); ++i)
-    if (in_heaped_volume(mesh, pose.to_local(particles.position[i]))) out.push_back(static_cast<int>(i));
+  if (mesh.profile.size() < 3) return out;
+  // a centre outside the box that holds the heaped volume is not in it: the box first (a type-G
+  // step asks for every particle of the zone, most of them ahead of the bucket: issue 14)
+  const Aabb bounds = heaped_bounds(mesh);
+  for (size_t i = 0; i < particles.size(); ++i) {
+    const Vec3 local = pose.to_local(particles.position[i]);
+    if ((local.array() < bounds.lo.array()).any() || (local.array() > bounds.hi.array()).any())
+      continue;
+    if (in_heaped_volume(mesh, local)) out.push_back(static_cast<int>(i));
+  }
   return out;
 }
 

@@ -7,6 +7,7 @@
 #include <optional>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <unordered_map>
 
 #include "host/error.hpp"
@@ -328,6 +329,14 @@ int MultiscaleTerrain::spawn(Particles& particles, const std::vector<ExcavatedCo
   // the highest of the column and its four neighbours: a particle (up to 0.55 D across its
   // column's centre) would otherwise start inside a taller neighbour's box at a cut face
   if (!columns.empty()) sites_ = columns;
+  // the first seed's size (drawn whether or not it is made: the sequence is the same on every
+  // run); a pool that cannot pay for it makes nothing, without the slots and their queries (most
+  // steps of a dig: issue 14)
+  std::uniform_real_distribution<double> spread(-kSizeSpread, kSizeSpread);
+  const double rho = options_.particle_material.density;
+  const double fraction = options_.seed_diameter;
+  double next_d = d * (1.0 + spread(sizes_));
+  if (pool_ < sphere_mass(fraction == 1.0 ? next_d : fraction * next_d, rho)) return 0;
   const auto floor_of = [&](int i, int j) {
     double f = voxels_.surface_height(i, j);
     const int di[4] = {-1, 1, 0, 0}, dj[4] = {0, 0, -1, 1};
@@ -359,11 +368,7 @@ int MultiscaleTerrain::spawn(Particles& particles, const std::vector<ExcavatedCo
   CentreGrid grid(d * (1.0 + kSizeSpread));
   for (size_t k = 0; k < particles.size(); ++k)
     grid.add(particles.position[k], particles.radius[k]);
-  std::uniform_real_distribution<double> spread(-kSizeSpread, kSizeSpread);
-  const double rho = options_.particle_material.density;
-  const double fraction = options_.seed_diameter;
   int made = 0;
-  double next_d = d * (1.0 + spread(sizes_));
   for (size_t k = 0; k < slots.size(); ++k) {
     const double seed_d = fraction == 1.0 ? next_d : fraction * next_d;
     const double mass = sphere_mass(seed_d, rho);
@@ -394,21 +399,21 @@ std::vector<double> MultiscaleTerrain::soil_surface(const Particles& particles,
   // not, nor one the bucket holds (a cell is coarser than the bucket's floor, so its load would
   // otherwise stack on the heap under it)
   const int nx = voxels_.nx();
-  std::vector<std::vector<std::pair<double, double>>> by_column(surface.size());
+  // (column, bottom, top) of each particle, sorted: by column, then bottom up (one flat list:
+  // a list per column cost an allocation per occupied column, every step)
+  std::vector<std::tuple<size_t, double, double>> spans;
+  spans.reserve(particles.size());
   for (size_t k = 0; k < particles.size(); ++k) {
     if (held[k]) continue;
     int i = 0, j = 0;
     if (!voxels_.column_at(particles.position[k].x(), particles.position[k].y(), &i, &j)) continue;
     const double r = particles.radius[k];
-    by_column[static_cast<size_t>(j) * nx + i].emplace_back(particles.position[k].z() - r,
-                                                            particles.position[k].z() + r);
+    spans.emplace_back(static_cast<size_t>(j) * nx + i, particles.position[k].z() - r,
+                       particles.position[k].z() + r);
   }
-  for (size_t c = 0; c < surface.size(); ++c) {
-    auto& column = by_column[c];
-    std::sort(column.begin(), column.end());
-    for (const auto& [bottom, top] : column)
-      if (bottom <= surface[c] + voxels_.cell()) surface[c] = std::max(surface[c], top);
-  }
+  std::sort(spans.begin(), spans.end());
+  for (const auto& [c, bottom, top] : spans)
+    if (bottom <= surface[c] + voxels_.cell()) surface[c] = std::max(surface[c], top);
   return surface;
 }
 
