@@ -13,6 +13,9 @@
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "apps/commands.hpp"
 #include "apps/outputs.hpp"
@@ -44,6 +47,10 @@ namespace {
 constexpr int kImageWidth = 1600, kImageHeight = 800;
 // simulated time between progress notes, which count the load in the bucket [s]
 constexpr double kProgressNoteInterval = 0.5;
+// simulated time between the samples of load.csv, the load in the bucket as the dig goes [s]:
+// ten a second show when a bucket fills (HD27's fill takes about 1.5 s) at no cost worth
+// timing (a sample downloads the particles, outside the timed steps)
+constexpr double kLoadSampleInterval = 0.1;
 
 // one line for stderr: "effects: a (k=v, ...), b (...)"
 std::string effects_note(const vehicle::EffectSet& effects) {
@@ -350,6 +357,16 @@ std::string soil_csv(const std::vector<SoilForceSample>& log) {
   return os.str();
 }
 
+// the load in the bucket as the dig goes (t, loaded_kg): the summary's loaded_mass_kg (the
+// heaped volume's, SAE J742) at every sample
+std::string load_csv(const std::vector<std::pair<double, double>>& samples) {
+  std::ostringstream os;
+  os << "t,loaded_kg\n";
+  os.precision(9);
+  for (const auto& [t, kg] : samples) os << t << ',' << kg << '\n';
+  return os.str();
+}
+
 // the type-G aggregate step by step as CSV (ParaView reads it with Table To Points on cx, cy, cz;
 // its pose's orientation is the quaternion qx..qw of its principal axes, moments i1 <= i2 <= i3)
 std::string aggregate_csv(const std::vector<AggregateSample>& log) {
@@ -429,6 +446,10 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
   Progress progress("dig " + sc.name + " " + preset.name, sc.duration, !o.quiet);
   const int note_every =
       std::max(1, static_cast<int>(std::lround(kProgressNoteInterval / preset.dt)));
+  // the load in the bucket from the start, a sample every kLoadSampleInterval and at the end
+  const int load_every =
+      std::max(1, static_cast<int>(std::lround(kLoadSampleInterval / preset.dt)));
+  std::vector<std::pair<double, double>> load{{sim.time(), sim.loaded_mass()}};
   const double dig_wall = sim.run([&](int k) {
     // asked to stop: between steps, before anything of this step is written
     if (interrupt_requested()) {
@@ -438,6 +459,7 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
       throw_if_interrupted(where.str());
     }
     snapshots.after_step(k, sim.time(), sim);
+    if (k % load_every == 0 || sim.done()) load.emplace_back(sim.time(), sim.loaded_mass());
     if (!o.quiet && k % note_every == 0) {
       std::ostringstream note;
       note << std::fixed << std::setprecision(0);
@@ -460,6 +482,7 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
       dig_details(o, sc, preset, dig_options, pile, scan, sim, pile_wall, dig_wall, dev, effects);
   run.dir = dir;
   write_run(o, run);
+  write_file_atomically((dir / "load.csv").string(), load_csv(load));
   write_dig_figures(dir, run, scan, sc, placed, final_particles, sim.loader(),
                     sim.multiscale() ? &sim.terrain().voxels() : nullptr);
   // the type-G terrain's surface at the end, beside the one it started from, for ParaView

@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace {
@@ -141,6 +142,26 @@ TEST(DiggingRunTest, Hd27AtD400WritesTheRunContractSnapshotsAndFigures) {
     ++steps;
   }
   EXPECT_EQ(steps, 450);
+  // the load in the bucket every 0.1 s from the start (91 samples of 9 s), the last the
+  // summary's load, an empty bucket at the start and a loaded one after the fill
+  std::ifstream load(dir / "load.csv");
+  std::getline(load, line);
+  EXPECT_EQ(line, "t,loaded_kg");
+  std::vector<std::pair<double, double>> samples;
+  while (std::getline(load, line)) {
+    const size_t comma = line.find(',');
+    ASSERT_NE(comma, std::string::npos) << line;
+    samples.emplace_back(std::stod(line.substr(0, comma)), std::stod(line.substr(comma + 1)));
+  }
+  ASSERT_EQ(samples.size(), 91u);
+  for (size_t k = 0; k < samples.size(); ++k) {
+    EXPECT_NEAR(samples[k].first, 0.1 * static_cast<double>(k), 1e-9) << k;
+    EXPECT_GE(samples[k].second, 0.0) << k;
+  }
+  EXPECT_EQ(samples.front().second, 0.0);
+  // (the CSV's 9 digits against the summary's 17)
+  EXPECT_NEAR(samples.back().second, summary["loaded_mass_kg"].get<double>(),
+              1e-8 * summary["loaded_mass_kg"].get<double>());
   // HD27-D400's dig: by 3.5 s the soil under the bottom has borne the bucket up by 62 kN and the
   // faces across the cutting direction taken 163 kN at the most (Digging.
   // ItsLogsGoThroughASavedStateBitForBit); a tenth of that is far above what a wrong split leaves
@@ -188,8 +209,9 @@ TEST(DiggingRunTest, Hd27AtG400WritesTheRunContractAndTheTerrain) {
   EXPECT_EQ(summary.at("fidelity").get<std::string>(), "G400");
   EXPECT_EQ(summary.at("model").get<std::string>(), "multiscale (type G)");
   EXPECT_GT(summary.at("loaded_mass_kg").get<double>(), 0.0);
-  for (const char* file : {"timeseries.csv", "channels.png", "trajectory.png", "side.png",
-                           "terrain.vts", "terrain_start.vts", "scan.csv", "aggregate.csv"})
+  for (const char* file :
+       {"timeseries.csv", "channels.png", "trajectory.png", "side.png", "terrain.vts",
+        "terrain_start.vts", "scan.csv", "aggregate.csv", "load.csv"})
     EXPECT_GT(std::filesystem::file_size(dir / file), 100u) << file;
   std::ifstream vts(dir / "terrain.vts");
   const std::string text((std::istreambuf_iterator<char>(vts)), std::istreambuf_iterator<char>());
