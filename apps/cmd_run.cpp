@@ -459,15 +459,21 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
       throw_if_interrupted(where.str());
     }
     snapshots.after_step(k, sim.time(), sim);
-    if (k % load_every == 0 || sim.done()) load.emplace_back(sim.time(), sim.loaded_mass());
-    if (!o.quiet && k % note_every == 0) {
+    // the load, measured once for the sample and the note alike (each measure downloads the
+    // particles)
+    const bool sample = k % load_every == 0 || sim.done();
+    const bool note_due = !o.quiet && k % note_every == 0;
+    if (!sample && !note_due) return;
+    const double loaded = sim.loaded_mass();
+    if (sample) load.emplace_back(sim.time(), loaded);
+    if (note_due) {
       std::ostringstream note;
       note << std::fixed << std::setprecision(0);
       if (sim.multiscale())
         note << sim.particle_count() << " zone particles, ";
       else
         note << sim.split().stats().bucket_contacts << " bucket contacts, ";
-      note << sim.loaded_mass() << " kg in the bucket";
+      note << loaded << " kg in the bucket";
       progress.update(sim.time(), note.str());
     }
   });
@@ -481,8 +487,9 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
   run.summary.details =
       dig_details(o, sc, preset, dig_options, pile, scan, sim, pile_wall, dig_wall, dev, effects);
   run.dir = dir;
-  write_run(o, run);
+  // (before the run contract, whose summary.json, written last, marks the folder complete)
   write_file_atomically((dir / "load.csv").string(), load_csv(load));
+  write_run(o, run);
   write_dig_figures(dir, run, scan, sc, placed, final_particles, sim.loader(),
                     sim.multiscale() ? &sim.terrain().voxels() : nullptr);
   // the type-G terrain's surface at the end, beside the one it started from, for ParaView

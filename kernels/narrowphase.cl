@@ -143,13 +143,14 @@ int visit_contacts(int i, int write, int limit, __global const float4* position,
   int column = ci.y * p.grid_nx + ci.x;
   int geom_end = fixed_i ? 0 : geom_column_start[column + 1];
   // the widest margin a static contact can have (contact_margin's, with the full speculative
-  // reach): a box beyond it is rejected before its normal (sphere_geom_within), the same contacts
+  // reach): a box beyond it (with sphere_geom_within's slack) is rejected before its normal, and
+  // its INFINITY alone is told apart here, so every other box meets contact_margin as before
   float static_reach = p.margin_rel * ri + p.speculative;
   for (int k = fixed_i ? 0 : geom_column_start[column]; k < geom_end; ++k) {
     int g = geom_column_list[k];
     float3 n;
     float gap = sphere_geom_within(xi, ri, geoms + g, static_reach, &n);
-    if (gap > static_reach || gap >= contact_margin(ri, ri, dot(velocity[i].xyz, n), p)) continue;
+    if (isinf(gap) || gap >= contact_margin(ri, ri, dot(velocity[i].xyz, n), p)) continue;
     if (write && count >= limit) return count;
     if (write)
       emit_static(out + count, i, g, ri, n, gap, p, prev_offsets, prev, has_prev);

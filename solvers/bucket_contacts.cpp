@@ -36,11 +36,12 @@ bool better(const Candidate& x, const Candidate& y) {
   return x.dist < y.dist || (x.dist == y.dist && x.tri < y.tri);
 }
 
-// whether p lies outside triangle t's bounds grown by kTouch: then it is farther than kTouch
-// from the triangle, a cheaper test than its closest point that decides the same
+// whether p lies outside triangle t's bounds grown by twice kTouch: then it is farther than
+// kTouch from the triangle with room for the exact test's rounding, a cheaper test than its
+// closest point that decides the same
 bool beyond_touch(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
-  const Vec3 lo = a.cwiseMin(b).cwiseMin(c).array() - kTouch;
-  const Vec3 hi = a.cwiseMax(b).cwiseMax(c).array() + kTouch;
+  const Vec3 lo = a.cwiseMin(b).cwiseMin(c).array() - 2.0 * kTouch;
+  const Vec3 hi = a.cwiseMax(b).cwiseMax(c).array() + 2.0 * kTouch;
   return (p.array() < lo.array()).any() || (p.array() > hi.array()).any();
 }
 

@@ -173,7 +173,6 @@ void DemWorld::bin_geoms() {
   const GeomBinning key{geoms_version_,     p.cell_size, p.grid_origin.s[0],
                         p.grid_origin.s[1], nx,          ny};
   if (binned_for_ == key) return;
-  binned_for_ = key;
   const double cell = p.cell_size;
   const Vec3 origin(p.grid_origin.s[0], p.grid_origin.s[1], p.grid_origin.s[2]);
   // the columns a geometry can reach: its bounds grown by one cell, which holds the farthest a
@@ -215,6 +214,8 @@ void DemWorld::bin_geoms() {
   }
   buffers_.geom_column_start.upload(start);
   buffers_.geom_column_list.upload(list);
+  // (recorded once the lists are on the device: a binning that threw is made again)
+  binned_for_ = key;
 }
 
 void DemWorld::set_particles(const Particles& in) {

@@ -9,6 +9,9 @@ namespace {
 
 // the 2:1 heap of SAE J742: its height grows by one for every two of distance from the edges
 constexpr double kHeapSlope = 0.5;
+// [m] how far outside the heaped volume's box a point is still given the exact test: far above
+// the rounding of a bucket's metre-sized coordinates (1e-16 m), far below a grain
+constexpr double kBoundsSlack = 1e-9;
 
 // even-odd test of (x, z) against the profile polygon closed by the strike line
 bool in_profile(const std::vector<Vec3>& profile, double x, double z) {
@@ -101,11 +104,13 @@ std::vector<int> particles_in_bucket(const Particles& particles, const vehicle::
   std::vector<int> out;
   if (mesh.profile.size() < 3) return out;
   // a centre outside the box that holds the heaped volume is not in it: the box first (a type-G
-  // step asks for every particle of the zone, most of them ahead of the bucket: issue 14)
+  // step asks for every particle of the zone, most of them ahead of the bucket: issue 14), grown
+  // by kBoundsSlack so that the exact test's rounding at the box's faces (the heap's ridge) decides
   const Aabb bounds = heaped_bounds(mesh);
   for (size_t i = 0; i < particles.size(); ++i) {
     const Vec3 local = pose.to_local(particles.position[i]);
-    if ((local.array() < bounds.lo.array()).any() || (local.array() > bounds.hi.array()).any())
+    if ((local.array() < bounds.lo.array() - kBoundsSlack).any() ||
+        (local.array() > bounds.hi.array() + kBoundsSlack).any())
       continue;
     if (in_heaped_volume(mesh, local)) out.push_back(static_cast<int>(i));
   }
