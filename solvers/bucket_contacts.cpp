@@ -40,9 +40,8 @@ bool better(const Candidate& x, const Candidate& y) {
 // kTouch from the triangle with room for the exact test's rounding, a cheaper test than its
 // closest point that decides the same
 bool beyond_touch(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
-  const Vec3 lo = a.cwiseMin(b).cwiseMin(c).array() - 2.0 * kTouch;
-  const Vec3 hi = a.cwiseMax(b).cwiseMax(c).array() + 2.0 * kTouch;
-  return (p.array() < lo.array()).any() || (p.array() > hi.array()).any();
+  const Aabb bounds{a.cwiseMin(b).cwiseMin(c), a.cwiseMax(b).cwiseMax(c)};
+  return !bounds.contains(p, 2.0 * kTouch);
 }
 
 // keeps the local minima of the distance over the surface: a candidate whose closest point lies

@@ -55,8 +55,9 @@ BucketPose bucket_pose(const vehicle::WheelLoader& loader);
 struct Aabb {
   Vec3 lo = Vec3::Zero();
   Vec3 hi = Vec3::Zero();
-  bool contains(const Vec3& x) const {
-    return (x.array() >= lo.array()).all() && (x.array() <= hi.array()).all();
+  // x lies in the box grown by `grow` [m] on every side (0: the box itself)
+  bool contains(const Vec3& x, double grow = 0.0) const {
+    return (x.array() >= lo.array() - grow).all() && (x.array() <= hi.array() + grow).all();
   }
 };
 

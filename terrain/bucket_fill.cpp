@@ -109,9 +109,7 @@ std::vector<int> particles_in_bucket(const Particles& particles, const vehicle::
   const Aabb bounds = heaped_bounds(mesh);
   for (size_t i = 0; i < particles.size(); ++i) {
     const Vec3 local = pose.to_local(particles.position[i]);
-    if ((local.array() < bounds.lo.array() - kBoundsSlack).any() ||
-        (local.array() > bounds.hi.array() + kBoundsSlack).any())
-      continue;
+    if (!bounds.contains(local, kBoundsSlack)) continue;
     if (in_heaped_volume(mesh, local)) out.push_back(static_cast<int>(i));
   }
   return out;
@@ -133,7 +131,7 @@ double loaded_mass(const Particles& particles, const vehicle::BucketMesh& mesh, 
     const Vec3 local = pose.to_local(particles.position[i]);
     const double r = particles.radius[i];
     // a ball wholly outside the heaped volume's box holds nothing in it
-    if ((local.array() < bounds.lo.array() - r).any() || (local.array() > bounds.hi.array() + r).any()) continue;
+    if (!bounds.contains(local, r)) continue;
     m += particles.mass(i) * heaped_fraction(mesh, local, r);
   }
   return m;
