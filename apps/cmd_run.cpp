@@ -180,6 +180,7 @@ DiggingOptions digging_options(const RunOptions& o) {
   options.relaxation = o.relaxation;
   options.seed_diameter = o.seed_diameter;
   options.edge_resistance = o.edge_resistance;
+  options.excavation_reach = o.excavation_reach;
   options.interface_damping_time = o.interface_damping_time;
   options.content_inertia = o.content_inertia;
   options.bucket_support = o.bucket_support;
@@ -285,6 +286,8 @@ nlohmann::json dig_details(const RunOptions& o, const vehicle::Scenario& sc,
         {"relaxation", options.relaxation},
         {"seed_diameter", options.seed_diameter},
         {"edge_resistance", options.edge_resistance},
+        // how far ahead of the cutting edge the zone's soil turns dynamic [m] (0: the whole wedge)
+        {"excavation_reach_m", options.excavation_reach},
         // the aggregate's interfaces' damping time in use (type G; null at type D)
         {"interface_damping_time_s",
          sim.multiscale() ? nlohmann::json(interface_damping_time(interfaces, preset.dt))
@@ -536,6 +539,8 @@ void run_scenario(const RunOptions& o) {
               "type-G soil to hold the bucket up or give way");
   type_g_only(o.edge_resistance != 1.0, "--edge-resistance " + std::to_string(o.edge_resistance),
               "type-G cutting edge to resist");
+  type_g_only(o.excavation_reach != 0.0, "--excavation-reach " + std::to_string(o.excavation_reach),
+              "type-G zone to excavate");
   type_g_only(o.interface_damping_time != 0.0,
               "--interface-damping-time " + std::to_string(o.interface_damping_time),
               "type-G aggregate's interfaces to damp");
@@ -620,6 +625,12 @@ void add_run_command(CLI::App& app, const std::string& command_line) {
                   "breakout force (docs/validation.md \"HD27's breakout follows the interfaces' "
                   "damping time\")")
       ->check(number_in(kMinDampingTime, kMaxDampingTime, "s", true))
+      ->capture_default_str();
+  cmd->add_option("--excavation-reach", opts->excavation_reach,
+                  "study, type G: the zone's soil turns into particles only within this distance "
+                  "ahead of the cutting edge [m]; 0 = the whole wedge (the default; "
+                  "docs/validation.md \"The zone's excavation reach\")")
+      ->check(non_negative_number())
       ->capture_default_str();
   cmd->add_option("--seed-diameter", opts->seed_diameter,
                   "study, type G: the zone's particles appear at this fraction of their full "

@@ -42,6 +42,9 @@ struct RunOptions {
   double seed_diameter = kSeedDiameter;
   // type G, a study: a factor on the cutting edge's penetration resistance (--edge-resistance)
   double edge_resistance = 1.0;
+  // type G, a study: how far ahead of the cutting edge the zone's soil turns dynamic [m]; 0: the
+  // whole wedge (--excavation-reach)
+  double excavation_reach = 0.0;
   // type G, a study: the aggregate's interfaces' damping time [s]; 0: two of the level's steps
   // (--interface-damping-time)
   double interface_damping_time = 0.0;

@@ -111,6 +111,14 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
                      ": at a type-D level the pile's particles hold the bucket up themselves; the "
                      "soil giving way under the bucket is a type-G study (a G level), or leave "
                      "bucket_support on");
+  if (!(options.excavation_reach >= 0.0 && std::isfinite(options.excavation_reach)))
+    throw InputError("excavation_reach " + std::to_string(options.excavation_reach) +
+                     " m: a distance ahead of the cutting edge, or 0 for the whole zone");
+  if (!is_multiscale(preset) && options.excavation_reach != 0.0)
+    throw InputError("excavation_reach " + std::to_string(options.excavation_reach) + " m at " +
+                     preset.name +
+                     ": only the type-G levels turn a zone of voxels into particles; use a G "
+                     "level or leave it at 0");
   if (!is_multiscale(preset) && options.seed_diameter != 1.0)
     throw InputError("seed_diameter " + std::to_string(options.seed_diameter) + " at " +
                      preset.name +
@@ -144,6 +152,7 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
     terrain.pair_reach = options.pair_reach;
     terrain.relaxation = options.relaxation;
     terrain.seed_diameter = options.seed_diameter;
+    terrain.excavation_reach = options.excavation_reach;
     terrain.seed = options.pile.seed;
     terrain.pressed_depth = options.bucket_support ? kPressedDepth : 0.0;
     terrain_ = std::make_unique<MultiscaleTerrain>(dev, scenario_pile_profile(scenario), preset,

@@ -70,6 +70,11 @@ struct DiggingOptions {
   // talus's own (the paper gives none) and moves a type-G dig more than anything else measured
   // (docs/validation.md "Type G against type D"); refused at a type-D level unless 1
   double edge_resistance = 1.0;
+  // type G, a study: the zone's soil turns dynamic only within this distance ahead of the
+  // cutting edge [m] (MultiscaleOptions::excavation_reach); 0, the default: the whole wedge. It
+  // moves the type-G loads toward D100's and RD21's work away from it (docs/validation.md "The
+  // zone's excavation reach"); refused at a type-D level unless 0
+  double excavation_reach = 0.0;
   // type G, a study: the SPOOK damping time of the aggregate's interfaces A and B [s] in
   // [kMinDampingTime, kMaxDampingTime] (solvers/dem_settings); 0, the default: two of the level's
   // steps (AggregateParameters::

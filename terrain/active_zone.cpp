@@ -128,6 +128,15 @@ ActiveZone predict_active_zone(const VoxelTerrain& terrain, const ToolEdges& too
   return zone;
 }
 
+ActiveZone within_reach(const ActiveZone& zone, double reach) {
+  if (!(reach >= 0.0 && std::isfinite(reach)))
+    throw Error("active zone: an excavation reach of " + std::to_string(reach) +
+                " m (0 for the whole zone, or a distance ahead of the cutting edge)");
+  ActiveZone part = zone;
+  if (reach > 0.0) part.reach_ahead = std::min(zone.reach_ahead, reach);
+  return part;
+}
+
 bool zone_interval(const ActiveZone& zone, const VoxelTerrain& terrain, int i, int j, double* z_lo,
                    double* z_hi) {
   const Vec3 c(terrain.column_x(i), terrain.column_y(j), zone.tip.z());

@@ -90,6 +90,13 @@ ActiveZone predict_active_zone(const VoxelTerrain& terrain, const ToolEdges& too
 bool zone_interval(const ActiveZone& zone, const VoxelTerrain& terrain, int i, int j, double* z_lo,
                    double* z_hi);
 
+// the part of a zone no farther than `reach` [m] ahead of its cutting edge: the same zone with
+// reach_ahead cut to `reach` (0: the whole zone). What turns dynamic is then the soil the edge is
+// about to meet, and the wedge's far end stays voxels until the edge comes within `reach` of it (a
+// type-G study, MultiscaleOptions::excavation_reach; docs/multiscale.md "Excavation reach").
+// Throws talus::Error for a negative or non-finite reach
+ActiveZone within_reach(const ActiveZone& zone, double reach);
+
 // the solid soil inside the zone [kg], left in place
 double zone_soil_mass(const ActiveZone& zone, const VoxelTerrain& terrain);
 

@@ -126,6 +126,10 @@ MultiscaleTerrain::MultiscaleTerrain(Device& dev, const PileProfile& profile,
                      " m is not a depth in [0, a cell): how far the bucket may press into the "
                      "voxels before push_aside moves the soil (0, or kPressedDepth with the "
                      "terrain's support)");
+  if (!(options.excavation_reach >= 0.0 && std::isfinite(options.excavation_reach)))
+    throw InputError("multiscale terrain: excavation_reach " +
+                     std::to_string(options.excavation_reach) +
+                     " m is not a distance ahead of the cutting edge (0: the whole zone)");
   DemSettings settings;
   settings.dt = level.dt;
   settings.iterations = level.iterations;
@@ -187,7 +191,8 @@ void MultiscaleTerrain::step(const KinematicBucket& bucket) {
   std::optional<StageScope> stage(std::in_place, dev, "zone_excavation");
   last_.zone = zone_for(bucket, particles);
   std::vector<ExcavatedColumn> columns;
-  const DynamicSoil dynamic = excavate(voxels_, last_.zone, options_.soil, &columns);
+  const DynamicSoil dynamic = excavate(voxels_, within_reach(last_.zone, options_.excavation_reach),
+                                       options_.soil, &columns);
   pool_ += dynamic.mass;
   last_.excavated = dynamic.mass;
   // the soil the rest of the bucket overlaps (its heel, its body outside the zone) pushed aside

@@ -87,6 +87,11 @@ struct MultiscaleOptions {
   double seed_diameter = kSeedDiameter;
   // [m/s] the most a growing particle's diameter rises per second of the step
   double growth_speed = kGrowthSpeed;
+  // [m] a study: the zone's soil turns dynamic only within this distance ahead of the cutting
+  // edge (terrain/active_zone within_reach); 0, the default: the whole wedge up to where its
+  // failure plane leaves the surface (docs/multiscale.md "Excavation reach": measured, not the
+  // default). The zone the aggregate reads is the whole wedge either way
+  double excavation_reach = 0.0;
   unsigned seed = 1;                      // of the particles' sizes
 };
 
@@ -124,7 +129,7 @@ class MultiscaleTerrain {
   // the terrain of a pile profile (placed where the pile stands) at a type-G level, with the
   // bucket's mesh (its profile frame) where `start` puts it. Throws InputError for a level that
   // is not type G and for options outside their ranges (seed_diameter, growth_speed,
-  // pressed_depth)
+  // pressed_depth, excavation_reach)
   MultiscaleTerrain(Device& dev, const PileProfile& profile, const FidelityPreset& level,
                     const vehicle::BucketMesh& bucket, const KinematicBucket& start,
                     const MultiscaleOptions& options = {},

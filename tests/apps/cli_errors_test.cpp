@@ -275,10 +275,11 @@ TEST(CliErrors, StepCountsAndLoadsOutsideTheirRangeAreRefused) {
     EXPECT_FALSE(std::filesystem::exists("/tmp/talus_cli_seed")) << cmd;
   }
   // the bucket's content by its weight alone, a factor on the cutting edge's resistance, the
-  // soil under the bucket giving way and the aggregate's interfaces' damping time: a pile scenario
-  // at a G level only
-  for (const char* option : {" --no-content-inertia", " --edge-resistance 0",
-                             " --no-bucket-support", " --interface-damping-time 0.01"}) {
+  // soil under the bucket giving way, the aggregate's interfaces' damping time and the zone's
+  // excavation reach: a pile scenario at a G level only
+  for (const char* option :
+       {" --no-content-inertia", " --edge-resistance 0", " --no-bucket-support",
+        " --interface-damping-time 0.01", " --excavation-reach 0.6"}) {
     for (const char* cmd :
          {"run --scenario hd27 --fidelity D400", "run --scenario load-carry --fidelity G400"}) {
       const Outcome o = run("", std::string(cmd) + " --out /tmp/talus_cli_seed" + option);
@@ -294,6 +295,11 @@ TEST(CliErrors, StepCountsAndLoadsOutsideTheirRangeAreRefused) {
                            "--edge-resistance 12");
   EXPECT_EQ(edge.code, 2) << edge.err;
   EXPECT_NE(edge.err.find("--edge-resistance"), std::string::npos) << edge.err;
+  const Outcome reach = run("",
+                            "run --scenario hd27 --fidelity G400 --out /tmp/talus_cli_seed "
+                            "--excavation-reach -1");
+  EXPECT_EQ(reach.code, 2) << reach.err;
+  EXPECT_NE(reach.err.find("--excavation-reach"), std::string::npos) << reach.err;
   const Outcome damping = run("",
                               "run --scenario hd27 --fidelity G400 --out /tmp/talus_cli_seed "
                               "--interface-damping-time 0.7");

@@ -326,6 +326,12 @@ TEST(Digging, TheCuttingEdgesResistanceIsTheLawTimesItsStudyFactor) {
   EXPECT_THROW(
       DiggingSimulation(test::shared_device(), sc, fidelity_preset("D400"), PileBuild{}, d),
       InputError);
+  d.edge_resistance = 1.0;
+  d.excavation_reach = 0.6;  // the zone's excavation reach: type G only
+  EXPECT_THROW(
+      DiggingSimulation(test::shared_device(), sc, fidelity_preset("D400"), PileBuild{}, d),
+      InputError);
+  d.excavation_reach = 0.0;
   d.edge_resistance = -0.1;
   EXPECT_THROW(DiggingSimulation(test::shared_device(), sc, g400,
                                  build_scenario_pile(test::shared_device(), sc,

@@ -1,6 +1,7 @@
 // terrain/active_zone: the predicted wedge against the analytic one of the fundamental earthmoving
 // equation on a level bed (depth, rake, failure angle, reaches, soil mass); the same wedge turned
-// a quarter round; excavation hands the zone's soil on with its swell and keeps the mass balance;
+// a quarter round; excavation hands the zone's soil on with its swell and keeps the mass balance,
+// within a reach of the edge only its near part;
 // a slow tool or one above the surface turns nothing dynamic; the soil a tool's body overlaps is
 // pushed aside down to the body's underside, unless it stands less than the pressed depth above it.
 #include <gtest/gtest.h>
@@ -102,6 +103,41 @@ TEST(ActiveZone, ExcavationHandsTheZonesSoilOnWithItsSwell) {
   int i = 0, j = 0;
   ASSERT_TRUE(t.column_at(2.5, 2.5, &i, &j));
   EXPECT_DOUBLE_EQ(t.surface_height(i, j), 1.0);
+}
+
+// within a reach: only the zone's columns no farther than the reach ahead of the edge leave the
+// terrain, the far end of the wedge stays in place, and the whole zone taken afterwards hands on
+// the rest, so that the two parts add up to the whole wedge
+TEST(ActiveZone, ExcavationWithinAReachTakesTheNearPartOfTheWedge) {
+  const BulkSoil soil;
+  VoxelTerrain t = level_bed(0.1, 1.0);
+  const double before = t.total_mass();
+  const ActiveZone z = predict_active_zone(t, tool_in_bed(Vec3::UnitX(), 0.5, 45.0), soil);
+  const double whole = zone_soil_mass(z, t);
+  ASSERT_GT(z.reach_ahead, 0.4);
+  // 0 is the whole zone; a reach beyond the wedge's is the whole zone too
+  EXPECT_EQ(within_reach(z, 0.0).reach_ahead, z.reach_ahead);
+  EXPECT_EQ(within_reach(z, 10.0).reach_ahead, z.reach_ahead);
+  const ActiveZone near = within_reach(z, 0.2);
+  EXPECT_EQ(near.reach_ahead, 0.2);
+  const double near_mass = zone_soil_mass(near, t);
+  EXPECT_GT(near_mass, 0.0);
+  EXPECT_LT(near_mass, whole);
+  const DynamicSoil first = excavate(t, near, soil);
+  EXPECT_NEAR(first.mass, near_mass, 1e-12 * before);
+  // a column 0.35 m ahead of the tip, inside the whole wedge, beyond the reach: untouched
+  int i = 0, j = 0;
+  ASSERT_TRUE(t.column_at(z.tip.x() + 0.35, z.tip.y(), &i, &j));
+  double lo = 0.0, hi = 0.0;
+  EXPECT_TRUE(zone_interval(z, t, i, j, &lo, &hi));
+  EXPECT_DOUBLE_EQ(t.surface_height(i, j), 1.0);
+  // the rest of the wedge, then: the parts add up to the whole
+  const DynamicSoil rest = excavate(t, z, soil);
+  EXPECT_NEAR(first.mass + rest.mass, whole, 1e-12 * before);
+  EXPECT_NEAR(t.total_mass() + first.mass + rest.mass, before, 1e-12 * before);
+  // a reach is a distance
+  for (double bad : {-0.1, std::nan(""), static_cast<double>(INFINITY)})
+    EXPECT_THROW(within_reach(z, bad), Error);
 }
 
 // no zone turns soil dynamic when the tool creeps (below 0.1 m/s) or rides above the surface

@@ -202,7 +202,7 @@ TEST(MultiscaleTerrain, DISABLED_CarriedSoilAcrossLevelsWithAndWithoutGrowth) {
     }
 }
 
-TEST(MultiscaleTerrain, SeedGrowthAndPressedDepthOptionsOutsideTheirRangeAreRefused) {
+TEST(MultiscaleTerrain, SeedGrowthReachAndPressedDepthOptionsOutsideTheirRangeAreRefused) {
   Device dev;
   const vehicle::BucketMesh mesh = vehicle::make_bucket_mesh(vehicle::BucketGeometry{});
   const auto refused = [&](const MultiscaleOptions& o, double value) {
@@ -220,6 +220,12 @@ TEST(MultiscaleTerrain, SeedGrowthAndPressedDepthOptionsOutsideTheirRangeAreRefu
     MultiscaleOptions o;
     o.growth_speed = speed;
     refused(o, speed);
+  }
+  // the excavation reach: a distance, 0 for the whole zone
+  for (double reach : {-0.1, std::numeric_limits<double>::infinity(), std::nan("")}) {
+    MultiscaleOptions o;
+    o.excavation_reach = reach;
+    refused(o, reach);
   }
   // the pressed depth: 0 up to less than a cell (G400's 0.4 m)
   for (double depth : {-0.01, 0.4, std::numeric_limits<double>::infinity(), std::nan("")}) {
