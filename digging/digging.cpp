@@ -111,9 +111,6 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
                      ": at a type-D level the pile's particles hold the bucket up themselves; the "
                      "soil giving way under the bucket is a type-G study (a G level), or leave "
                      "bucket_support on");
-  if (!(options.excavation_reach >= 0.0 && std::isfinite(options.excavation_reach)))
-    throw InputError("excavation_reach " + std::to_string(options.excavation_reach) +
-                     " m: a distance ahead of the cutting edge, or 0 for the whole zone");
   if (!is_multiscale(preset) && options.excavation_reach != 0.0)
     throw InputError("excavation_reach " + std::to_string(options.excavation_reach) + " m at " +
                      preset.name +
