@@ -184,6 +184,7 @@ DiggingOptions digging_options(const RunOptions& o) {
   options.interface_damping_time = o.interface_damping_time;
   options.content_inertia = o.content_inertia;
   options.bucket_support = o.bucket_support;
+  options.failure_plane_floor = o.failure_plane_floor;
   if (o.form_speed >= 0.0) options.pile.form_speed = o.form_speed;
   options.pile.hold_face = o.hold_face;
   options.sweep = parse_sweep(o.sweep, "--sweep");
@@ -288,6 +289,8 @@ nlohmann::json dig_details(const RunOptions& o, const vehicle::Scenario& sc,
         {"edge_resistance", options.edge_resistance},
         // how far ahead of the cutting edge the zone's soil turns dynamic [m] (0: the whole wedge)
         {"excavation_reach_m", options.excavation_reach},
+        // the zone's particles on its failure plane (true) or its columns' staircase (type G)
+        {"failure_plane_floor", options.failure_plane_floor},
         // the aggregate's interfaces' damping time in use (type G; null at type D)
         {"interface_damping_time_s",
          sim.multiscale() ? nlohmann::json(interface_damping_time(interfaces, preset.dt))
@@ -541,6 +544,8 @@ void run_scenario(const RunOptions& o) {
               "type-G cutting edge to resist");
   type_g_only(o.excavation_reach != 0.0, "--excavation-reach " + std::to_string(o.excavation_reach),
               "type-G zone to excavate");
+  type_g_only(!o.failure_plane_floor, "--no-failure-plane-floor",
+              "type-G zone whose floor to make of voxel columns");
   type_g_only(o.interface_damping_time != 0.0,
               "--interface-damping-time " + std::to_string(o.interface_damping_time),
               "type-G aggregate's interfaces to damp");
@@ -642,6 +647,11 @@ void add_run_command(CLI::App& app, const std::string& command_line) {
                 "type G: the soil the bucket holds is a body welded to it, so the machine feels "
                 "its inertia as well as its weight (the default); --no-content-inertia, a study: "
                 "its weight alone (docs/multiscale.md \"The bucket's content\")")
+      ->capture_default_str();
+  cmd->add_flag("--failure-plane-floor,!--no-failure-plane-floor", opts->failure_plane_floor,
+                "type G: the zone's particles stand on its failure plane (the default); "
+                "--no-failure-plane-floor, a study: on the staircase its excavated voxel columns "
+                "make (docs/multiscale.md \"The zone's floor is its failure plane\")")
       ->capture_default_str();
   cmd->add_flag("--bucket-support,!--no-bucket-support", opts->bucket_support,
                 "type G: the resting soil holds the bucket's bottom up, solved with the machine "

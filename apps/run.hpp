@@ -54,6 +54,9 @@ struct RunOptions {
   // type G: the resting soil holds the bucket's bottom up (the default); --no-bucket-support: the
   // soil under the bucket gives way to any force (a study)
   bool bucket_support = true;
+  // type G: the zone's particles stand on its failure plane (the default);
+  // --no-failure-plane-floor: on its excavated columns' staircase (a study)
+  bool failure_plane_floor = true;
   bool residuals = false;
   // settled piles read from and saved to the pile cache (terrain/pile_cache.hpp; --no-pile-cache)
   bool pile_cache = true;

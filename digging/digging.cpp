@@ -116,6 +116,11 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
                      preset.name +
                      ": only the type-G levels turn a zone of voxels into particles; use a G "
                      "level or leave it at 0");
+  if (!is_multiscale(preset) && !options.failure_plane_floor)
+    throw InputError("failure_plane_floor off at " + preset.name +
+                     ": only the type-G levels have a zone of excavated voxel columns to stand "
+                     "on; the columns' staircase is a type-G study (a G level), or leave "
+                     "failure_plane_floor on");
   if (!is_multiscale(preset) && options.seed_diameter != 1.0)
     throw InputError("seed_diameter " + std::to_string(options.seed_diameter) + " at " +
                      preset.name +
@@ -150,6 +155,7 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
     terrain.relaxation = options.relaxation;
     terrain.seed_diameter = options.seed_diameter;
     terrain.excavation_reach = options.excavation_reach;
+    terrain.failure_plane_floor = options.failure_plane_floor;
     terrain.seed = options.pile.seed;
     terrain.pressed_depth = options.bucket_support ? kPressedDepth : 0.0;
     terrain_ = std::make_unique<MultiscaleTerrain>(dev, scenario_pile_profile(scenario), preset,

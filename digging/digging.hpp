@@ -75,6 +75,11 @@ struct DiggingOptions {
   // moves the type-G loads toward D100's and RD21's work away from it (docs/validation.md "The
   // zone's excavation reach"); refused at a type-D level unless 0
   double excavation_reach = 0.0;
+  // type G: the zone's particles stand on its failure plane, not on its excavated columns'
+  // staircase (MultiscaleOptions::failure_plane_floor; the default since 2026-11-30: it brings
+  // the type-G loads and work toward D100's, docs/validation.md "The zone's floor is its failure
+  // plane"); off: the columns alone (a study; refused at a type-D level, which has no voxels)
+  bool failure_plane_floor = true;
   // type G, a study: the SPOOK damping time of the aggregate's interfaces A and B [s] in
   // [kMinDampingTime, kMaxDampingTime] (solvers/dem_settings); 0, the default: two of the level's
   // steps (AggregateParameters::

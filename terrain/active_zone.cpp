@@ -175,6 +175,41 @@ void zone_columns(const ActiveZone& zone, const VoxelTerrain& terrain, int* i0, 
 
 }  // namespace
 
+bool failure_plane_column(const ActiveZone& zone, const VoxelTerrain& terrain, int i, int j,
+                          PlaneFloorColumn* column) {
+  if (!zone.active) return false;
+  // the column's centre in the zone's frame: within its width, on the failure plane's part
+  const double h = terrain.cell();
+  const Vec3 centre(terrain.column_x(i), terrain.column_y(j), zone.tip.z());
+  const Vec3 r = centre - zone.tip;
+  const double s = r.dot(zone.forward);
+  if (std::abs(r.dot(zone.along)) > 0.5 * zone.width || s < 0.0 || s > zone.reach_ahead)
+    return false;
+  // excavated to the plane there, or deeper (a plane risen since, as the tool lifts), on soil
+  const double tan_beta = std::tan(zone.failure_angle_deg * kDegree);
+  const double top = terrain.surface_height(i, j);
+  if (top <= terrain.z0() || top > zone.tip.z() + s * tan_beta + kOverlapRounding) return false;
+  // the footprint's half extents along forward and along (a turned zone sees the square wider)
+  const double half_forward = 0.5 * h * (std::abs(zone.forward.x()) + std::abs(zone.forward.y()));
+  const double half_along = 0.5 * h * (std::abs(zone.along.x()) + std::abs(zone.along.y()));
+  column->top = std::max(terrain.z0(), top - half_forward * tan_beta);
+  // the plate: its top face the plane over the footprint, its depth the footprint's length along
+  // forward (at least the plane's fall over it, h tan(beta) cos(beta), for beta up to 90 deg)
+  const double beta = zone.failure_angle_deg * kDegree;
+  const Vec3 up = Vec3::UnitZ();
+  const Vec3 uphill = std::cos(beta) * zone.forward + std::sin(beta) * up;
+  const Vec3 normal = -std::sin(beta) * zone.forward + std::cos(beta) * up;
+  Eigen::Matrix3d axes;
+  axes.col(0) = uphill;
+  axes.col(1) = zone.along;
+  axes.col(2) = normal;
+  const double half_depth = half_forward;
+  column->plate =
+      StaticGeom::box(Vec3(centre.x(), centre.y(), top) - half_depth * normal,
+                      Vec3(half_forward / std::cos(beta), half_along, half_depth), axes);
+  return true;
+}
+
 double zone_soil_mass(const ActiveZone& zone, const VoxelTerrain& terrain) {
   if (zone.depth <= 0.0) return 0.0;
   int i0 = 0, i1 = 0, j0 = 0, j1 = 0;

@@ -97,6 +97,29 @@ bool zone_interval(const ActiveZone& zone, const VoxelTerrain& terrain, int i, i
 // Throws talus::Error for a negative or non-finite reach
 ActiveZone within_reach(const ActiveZone& zone, double reach);
 
+// the zone's floor as its particles stand on it (MultiscaleOptions::failure_plane_floor, the
+// default since 2026-11-30): the failure plane itself, not the staircase of its columns.
+// Excavation leaves each column of the zone at the plane's height over the column's centre, so on
+// a grid of cell h the floor is a staircase whose steps, h tan(beta) high (17 cm at G200 with
+// HD27's beta of about 40 deg, most of a grain), face the tool: the soil it pushes has to climb
+// each one, where the model's wedge slides up a plane
+// (docs/multiscale.md "The zone's floor is its failure plane"). Column (i, j) is under the plane
+// when the zone is active, the column's centre lies within the zone's width ahead of the tip (the
+// failure plane's part, 0 <= s <= reach_ahead) and its top stands on soil at or below the plane
+// there (excavated to it, within a nanometre, or deeper: the plane rises as the tool lifts). Such
+// a column's top is shown to the particles as a plane parallel to the failure plane through the
+// top over the column's centre (the same soil under it): `top`, that plane's height at the
+// footprint's nearest point to the tip, for the column's box (nothing of it stands above the
+// plane), and `plate`, a box whose top face is that plane over the footprint (its extent along
+// `forward` and `along`, so a turned zone's plates overlap a little) and deep enough to cover the
+// box's top. The plates of neighbouring columns cut to the plane join into the plane itself
+struct PlaneFloorColumn {
+  double top = 0.0;
+  StaticGeom plate;
+};
+bool failure_plane_column(const ActiveZone& zone, const VoxelTerrain& terrain, int i, int j,
+                          PlaneFloorColumn* column);
+
 // the solid soil inside the zone [kg], left in place
 double zone_soil_mass(const ActiveZone& zone, const VoxelTerrain& terrain);
 

@@ -439,9 +439,16 @@ std::vector<StaticGeom> MultiscaleTerrain::geometry(const Particles& particles) 
   const int j0 = std::max(0, static_cast<int>(std::floor((lo.y() - grow - voxels_.y0()) / h)));
   const int j1 =
       std::min(voxels_.ny() - 1, static_cast<int>(std::floor((hi.y() + grow - voxels_.y0()) / h)));
+  PlaneFloorColumn floor;
   for (int j = j0; j <= j1; ++j)
     for (int i = i0; i <= i1; ++i) {
-      const double top = voxels_.surface_height(i, j);
+      double top = voxels_.surface_height(i, j);
+      // under the active zone the failure plane itself is the floor, not its columns' staircase
+      // (terrain/active_zone failure_plane_column): the column lowered under a plate on the plane
+      if (options_.failure_plane_floor && failure_plane_column(last_.zone, voxels_, i, j, &floor)) {
+        top = floor.top;
+        geoms.push_back(floor.plate);
+      }
       if (top <= voxels_.z0()) continue;  // bare ground: the ground plane holds them
       const double bottom = voxels_.z0();
       geoms.push_back(StaticGeom::box(

@@ -92,6 +92,11 @@ struct MultiscaleOptions {
   // failure plane leaves the surface (docs/multiscale.md "Excavation reach": measured, not the
   // default). The zone the aggregate reads is the whole wedge either way
   double excavation_reach = 0.0;
+  // the zone's particles stand on its failure plane, not on the staircase its excavated columns
+  // make (terrain/active_zone failure_plane_column; the default since 2026-11-30:
+  // docs/multiscale.md "The zone's floor is its failure plane", measured); false: the columns'
+  // boxes alone (a study)
+  bool failure_plane_floor = true;
   unsigned seed = 1;                      // of the particles' sizes
 };
 

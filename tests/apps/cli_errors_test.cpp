@@ -275,11 +275,11 @@ TEST(CliErrors, StepCountsAndLoadsOutsideTheirRangeAreRefused) {
     EXPECT_FALSE(std::filesystem::exists("/tmp/talus_cli_seed")) << cmd;
   }
   // the bucket's content by its weight alone, a factor on the cutting edge's resistance, the
-  // soil under the bucket giving way, the aggregate's interfaces' damping time and the zone's
-  // excavation reach: a pile scenario at a G level only
+  // soil under the bucket giving way, the aggregate's interfaces' damping time, the zone's
+  // excavation reach and its floor of voxel columns: a pile scenario at a G level only
   for (const char* option :
        {" --no-content-inertia", " --edge-resistance 0", " --no-bucket-support",
-        " --interface-damping-time 0.01", " --excavation-reach 0.6"}) {
+        " --interface-damping-time 0.01", " --excavation-reach 0.6", " --no-failure-plane-floor"}) {
     for (const char* cmd :
          {"run --scenario hd27 --fidelity D400", "run --scenario load-carry --fidelity G400"}) {
       const Outcome o = run("", std::string(cmd) + " --out /tmp/talus_cli_seed" + option);

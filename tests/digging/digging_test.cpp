@@ -332,6 +332,11 @@ TEST(Digging, TheCuttingEdgesResistanceIsTheLawTimesItsStudyFactor) {
       DiggingSimulation(test::shared_device(), sc, fidelity_preset("D400"), PileBuild{}, d),
       InputError);
   d.excavation_reach = 0.0;
+  d.failure_plane_floor = false;  // the zone's floor of voxel columns: type G only
+  EXPECT_THROW(
+      DiggingSimulation(test::shared_device(), sc, fidelity_preset("D400"), PileBuild{}, d),
+      InputError);
+  d.failure_plane_floor = true;
   d.edge_resistance = -0.1;
   EXPECT_THROW(DiggingSimulation(test::shared_device(), sc, g400,
                                  build_scenario_pile(test::shared_device(), sc,

@@ -2,6 +2,7 @@
 // equation on a level bed (depth, rake, failure angle, reaches, soil mass); the same wedge turned
 // a quarter round; excavation hands the zone's soil on with its swell and keeps the mass balance,
 // within a reach of the edge only its near part;
+// the excavated zone's floor is its failure plane, not a staircase;
 // a slow tool or one above the surface turns nothing dynamic; the soil a tool's body overlaps is
 // pushed aside down to the body's underside, unless it stands less than the pressed depth above it.
 #include <gtest/gtest.h>
@@ -12,6 +13,7 @@
 #include <vector>
 
 #include "host/error.hpp"
+#include "solvers/dem_reference.hpp"
 #include "terrain/active_zone.hpp"
 #include "terrain/earthmoving_equation.hpp"
 #include "tests/terrain/voxel_test_util.hpp"
@@ -138,6 +140,87 @@ TEST(ActiveZone, ExcavationWithinAReachTakesTheNearPartOfTheWedge) {
   // a reach is a distance
   for (double bad : {-0.1, std::nan(""), static_cast<double>(INFINITY)})
     EXPECT_THROW(within_reach(z, bad), Error);
+}
+
+// the excavated zone's floor: with its columns' boxes alone a staircase whose steps stand above
+// the failure plane; with failure_plane_column's plates and lowered boxes the plane itself, a
+// grain touching the plane anywhere over the zone touching the floor and nothing above it, for a
+// zone along x and one turned 30 deg; columns outside the zone, behind the tip or of an inactive
+// zone are left as they are
+TEST(ActiveZone, TheExcavatedZonesFloorIsItsFailurePlaneNotAStaircase) {
+  const BulkSoil soil;
+  const double h = 0.1, r = 0.02;
+  for (double turn : {0.0, 30.0}) {
+    VoxelTerrain t = level_bed(h, 1.0);
+    const Vec3 forward(std::cos(turn * kDeg), std::sin(turn * kDeg), 0.0);
+    const ActiveZone z = predict_active_zone(t, tool_in_bed(forward, 0.5, 45.0), soil);
+    ASSERT_TRUE(z.active);
+    excavate(t, z, soil);
+    // the columns as boxes, with and without the plane's plates
+    std::vector<StaticGeom> steps, plane;
+    int plates = 0;
+    for (int j = 0; j < t.ny(); ++j)
+      for (int i = 0; i < t.nx(); ++i) {
+        double top = t.surface_height(i, j);
+        const auto box = [&](double z_top) {
+          return StaticGeom::box(Vec3(t.column_x(i), t.column_y(j), 0.5 * z_top),
+                                 Vec3(0.5 * h, 0.5 * h, 0.5 * z_top), Eigen::Matrix3d::Identity());
+        };
+        steps.push_back(box(top));
+        PlaneFloorColumn floor;
+        if (failure_plane_column(z, t, i, j, &floor)) {
+          EXPECT_LE(floor.top, top);
+          top = floor.top;
+          plane.push_back(floor.plate);
+          ++plates;
+        }
+        plane.push_back(box(top));
+      }
+    EXPECT_GT(plates, 20) << turn;
+    // a grain touching the failure plane, a cell inside the zone's edges, at points a seventh of a
+    // cell apart: the plane's floor touches it (gap 0), the staircase overlaps it
+    const double beta = z.failure_angle_deg * kDeg;
+    const Vec3 normal = -std::sin(beta) * z.forward + std::cos(beta) * Vec3::UnitZ();
+    double worst_plane = INFINITY, worst_steps = INFINITY, highest_plane = -INFINITY;
+    for (double s = h; s <= z.reach_ahead - h; s += h / 7.0)
+      for (double a = -0.5 * z.width + h; a <= 0.5 * z.width - h; a += h / 7.0) {
+        const Vec3 on_plane =
+            z.tip + s * z.forward + a * z.along + s * std::tan(beta) * Vec3::UnitZ();
+        const Vec3 grain = on_plane + r * normal;
+        const auto min_gap = [&](const std::vector<StaticGeom>& geoms) {
+          double gap = INFINITY;
+          Vec3 n;
+          for (const StaticGeom& g : geoms)
+            gap = std::min(gap, reference::sphere_geom(grain, r, g, &n));
+          return gap;
+        };
+        const double gap = min_gap(plane);
+        worst_plane = std::min(worst_plane, gap);
+        highest_plane = std::max(highest_plane, gap);
+        worst_steps = std::min(worst_steps, min_gap(steps));
+      }
+    std::printf(
+        "[ measured ] zone turned %.0f deg, beta %.1f deg: a grain on the plane overlaps "
+        "the plane's floor by %.2g m at most (the staircase: %.3f m)\n",
+        turn, z.failure_angle_deg, -worst_plane, -worst_steps);
+    EXPECT_GT(worst_plane, -1e-9) << turn;
+    EXPECT_LT(highest_plane, 1e-9) << turn;
+    EXPECT_LT(worst_steps, -0.25 * h * std::tan(beta)) << turn;
+    // outside the zone, behind its tip, or under an inactive zone: no plate
+    PlaneFloorColumn floor;
+    int i = 0, j = 0;
+    ASSERT_TRUE(t.column_at(2.5, 2.5, &i, &j));
+    EXPECT_FALSE(failure_plane_column(z, t, i, j, &floor));
+    const Vec3 behind = z.tip - 0.3 * z.forward;
+    ASSERT_TRUE(t.column_at(behind.x(), behind.y(), &i, &j));
+    EXPECT_FALSE(failure_plane_column(z, t, i, j, &floor));
+    const Vec3 ahead = z.tip + 0.5 * z.reach_ahead * z.forward;
+    ASSERT_TRUE(t.column_at(ahead.x(), ahead.y(), &i, &j));
+    EXPECT_TRUE(failure_plane_column(z, t, i, j, &floor));
+    ActiveZone idle = z;
+    idle.active = false;
+    EXPECT_FALSE(failure_plane_column(idle, t, i, j, &floor));
+  }
 }
 
 // no zone turns soil dynamic when the tool creeps (below 0.1 m/s) or rides above the surface
