@@ -186,7 +186,8 @@ bool failure_plane_column(const ActiveZone& zone, const VoxelTerrain& terrain, i
   if (std::abs(r.dot(zone.along)) > 0.5 * zone.width || s < 0.0 || s > zone.reach_ahead)
     return false;
   // excavated to the plane there, or deeper (a plane risen since, as the tool lifts), on soil
-  const double tan_beta = std::tan(zone.failure_angle_deg * kDegree);
+  const double beta = zone.failure_angle_deg * kDegree;
+  const double tan_beta = std::tan(beta);
   const double top = terrain.surface_height(i, j);
   if (top <= terrain.z0() || top > zone.tip.z() + s * tan_beta + kOverlapRounding) return false;
   // the footprint's half extents along forward and along (a turned zone sees the square wider)
@@ -195,7 +196,6 @@ bool failure_plane_column(const ActiveZone& zone, const VoxelTerrain& terrain, i
   column->top = std::max(terrain.z0(), top - half_forward * tan_beta);
   // the plate: its top face the plane over the footprint, its depth the footprint's length along
   // forward (at least the plane's fall over it, h tan(beta) cos(beta), for beta up to 90 deg)
-  const double beta = zone.failure_angle_deg * kDegree;
   const Vec3 up = Vec3::UnitZ();
   const Vec3 uphill = std::cos(beta) * zone.forward + std::sin(beta) * up;
   const Vec3 normal = -std::sin(beta) * zone.forward + std::cos(beta) * up;

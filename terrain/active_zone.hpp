@@ -102,10 +102,10 @@ ActiveZone within_reach(const ActiveZone& zone, double reach);
 // Excavation leaves each column of the zone at the plane's height over the column's centre, so on
 // a grid of cell h the floor is a staircase whose steps, h tan(beta) high (17 cm at G200 with
 // HD27's beta of about 40 deg, most of a grain), face the tool: the soil it pushes has to climb
-// each one, where the model's wedge slides up a plane
-// (docs/multiscale.md "The zone's floor is its failure plane"). Column (i, j) is under the plane
-// when the zone is active, the column's centre lies within the zone's width ahead of the tip (the
-// failure plane's part, 0 <= s <= reach_ahead) and its top stands on soil at or below the plane
+// each one, where the model's wedge slides up a plane (docs/multiscale.md "The zone's floor is
+// its failure plane"). Column (i, j) is under the plane when the zone is active, the column's
+// centre lies within the zone's width ahead of the tip (the failure plane's part,
+// 0 <= s <= reach_ahead) and its top stands on soil at or below the plane
 // there (excavated to it, within a nanometre, or deeper: the plane rises as the tool lifts). Such
 // a column's top is shown to the particles as a plane parallel to the failure plane through the
 // top over the column's centre (the same soil under it): `top`, that plane's height at the
