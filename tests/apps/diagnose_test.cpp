@@ -395,9 +395,14 @@ TEST(DiagnoseTest, AMissingEffectBesideTheSimulationsSensitivityIsStillUnexplain
 // (below half), so there is no check to run: that draw asserts nothing was added and the test
 // draws again, at most kChaosDraws times, until one reaches the check it is about. With the
 // content a body (the default since 9e456b7) 1 of 20 draws (seed 101) dug data within noise of
-// the model without cohesion: no round at all, and the test draws again too
+// the model without cohesion: no round at all, and the test draws again too. Since the zone's
+// floor is its failure plane (f10394b) the dig is more chaotic in the cohesion: over seeds 1-12
+// and 663386212 (the CI failure of 57a236f) 11 of 23 draws reached the check (every check
+// refused the fit); the others' fits explained 14-44 %, or no scanned value beat the model
+// without cohesion at all (best 2.90 against 2.70). Ten draws leave 0.52^10 = 0.15 % of seeds
+// without a check
 TEST(DiagnoseTest, AFitOfThePileTheDataWereDugOnIsRefusedByTheChaosCheck) {
-  constexpr int kChaosDraws = 3;
+  constexpr int kChaosDraws = 10;
   const unsigned seed = test_seed();
   std::mt19937_64 rng(seed);
   bool checked = false;
@@ -433,7 +438,15 @@ TEST(DiagnoseTest, AFitOfThePileTheDataWereDugOnIsRefusedByTheChaosCheck) {
       continue;
     }
     const auto& round = j["rounds"][0];
-    ASSERT_FALSE(round["fitted"].empty()) << context;
+    // a chaotic response can leave every point of the scan worse than the model without the
+    // cohesion (seed 663386212: best 2.90 against 2.70 without): no fit, so nothing to check
+    if (round["fitted"].empty()) {
+      EXPECT_TRUE(round["chaos_checks"].empty()) << context << ": " << round.dump();
+      std::cout << context
+                << ": no scanned cohesion beat the model without it, no fit; drawing again\n";
+      fs::remove_all(base);
+      continue;
+    }
     EXPECT_EQ(round["fitted"][0]["explained_on"], "calibration") << context;
     // a fit below half is no addition, so nothing to check: draw again
     if (round["fitted"][0]["explained"].get<double>() < 0.5) {
