@@ -185,6 +185,8 @@ DiggingOptions digging_options(const RunOptions& o) {
   options.content_inertia = o.content_inertia;
   options.bucket_support = o.bucket_support;
   options.failure_plane_floor = o.failure_plane_floor;
+  options.avalanche.repose_deg = o.repose_angle;
+  options.avalanche.rate = o.avalanche_rate;
   if (o.form_speed >= 0.0) options.pile.form_speed = o.form_speed;
   options.pile.hold_face = o.hold_face;
   options.sweep = parse_sweep(o.sweep, "--sweep");
@@ -291,6 +293,9 @@ nlohmann::json dig_details(const RunOptions& o, const vehicle::Scenario& sc,
         {"excavation_reach_m", options.excavation_reach},
         // the zone's particles on its failure plane (true) or its columns' staircase (type G)
         {"failure_plane_floor", options.failure_plane_floor},
+        // the voxel surface's avalanche (type G; the defaults at type D, which has none)
+        {"repose_angle_deg", options.avalanche.repose_deg},
+        {"avalanche_rate_per_s", options.avalanche.rate},
         // the aggregate's interfaces' damping time in use (type G; null at type D)
         {"interface_damping_time_s",
          sim.multiscale() ? nlohmann::json(interface_damping_time(interfaces, preset.dt))
@@ -546,6 +551,12 @@ void run_scenario(const RunOptions& o) {
               "type-G zone to excavate");
   type_g_only(!o.failure_plane_floor, "--no-failure-plane-floor",
               "type-G zone whose floor to make of voxel columns");
+  type_g_only(o.repose_angle != AvalancheOptions{}.repose_deg,
+              "--repose-angle " + std::to_string(o.repose_angle),
+              "type-G voxel surface to avalanche");
+  type_g_only(o.avalanche_rate != AvalancheOptions{}.rate,
+              "--avalanche-rate " + std::to_string(o.avalanche_rate),
+              "type-G voxel surface to avalanche");
   type_g_only(o.interface_damping_time != 0.0,
               "--interface-damping-time " + std::to_string(o.interface_damping_time),
               "type-G aggregate's interfaces to damp");
@@ -636,6 +647,16 @@ void add_run_command(CLI::App& app, const std::string& command_line) {
                   "ahead of the cutting edge [m]; 0 = the whole wedge (the default; "
                   "docs/validation.md \"The zone's excavation reach\")")
       ->check(non_negative_number())
+      ->capture_default_str();
+  cmd->add_option("--repose-angle", opts->repose_angle,
+                  "study, type G: the voxel surface's angle of repose, to which it avalanches "
+                  "[deg], in [5, 60] (docs/validation.md \"D100's face creeps from t = 0\")")
+      ->check(number_in(kMinReposeAngle, kMaxReposeAngle, "deg"))
+      ->capture_default_str();
+  cmd->add_option("--avalanche-rate", opts->avalanche_rate,
+                  "study, type G: how fast the surface's slope above the repose angle decays "
+                  "[1/s], in [0, 1000]; 6.3 = the reference engine's (terrain/avalanche.hpp)")
+      ->check(number_in(0.0, kMaxAvalancheRate, "1/s"))
       ->capture_default_str();
   cmd->add_option("--seed-diameter", opts->seed_diameter,
                   "study, type G: the zone's particles appear at this fraction of their full "

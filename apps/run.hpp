@@ -57,6 +57,10 @@ struct RunOptions {
   // type G: the zone's particles stand on its failure plane (the default);
   // --no-failure-plane-floor: on its excavated columns' staircase (a study)
   bool failure_plane_floor = true;
+  // type G, a study: the voxel surface's angle of repose [deg] and its avalanche's decay rate
+  // [1/s] (--repose-angle, --avalanche-rate; DiggingOptions::avalanche)
+  double repose_angle = AvalancheOptions{}.repose_deg;
+  double avalanche_rate = AvalancheOptions{}.rate;
   bool residuals = false;
   // settled piles read from and saved to the pile cache (terrain/pile_cache.hpp; --no-pile-cache)
   bool pile_cache = true;

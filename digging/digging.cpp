@@ -121,6 +121,14 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
                      ": only the type-G levels have a zone of excavated voxel columns to stand "
                      "on; the columns' staircase is a type-G study (a G level), or leave "
                      "failure_plane_floor on");
+  if (!is_multiscale(preset) && (options.avalanche.repose_deg != AvalancheOptions{}.repose_deg ||
+                                 options.avalanche.rate != AvalancheOptions{}.rate))
+    throw InputError("avalanche (repose " + std::to_string(options.avalanche.repose_deg) +
+                     " deg, rate " + std::to_string(options.avalanche.rate) + " /s) at " +
+                     preset.name +
+                     ": only the type-G levels have a voxel surface that avalanches; at a type-D "
+                     "level the particles make the slope themselves (use a G level or leave the "
+                     "avalanche at its defaults)");
   if (!is_multiscale(preset) && options.seed_diameter != 1.0)
     throw InputError("seed_diameter " + std::to_string(options.seed_diameter) + " at " +
                      preset.name +
@@ -156,6 +164,7 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
     terrain.seed_diameter = options.seed_diameter;
     terrain.excavation_reach = options.excavation_reach;
     terrain.failure_plane_floor = options.failure_plane_floor;
+    terrain.avalanche = options.avalanche;
     terrain.seed = options.pile.seed;
     terrain.pressed_depth = options.bucket_support ? kPressedDepth : 0.0;
     terrain_ = std::make_unique<MultiscaleTerrain>(dev, scenario_pile_profile(scenario), preset,

@@ -41,6 +41,14 @@ inline constexpr double kDigSweepTolerance = 1.0e-4;
 // law (at 0.5 m of depth the law gives 38 kN; ten times it is four times the machine's traction,
 // about 100 kN, so larger factors only stall the bucket)
 inline constexpr double kMaxEdgeResistance = 10.0;
+// the range `talus run --repose-angle` takes for the type-G surface [deg]: dry granular soils
+// stand at 25-45 deg; 5 lets a study flatten a face, 60 steepen one
+inline constexpr double kMinReposeAngle = 5.0;
+inline constexpr double kMaxReposeAngle = 60.0;
+// the largest rate `talus run --avalanche-rate` takes [1/s]: at every level's step the fraction a
+// step moves, 1 - exp(-k dt), reaches its cap of 0.25 (terrain/avalanche.hpp) below it (G50's 5 ms:
+// k = 58 /s), so faster rates change nothing
+inline constexpr double kMaxAvalancheRate = 1000.0;
 
 struct DiggingOptions {
   PileBuildOptions pile;         // settling of the pile before the machine starts
@@ -80,6 +88,13 @@ struct DiggingOptions {
   // the type-G loads and work toward D100's, docs/validation.md "The zone's floor is its failure
   // plane"); off: the columns alone (a study; refused at a type-D level, which has no voxels)
   bool failure_plane_floor = true;
+  // type G, a study: the voxel surface's avalanche (MultiscaleOptions::avalanche,
+  // terrain/avalanche): its angle of repose (32 deg, the gravel's internal friction, paper §4.4)
+  // and decay rate (6.3 /s, the reference engine's). A lower angle and a faster rate let the pile's
+  // face slide into the cut as the type-D spheres' face creeps (docs/validation.md "D100's face
+  // creeps from t = 0"); refused at a type-D level unless the defaults, whose particles are the
+  // surface
+  AvalancheOptions avalanche;
   // type G, a study: the SPOOK damping time of the aggregate's interfaces A and B [s] in
   // [kMinDampingTime, kMaxDampingTime] (solvers/dem_settings); 0, the default: two of the level's
   // steps (AggregateParameters::

@@ -134,7 +134,7 @@ class MultiscaleTerrain {
   // the terrain of a pile profile (placed where the pile stands) at a type-G level, with the
   // bucket's mesh (its profile frame) where `start` puts it. Throws InputError for a level that
   // is not type G and for options outside their ranges (seed_diameter, growth_speed,
-  // pressed_depth, excavation_reach)
+  // pressed_depth, excavation_reach, the avalanche's repose angle and rate)
   MultiscaleTerrain(Device& dev, const PileProfile& profile, const FidelityPreset& level,
                     const vehicle::BucketMesh& bucket, const KinematicBucket& start,
                     const MultiscaleOptions& options = {},

@@ -276,10 +276,12 @@ TEST(CliErrors, StepCountsAndLoadsOutsideTheirRangeAreRefused) {
   }
   // the bucket's content by its weight alone, a factor on the cutting edge's resistance, the
   // soil under the bucket giving way, the aggregate's interfaces' damping time, the zone's
-  // excavation reach and its floor of voxel columns: a pile scenario at a G level only
+  // excavation reach, its floor of voxel columns and the surface's avalanche: a pile scenario at
+  // a G level only
   for (const char* option :
        {" --no-content-inertia", " --edge-resistance 0", " --no-bucket-support",
-        " --interface-damping-time 0.01", " --excavation-reach 0.6", " --no-failure-plane-floor"}) {
+        " --interface-damping-time 0.01", " --excavation-reach 0.6", " --no-failure-plane-floor",
+        " --repose-angle 20", " --avalanche-rate 30"}) {
     for (const char* cmd :
          {"run --scenario hd27 --fidelity D400", "run --scenario load-carry --fidelity G400"}) {
       const Outcome o = run("", std::string(cmd) + " --out /tmp/talus_cli_seed" + option);
@@ -305,6 +307,13 @@ TEST(CliErrors, StepCountsAndLoadsOutsideTheirRangeAreRefused) {
                               "--interface-damping-time 0.7");
   EXPECT_EQ(damping.code, 2) << damping.err;
   EXPECT_NE(damping.err.find("--interface-damping-time"), std::string::npos) << damping.err;
+  for (const char* option : {" --repose-angle 70", " --repose-angle 4", " --avalanche-rate -1"}) {
+    const Outcome o = run("", std::string("run --scenario hd27 --fidelity G400 --out "
+                                          "/tmp/talus_cli_seed") +
+                                  option);
+    EXPECT_EQ(o.code, 2) << option << ": " << o.err;
+    EXPECT_NE(o.err.find(std::string(option).substr(1, 13)), std::string::npos) << o.err;
+  }
   EXPECT_FALSE(std::filesystem::exists("/tmp/talus_cli_seed"));
   // the blade test takes it at a G level only
   const Outcome cut =

@@ -337,6 +337,16 @@ TEST(Digging, TheCuttingEdgesResistanceIsTheLawTimesItsStudyFactor) {
       DiggingSimulation(test::shared_device(), sc, fidelity_preset("D400"), PileBuild{}, d),
       InputError);
   d.failure_plane_floor = true;
+  d.avalanche.repose_deg = 20.0;  // the voxel surface's avalanche: type G only
+  EXPECT_THROW(
+      DiggingSimulation(test::shared_device(), sc, fidelity_preset("D400"), PileBuild{}, d),
+      InputError);
+  d.avalanche = AvalancheOptions{};
+  d.avalanche.rate = 30.0;
+  EXPECT_THROW(
+      DiggingSimulation(test::shared_device(), sc, fidelity_preset("D400"), PileBuild{}, d),
+      InputError);
+  d.avalanche = AvalancheOptions{};
   d.edge_resistance = -0.1;
   EXPECT_THROW(DiggingSimulation(test::shared_device(), sc, g400,
                                  build_scenario_pile(test::shared_device(), sc,
