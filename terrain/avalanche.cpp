@@ -28,13 +28,20 @@ struct Outflow {
 
 }  // namespace
 
+void check_avalanche_options(const AvalancheOptions& options) {
+  if (!(options.repose_deg > 0.0 && options.repose_deg < 90.0))
+    throw InputError("avalanche: repose_deg " + std::to_string(options.repose_deg) +
+                     " deg is not an angle of repose in (0, 90) deg (the gravel's: 32)");
+  if (!(options.rate >= 0.0 && std::isfinite(options.rate)))
+    throw InputError("avalanche: rate " + std::to_string(options.rate) +
+                     " /s is not a decay rate >= 0 (the reference engine's: 6.3 /s)");
+}
+
 AvalancheStep avalanche(VoxelTerrain& terrain, double dt, const AvalancheOptions& options,
                         const std::vector<char>* closed) {
-  if (!(dt > 0.0) || !(options.rate >= 0.0) ||
-      !(options.repose_deg > 0.0 && options.repose_deg < 90.0))
-    throw Error(
-        "avalanche: the timestep must be positive, the rate non-negative and the repose angle in "
-        "(0, 90) deg");
+  if (!(dt > 0.0))
+    throw Error("avalanche: the timestep " + std::to_string(dt) + " s is not positive");
+  check_avalanche_options(options);
   AvalancheStep step;
   const int nx = terrain.nx(), ny = terrain.ny();
   if (closed && closed->size() != static_cast<size_t>(nx) * ny)

@@ -36,6 +36,11 @@ struct AvalancheStep {
   double steepest_deg = 0.0;  // the steepest slope between neighbours at the step's start
 };
 
+// the options' one contract, checked by avalanche and by the multiscale terrain before a dig:
+// throws talus::InputError naming the field for a repose angle outside (0, 90) deg or a rate
+// that is not a finite number >= 0
+void check_avalanche_options(const AvalancheOptions& options);
+
 // one step of avalanching over the whole terrain; throws talus::Error for a non-positive timestep,
 // a negative rate or a repose angle outside (0, 90) deg. `closed` (one flag per column, index
 // j nx + i), when given, marks the columns that take no soil: where a tool's body stands on the

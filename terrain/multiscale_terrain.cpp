@@ -130,14 +130,7 @@ MultiscaleTerrain::MultiscaleTerrain(Device& dev, const PileProfile& profile,
     throw InputError("multiscale terrain: excavation_reach " +
                      std::to_string(options.excavation_reach) +
                      " m is not a distance ahead of the cutting edge (0: the whole zone)");
-  if (!(options.avalanche.repose_deg > 0.0 && options.avalanche.repose_deg < 90.0))
-    throw InputError("multiscale terrain: avalanche.repose_deg " +
-                     std::to_string(options.avalanche.repose_deg) +
-                     " deg is not an angle of repose in (0, 90) deg (the gravel's: 32)");
-  if (!(options.avalanche.rate >= 0.0 && std::isfinite(options.avalanche.rate)))
-    throw InputError("multiscale terrain: avalanche.rate " +
-                     std::to_string(options.avalanche.rate) +
-                     " /s is not a decay rate >= 0 (the reference engine's: 6.3 /s)");
+  check_avalanche_options(options.avalanche);
   DemSettings settings;
   settings.dt = level.dt;
   settings.iterations = level.iterations;
