@@ -210,6 +210,7 @@ void add_bench_dig(CLI::App& bench) {
     bool pile_cache = true;  // the pile through the pile cache (--no-pile-cache)
     double sweep_tolerance = kDigSweepTolerance;  // [m/s] DiggingOptions::sweep_tolerance
     SolverStudy study{DiggingOptions{}.pair_reach};
+    std::string bucket_sweep = "serial";  // CouplingSettings::bucket_sweep
   };
   auto opt = std::make_shared<Options>();
   auto* dig = bench.add_subcommand("dig",
@@ -235,6 +236,7 @@ void add_bench_dig(CLI::App& bench) {
       ->check(number_in(0.0, 1.0, "m/s", true))
       ->capture_default_str();
   opt->study.add_flags(*dig);
+  dig->add_option("--bucket-sweep", opt->bucket_sweep, kBucketSweepHelp)->capture_default_str();
   dig->add_flag("--quiet", opt->quiet, "no progress on stderr");
   dig->add_flag(
       "!--no-pile-cache", opt->pile_cache,
@@ -248,12 +250,14 @@ void add_bench_dig(CLI::App& bench) {
     // a type-D pile, or a type-G terrain built from the pile's profile (issue 14)
     const FidelityPreset& preset = level_preset(opt->level);
     check_dig_seconds(scenario, opt->seconds);
+    const BucketSweep bucket_sweep = parse_bucket_sweep(opt->bucket_sweep, "--bucket-sweep");
     if (!opt->json.empty()) check_writable(opt->json, "--json");
     Device dev(run_device_choice(preset));
     DiggingOptions options;
     options.pile.seed = opt->seed;
     options.sweep_tolerance = opt->sweep_tolerance;
     opt->study.apply(options);
+    options.coupling.bucket_sweep = bucket_sweep;
     options.pile_cache.enabled = opt->pile_cache;
     options.pile_cache.note = [](const std::string& line) {
       std::cerr << "talus bench dig: " << line << "\n";
@@ -272,6 +276,7 @@ void add_bench_dig(CLI::App& bench) {
     progress.finish();
     nlohmann::ordered_json j = dig_cost_json(cost, dev.description());
     opt->study.describe(j);
+    j["bucket_sweep"] = bucket_sweep_name(bucket_sweep);
     if (!opt->json.empty()) write_file_atomically(opt->json, j.dump(2) + "\n");
     std::cout << j.dump(2) << "\n";
   });

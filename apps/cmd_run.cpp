@@ -190,6 +190,7 @@ DiggingOptions digging_options(const RunOptions& o) {
   if (o.form_speed >= 0.0) options.pile.form_speed = o.form_speed;
   options.pile.hold_face = o.hold_face;
   options.sweep = parse_sweep(o.sweep, "--sweep");
+  options.coupling.bucket_sweep = parse_bucket_sweep(o.bucket_sweep, "--bucket-sweep");
   check_relaxation(o.relaxation, options.sweep, "--relaxation");
   options.pile_cache.enabled = o.pile_cache;
   options.pile_cache.note = [quiet = o.quiet](const std::string& line) {
@@ -287,6 +288,7 @@ nlohmann::json dig_details(const RunOptions& o, const vehicle::Scenario& sc,
         {"sweep_tolerance_m_s", options.sweep_tolerance},
         {"pair_reach", options.pair_reach},
         {"relaxation", options.relaxation},
+        {"bucket_sweep", bucket_sweep_name(options.coupling.bucket_sweep)},
         {"seed_diameter", options.seed_diameter},
         {"edge_resistance", options.edge_resistance},
         // how far ahead of the cutting edge the zone's soil turns dynamic [m] (0: the whole wedge)
@@ -528,6 +530,13 @@ void run_scenario(const RunOptions& o) {
   // the level and the sweep are checked for every scenario, though only a pile uses them
   const FidelityPreset level = level_preset(o.fidelity);
   parse_sweep(o.sweep, "--sweep");
+  if (parse_bucket_sweep(o.bucket_sweep, "--bucket-sweep") != BucketSweep::Serial &&
+      !(sc.pile && !is_multiscale(level)))
+    throw InputError("--bucket-sweep " + o.bucket_sweep + ": scenario '" + sc.name + "' at " +
+                     level.name +
+                     " has no chain of particle-bucket rows to colour (a type-G bucket meets the "
+                     "soil through its aggregate); give a pile scenario at a D level, or leave "
+                     "it serial");
   if (o.seed_diameter != 1.0 && !sc.pile)
     throw InputError("--seed-diameter " + std::to_string(o.seed_diameter) + ": scenario '" +
                      sc.name +
@@ -629,6 +638,7 @@ void add_run_command(CLI::App& app, const std::string& command_line) {
   cmd->add_option("--relaxation", opts->relaxation, kRelaxationHelp)
       ->check(relaxation_number())
       ->capture_default_str();
+  cmd->add_option("--bucket-sweep", opts->bucket_sweep, kBucketSweepHelp)->capture_default_str();
   cmd->add_option("--edge-resistance", opts->edge_resistance,
                   "study, type G: a factor on the cutting edge's penetration resistance, in [0, "
                   "10]; 1 = the law as it stands, 0 = none (docs/multiscale.md \"Penetration "

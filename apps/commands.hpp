@@ -52,6 +52,12 @@ inline const char* const kRelaxationHelp =
     "study: the relaxation omega of the particle rows' PGS sweeps, in [0.01, 2): each row's step "
     "is omega times Gauss-Seidel's (projected SOR; 1 = plain PGS, docs/dem.md \"Relaxation\")";
 
+// --bucket-sweep of run and bench dig (CouplingSettings::bucket_sweep)
+inline const char* const kBucketSweepHelp =
+    "how a type-D step sweeps its bucket rows: 'serial' (one chain, the bucket moving with each "
+    "row) or 'coloured' (a particle's rows in different colours, a colour's rows at once against "
+    "the bucket split among them; for GPUs, where the chain's latency dominates; docs/digging.md)";
+
 // a numeric option that must be a finite number: CLI11's range checks let NaN through (every
 // comparison with it is false), and a NaN timestep or rolling resistance would run silently
 inline CLI::Validator finite_number() {

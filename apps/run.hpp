@@ -18,6 +18,7 @@ struct RunOptions {
   std::string json;
   std::string command_line;  // as typed, recorded in summary.json with the version and commit
   std::string sweep = "pgs";
+  std::string bucket_sweep = "serial";  // CouplingSettings::bucket_sweep: serial or coloured
   double snapshot_interval = 1.0;  // s; 0: no snapshots
   unsigned seed = 1;
   bool quiet = false;

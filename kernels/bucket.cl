@@ -272,6 +272,123 @@ __kernel void bucket_sweep(__global TlRow* rows, int n_rows, __global float4* ve
   }
 }
 
+// The coloured walk (CouplingSettings::bucket_sweep Coloured, issue 13): the same rows without a
+// chain of all of them. Colour c holds each particle's c-th row (solvers/bucket_rows
+// colour_bucket_rows), so the rows of a colour share no particle and can be solved at once, one
+// work-item a row, against the twist the colour started from. They all push the bucket, so each
+// sees it split among the colour's s rows (mass splitting, Tonge et al. 2012): a row solves
+// against its own copy of the bucket with mobility s W (its effective masses were made with s W on
+// the host), and the bucket moves by the mean of the copies' changes, (1/s) sum of s W J^T dlambda
+// = W times the colour's total impulse, so the twist still follows W exactly as the direct solve
+// does. Colours run one after another (Gauss-Seidel between them); the copies' changes are summed
+// chunk by chunk by a tree in local memory, in an order fixed by the work-group size alone, so a
+// device and work-group size give the same bits on every run. Launched as one work-group whose
+// size is a power of two.
+
+// the sum of `sums`' first 6 x size floats into its first 6 (work-item k's 6 at 6 k), a tree of
+// halvings: the same additions in the same order whatever the timing
+void bucket_twist_sum(__local float* sums) {
+  int k = get_local_id(0);
+  for (int span = get_local_size(0) / 2; span > 0; span /= 2) {
+    barrier(CLK_LOCAL_MEM_FENCE);
+    if (k < span)
+      for (int i = 0; i < 6; ++i) sums[6 * k + i] += sums[6 * (k + span) + i];
+  }
+  barrier(CLK_LOCAL_MEM_FENCE);
+}
+
+// the warm start, colour by colour: a colour's rows touch distinct particles
+__kernel void bucket_warm_start_coloured(__global const TlRow* rows,
+                                         __global const int* colour_start, int colours,
+                                         __global float4* velocity, __global float4* omega) {
+  int size = get_local_size(0);
+  for (int c = 0; c < colours; ++c) {
+    int end = colour_start[c + 1];
+    for (int r = colour_start[c] + get_local_id(0); r < end; r += size) {
+      TlRow row = rows[r];
+      float4 va = velocity[row.a];
+      float4 wa = omega[row.a];
+      bucket_row_warm_start(row, &va, &wa);
+      velocity[row.a] = va;
+      omega[row.a] = wa;
+    }
+    // the colour's particles seen by the next colour's rows
+    barrier(CLK_GLOBAL_MEM_FENCE);
+  }
+}
+
+// one sweep over the rows colour by colour, each colour's rows at once against split copies of
+// the bucket; `sums` holds 6 floats a work-item
+__kernel void bucket_sweep_coloured(__global TlRow* rows, __global const int* colour_start,
+                                    int colours, __global float4* velocity, __global float4* omega,
+                                    __global TlBucketBody* bucket, __local float* sums) {
+  int k = get_local_id(0);
+  int size = get_local_size(0);
+  // every work-item holds the twist and does the same additions to it: the same bits in all
+  float3 vb = bucket->velocity.xyz, wb = bucket->omega.xyz;
+  for (int c = 0; c < colours; ++c) {
+    int begin = colour_start[c];
+    int end = colour_start[c + 1];
+    // the split: the colour's rows share the bucket
+    float s = (float)(end - begin);
+    float3 dv = (float3)(0.0f), dw = (float3)(0.0f);
+    for (int base = begin; base < end; base += size) {
+      int r = base + k;
+      float d[6] = {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f};
+      if (r < end) {
+        TlRow row = rows[r];
+        float4 va = velocity[row.a];
+        float4 wa = omega[row.a];
+        // the copy's mobility s W and coupling s G (G = W J_b^T and G n as bucket_chunk_coupling)
+        float W[36];
+        for (int i = 0; i < 36; ++i) W[i] = s * bucket->mobility[i];
+        float3 b = row.arm_b.xyz;
+        float3 n = row.normal.xyz;
+        float3 cr[3] = {(float3)(0.0f, b.z, -b.y), (float3)(-b.z, 0.0f, b.x),
+                        (float3)(b.y, -b.x, 0.0f)};
+        float G[TL_COUPLING_FLOATS];
+        for (int i = 0; i < 6; ++i) {
+          float3 w_lin = (float3)(W[6 * i], W[6 * i + 1], W[6 * i + 2]);
+          float3 w_ang = (float3)(W[6 * i + 3], W[6 * i + 4], W[6 * i + 5]);
+          float3 gi = w_lin + (float3)(dot(w_ang, cr[0]), dot(w_ang, cr[1]), dot(w_ang, cr[2]));
+          G[3 * i] = gi.x;
+          G[3 * i + 1] = gi.y;
+          G[3 * i + 2] = gi.z;
+          G[18 + i] = dot(gi, n);
+        }
+        float3 vk = vb, wk = wb;
+        bucket_row_solve(&row, &va, &wa, W, G, &vk, &wk);
+        rows[r].impulse_t = row.impulse_t;
+        rows[r].impulse_r = row.impulse_r;
+        velocity[row.a] = va;
+        omega[row.a] = wa;
+        // the copy's change, shared out: the bucket's is the mean over the colour
+        float3 ev = (vk - vb) / s, ew = (wk - wb) / s;
+        d[0] = ev.x;
+        d[1] = ev.y;
+        d[2] = ev.z;
+        d[3] = ew.x;
+        d[4] = ew.y;
+        d[5] = ew.z;
+      }
+      for (int i = 0; i < 6; ++i) sums[6 * k + i] = d[i];
+      bucket_twist_sum(sums);
+      dv += (float3)(sums[0], sums[1], sums[2]);
+      dw += (float3)(sums[3], sums[4], sums[5]);
+      // every work-item has read the chunk's sum before the next chunk writes its own
+      barrier(CLK_LOCAL_MEM_FENCE);
+    }
+    vb += dv;
+    wb += dw;
+    // the colour's particles seen by the next colour's rows
+    barrier(CLK_GLOBAL_MEM_FENCE);
+  }
+  if (k == 0) {
+    bucket->velocity = (float4)(vb, 0.0f);
+    bucket->omega = (float4)(wb, 0.0f);
+  }
+}
+
 // Kinematic tools (mobility W = 0: the type-G bucket, the cutting blade, the shear ring): the
 // particles cannot move the tool, so a row changes its particle alone and the rows of different
 // particles do not depend on one another. The serial walk above is then only a walk per particle:

@@ -3,6 +3,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <string>
 
 #include "host/error.hpp"
@@ -124,10 +125,52 @@ std::vector<ContactRow> make_bucket_rows(const std::vector<BucketContact>& conta
   return rows;
 }
 
-void set_bucket_effective_masses(std::vector<ContactRow>& rows, const std::vector<BucketContact>& contacts,
-                                 const Particles& particles, const Mat6& mobility) {
+const char* bucket_sweep_name(BucketSweep sweep) {
+  return sweep == BucketSweep::Coloured ? "coloured" : "serial";
+}
+
+BucketSweep parse_bucket_sweep(const std::string& text, const std::string& field) {
+  if (text == "serial") return BucketSweep::Serial;
+  if (text == "coloured") return BucketSweep::Coloured;
+  throw InputError(field + ": unknown bucket sweep '" + text + "'; use 'serial' or 'coloured'");
+}
+
+BucketColouring colour_bucket_rows(const std::vector<int>& particle_of_row) {
+  // each row's colour: how many rows of its particle came before it
+  std::map<int, int> seen;
+  std::vector<int> colour(particle_of_row.size());
+  int colours = 0;
+  for (size_t k = 0; k < particle_of_row.size(); ++k) {
+    colour[k] = seen[particle_of_row[k]]++;
+    colours = std::max(colours, colour[k] + 1);
+  }
+  // the rows by colour, in row order within one (a counting sort)
+  BucketColouring out;
+  out.colour_start.assign(colours + 1, 0);
+  for (int c : colour) ++out.colour_start[c + 1];
+  for (int c = 0; c < colours; ++c) out.colour_start[c + 1] += out.colour_start[c];
+  std::vector<int> next(out.colour_start.begin(), out.colour_start.end() - 1);
+  out.order.resize(particle_of_row.size());
+  out.split.resize(particle_of_row.size());
+  for (size_t k = 0; k < colour.size(); ++k) {
+    out.order[next[colour[k]]++] = static_cast<int>(k);
+    out.split[k] = out.colour_start[colour[k] + 1] - out.colour_start[colour[k]];
+  }
+  return out;
+}
+
+void set_bucket_effective_masses(std::vector<ContactRow>& rows,
+                                 const std::vector<BucketContact>& contacts,
+                                 const Particles& particles, const Mat6& mobility,
+                                 const std::vector<int>& split) {
+  if (!split.empty() && split.size() != rows.size())
+    throw Error("set_bucket_effective_masses: " + std::to_string(split.size()) +
+                " split factors for " + std::to_string(rows.size()) + " rows");
   const double d_r_bucket = largest_eigenvalue(mobility.block<3, 3>(3, 3));
-  for (ContactRow& row : rows) {
+  for (size_t k = 0; k < rows.size(); ++k) {
+    ContactRow& row = rows[k];
+    // the bucket as this row sees it: shared s ways in the coloured sweep (mobility s W)
+    const double s = split.empty() ? 1.0 : split[k];
     const BucketContact& c = contacts.at(row.contact);
     const Vec3& n = row.normal;
     const double inv_m = particles.inv_mass[row.a];
@@ -135,12 +178,12 @@ void set_bucket_effective_masses(std::vector<ContactRow>& rows, const std::vecto
     // the bucket's point mobility at the contact: K_b = E W E^T, E = [I, -[arm]x]
     Eigen::Matrix<double, 3, 6> E;
     E << Mat3d::Identity(), -skew(row.arm_b);
-    const Mat3d K = E * mobility * E.transpose();
+    const Mat3d K = s * (E * mobility * E.transpose());
     // effective masses: exact along n, an upper bound across (see the header)
     const Mat3d across = Mat3d::Identity() - n * n.transpose();
     const double d_n = inv_m + n.dot(K * n) + row.sigma;
     const double d_t = inv_m + inv_i * c.arm_particle.squaredNorm() + largest_eigenvalue(across * K * across);
-    const double d_r = inv_i + d_r_bucket;
+    const double d_r = inv_i + s * d_r_bucket;
     row.inv_dn = 1.0 / d_n;
     row.inv_dt = d_t > 0.0 ? 1.0 / d_t : 0.0;
     row.inv_dr = d_r > 0.0 ? 1.0 / d_r : 0.0;
@@ -234,44 +277,86 @@ void bucket_warm_start(const std::vector<ContactRow>& rows, Particles& particles
   }
 }
 
+namespace {
+
+// one row against the bucket (kernels/bucket.cl bucket_row_solve): normal, friction, rolling,
+// the bucket moved through its mobility by every impulse change
+void solve_bucket_row(ContactRow& row, Particles& particles, BucketBody& bucket) {
+  const int a = row.a;
+  Vec3& va = particles.velocity[a];
+  Vec3& wa = particles.omega[a];
+  const double ima = particles.inv_mass[a];
+  const double iia = particles.inv_inertia[a];
+  const Vec3& n = row.normal;
+  double ln = row.impulse_n;
+
+  // normal
+  const double un = n.dot(bucket.velocity + bucket.omega.cross(row.arm_b) - va);
+  const double ln_new = contact_law::normal_impulse(ln, row.rhs, un, row.sigma, row.inv_dn, 0.0);
+  const Vec3 dp = (ln_new - ln) * n;
+  va -= ima * dp;
+  add_twist_change(bucket, dp, row.arm_b.cross(dp));
+  ln = ln_new;
+
+  // friction on the disc
+  const Vec3 u = (bucket.velocity + bucket.omega.cross(row.arm_b)) - (va + wa.cross(row.arm_a));
+  const Vec3 ut = u - u.dot(n) * n;
+  const Vec3 lt_new =
+      contact_law::friction_impulse(row.impulse_t, ut, row.inv_dt, row.friction * ln);
+  const Vec3 dlt = lt_new - row.impulse_t;
+  va -= ima * dlt;
+  wa -= iia * row.arm_a.cross(dlt);
+  add_twist_change(bucket, dlt, row.arm_b.cross(dlt));
+
+  // rolling and twist
+  const Vec3 wrel = bucket.omega - wa;
+  const Vec3& lr = row.impulse_r;
+  const Vec3 lr_new = contact_law::rolling_impulse(lr, wrel, n, row.inv_dr, row.rolling_limit * ln);
+  const Vec3 dlr = lr_new - lr;
+  wa -= iia * dlr;
+  add_twist_change(bucket, Vec3::Zero(), dlr);
+
+  row.impulse_n = ln;
+  row.impulse_t = lt_new;
+  row.impulse_r = lr_new;
+}
+
+}  // namespace
+
 void bucket_sweep(std::vector<ContactRow>& rows, Particles& particles, BucketBody& bucket) {
-  for (ContactRow& row : rows) {
+  for (ContactRow& row : rows) solve_bucket_row(row, particles, bucket);
+}
+
+void bucket_warm_start_coloured(const std::vector<ContactRow>& rows,
+                                const BucketColouring& colouring, Particles& particles) {
+  // a particle's rows in colour order
+  for (int k : colouring.order) {
+    const ContactRow& row = rows.at(k);
     const int a = row.a;
-    Vec3& va = particles.velocity[a];
-    Vec3& wa = particles.omega[a];
-    const double ima = particles.inv_mass[a];
-    const double iia = particles.inv_inertia[a];
-    const Vec3& n = row.normal;
-    double ln = row.impulse_n;
+    const Vec3 P = row.impulse_n * row.normal + row.impulse_t;
+    particles.velocity[a] -= particles.inv_mass[a] * P;
+    particles.omega[a] -= particles.inv_inertia[a] * (row.arm_a.cross(P) + row.impulse_r);
+  }
+}
 
-    // normal
-    const double un = n.dot(bucket.velocity + bucket.omega.cross(row.arm_b) - va);
-    const double ln_new = contact_law::normal_impulse(ln, row.rhs, un, row.sigma, row.inv_dn, 0.0);
-    const Vec3 dp = (ln_new - ln) * n;
-    va -= ima * dp;
-    add_twist_change(bucket, dp, row.arm_b.cross(dp));
-    ln = ln_new;
-
-    // friction on the disc
-    const Vec3 u = (bucket.velocity + bucket.omega.cross(row.arm_b)) - (va + wa.cross(row.arm_a));
-    const Vec3 ut = u - u.dot(n) * n;
-    const Vec3 lt_new = contact_law::friction_impulse(row.impulse_t, ut, row.inv_dt, row.friction * ln);
-    const Vec3 dlt = lt_new - row.impulse_t;
-    va -= ima * dlt;
-    wa -= iia * row.arm_a.cross(dlt);
-    add_twist_change(bucket, dlt, row.arm_b.cross(dlt));
-
-    // rolling and twist
-    const Vec3 wrel = bucket.omega - wa;
-    const Vec3& lr = row.impulse_r;
-    const Vec3 lr_new = contact_law::rolling_impulse(lr, wrel, n, row.inv_dr, row.rolling_limit * ln);
-    const Vec3 dlr = lr_new - lr;
-    wa -= iia * dlr;
-    add_twist_change(bucket, Vec3::Zero(), dlr);
-
-    row.impulse_n = ln;
-    row.impulse_t = lt_new;
-    row.impulse_r = lr_new;
+void bucket_sweep_coloured(std::vector<ContactRow>& rows, const BucketColouring& colouring,
+                           Particles& particles, BucketBody& bucket) {
+  for (size_t c = 0; c + 1 < colouring.colour_start.size(); ++c) {
+    const int begin = colouring.colour_start[c], end = colouring.colour_start[c + 1];
+    // every row against its own copy of the bucket, split s ways
+    const double s = end - begin;
+    BucketBody copy = bucket;
+    copy.mobility *= s;
+    Vec6 moved = Vec6::Zero();
+    for (int k = begin; k < end; ++k) {
+      copy.velocity = bucket.velocity;
+      copy.omega = bucket.omega;
+      solve_bucket_row(rows.at(colouring.order[k]), particles, copy);
+      moved += (copy.twist() - bucket.twist()) / s;
+    }
+    // the bucket by the mean of the copies' changes
+    bucket.velocity += moved.head<3>();
+    bucket.omega += moved.tail<3>();
   }
 }
 
@@ -302,6 +387,7 @@ void set_chunk_args(cl::Kernel& kernel, cl_uint first, size_t chunk, bool coupli
 BucketRowBlock::BucketRowBlock(Device& dev, size_t chunk)
     : dev_(dev),
       rows_(dev, 1),
+      colour_start_(dev, 1),
       body_(dev, 1),
       index_(dev, 1),
       gathered_position_(dev, 1),
@@ -312,6 +398,8 @@ BucketRowBlock::BucketRowBlock(Device& dev, size_t chunk)
   gather_kernel_ = dev.kernel(program, "bucket_gather");
   warm_kernel_ = dev.kernel(program, "bucket_warm_start");
   sweep_kernel_ = dev.kernel(program, "bucket_sweep");
+  warm_coloured_kernel_ = dev.kernel(program, "bucket_warm_start_coloured");
+  sweep_coloured_kernel_ = dev.kernel(program, "bucket_sweep_coloured");
 }
 
 Particles BucketRowBlock::gather(const std::vector<int>& index, const Buffer<cl_float4>& position,
@@ -337,15 +425,38 @@ Particles BucketRowBlock::gather(const std::vector<int>& index, const Buffer<cl_
   return particles_from_device(x, v, w, identity);
 }
 
-void BucketRowBlock::set_rows(const std::vector<TlRow>& rows) {
+void BucketRowBlock::set_rows(const std::vector<TlRow>& rows, const BucketColouring& colouring) {
   rows_count_ = static_cast<int>(rows.size());
-  if (!rows.empty()) rows_.upload(rows);
+  order_.clear();
+  colours_ = 0;
+  if (rows.empty()) return;
+  if (colouring.empty()) {
+    rows_.upload(rows);
+    return;
+  }
+  if (colouring.order.size() != rows.size())
+    throw Error("BucketRowBlock::set_rows: a colouring of " +
+                std::to_string(colouring.order.size()) + " rows for " +
+                std::to_string(rows.size()));
+  // the rows in colour order on the device
+  order_ = colouring.order;
+  std::vector<TlRow> ordered;
+  ordered.reserve(rows.size());
+  for (int k : order_) ordered.push_back(rows[k]);
+  rows_.upload(ordered);
+  colour_start_.upload(colouring.colour_start);
+  colours_ = static_cast<int>(colouring.colour_start.size()) - 1;
 }
 
 void BucketRowBlock::set_bucket(const BucketBody& bucket) { body_.upload({to_device(bucket)}); }
 
 void BucketRowBlock::warm_start(Buffer<cl_float4>& velocity, Buffer<cl_float4>& omega) {
   if (rows_count_ == 0) return;
+  if (!order_.empty()) {
+    set_args(warm_coloured_kernel_, rows_, colour_start_, colours_, velocity, omega);
+    launch_group(dev_, warm_coloured_kernel_, kColouredGroup, "bucket_warm_start_coloured");
+    return;
+  }
   set_args(warm_kernel_, rows_, rows_count_, velocity, omega);
   set_chunk_args(warm_kernel_, 4, chunk_, false);
   launch_group(dev_, warm_kernel_, chunk_, "bucket_warm_start");
@@ -353,6 +464,14 @@ void BucketRowBlock::warm_start(Buffer<cl_float4>& velocity, Buffer<cl_float4>& 
 
 void BucketRowBlock::sweep(Buffer<cl_float4>& velocity, Buffer<cl_float4>& omega) {
   if (rows_count_ == 0) return;
+  if (!order_.empty()) {
+    set_args(sweep_coloured_kernel_, rows_, colour_start_, colours_, velocity, omega, body_);
+    cl_checked("setting the coloured bucket sweep's local memory", [&] {
+      return sweep_coloured_kernel_.setArg(6, cl::Local(kColouredGroup * 6 * sizeof(cl_float)));
+    });
+    launch_group(dev_, sweep_coloured_kernel_, kColouredGroup, "bucket_sweep_coloured");
+    return;
+  }
   set_args(sweep_kernel_, rows_, rows_count_, velocity, omega, body_);
   set_chunk_args(sweep_kernel_, 5, chunk_, true);
   launch_group(dev_, sweep_kernel_, chunk_, "bucket_sweep");
@@ -360,7 +479,12 @@ void BucketRowBlock::sweep(Buffer<cl_float4>& velocity, Buffer<cl_float4>& omega
 
 std::vector<TlRow> BucketRowBlock::rows() const {
   if (rows_count_ == 0) return {};
-  return rows_.download(rows_count_);
+  std::vector<TlRow> device = rows_.download(rows_count_);
+  if (order_.empty()) return device;
+  // back in the order they were given
+  std::vector<TlRow> given(device.size());
+  for (size_t k = 0; k < device.size(); ++k) given[order_[k]] = device[k];
+  return given;
 }
 
 BucketBody BucketRowBlock::bucket() const { return from_device(body_.download(1)[0]); }

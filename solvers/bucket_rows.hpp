@@ -16,6 +16,7 @@
 // solved on the device by kernels/bucket.cl; BucketRowBlock owns the device side. The free
 // functions in namespace reference are the double twins of the kernels.
 #pragma once
+#include <string>
 #include <vector>
 
 #include "host/binary.hpp"
@@ -84,11 +85,41 @@ std::vector<ContactRow> make_bucket_rows(const std::vector<BucketContact>& conta
                                              const std::vector<BucketImpulse>& previous,
                                              const std::vector<int>& match);
 
+// how the bucket rows are swept inside every sweep (CouplingSettings::bucket_sweep; issue 13)
+enum class BucketSweep {
+  // one chain: every row after the one before it, the bucket moving with each (kernels/bucket.cl
+  // bucket_sweep): true Gauss-Seidel for the bucket, one work-item's walk
+  Serial,
+  // colour by colour (colour_bucket_rows): a colour's rows at once, each against the bucket split
+  // among them (mass splitting), the bucket moved by their mean after the colour
+  // (bucket_sweep_coloured): a work-item a row, for devices where the chain's latency dominates
+  Coloured,
+};
+
+// "serial" or "coloured"
+const char* bucket_sweep_name(BucketSweep sweep);
+// the inverse of bucket_sweep_name; throws InputError naming `field` otherwise
+BucketSweep parse_bucket_sweep(const std::string& text, const std::string& field);
+
+// the bucket rows' colours for BucketSweep::Coloured: colour c holds each particle's c-th row, so
+// a colour's rows share no particle, and there are as many colours as the most rows a particle has
+struct BucketColouring {
+  std::vector<int> order;         // row indices, colour by colour, in row order within a colour
+  std::vector<int> colour_start;  // colour c is order[colour_start[c] .. colour_start[c + 1])
+  std::vector<int> split;         // split[k]: the size of row k's colour (rows sharing the bucket)
+  bool empty() const { return order.empty(); }
+};
+// `particle_of_row[k]`: the particle of row k (any numbering, one number a particle)
+BucketColouring colour_bucket_rows(const std::vector<int>& particle_of_row);
+
 // the rows' effective masses (1/D of normal, friction and rolling) for the bucket's mobility W:
 // the only part of a row that depends on W, so a coupled step can make its rows (and take their
-// warm-start wrench) before the vehicle solve that gives W, then set these
-void set_bucket_effective_masses(std::vector<ContactRow>& rows, const std::vector<BucketContact>& contacts,
-                                 const Particles& particles, const Mat6& mobility);
+// warm-start wrench) before the vehicle solve that gives W, then set these. `split` (one a row,
+// BucketColouring::split; empty: all 1) makes row k see the bucket's mobility as split[k] W
+void set_bucket_effective_masses(std::vector<ContactRow>& rows,
+                                 const std::vector<BucketContact>& contacts,
+                                 const Particles& particles, const Mat6& mobility,
+                                 const std::vector<int>& split = {});
 
 // the impulse wrench the rows put on the bucket about its centre of mass: sum of [P; arm x P + L]
 Vec6 bucket_wrench_impulse(const std::vector<ContactRow>& rows);
@@ -106,24 +137,37 @@ namespace reference {
 void bucket_warm_start(const std::vector<ContactRow>& rows, Particles& particles);
 // kernels/bucket.cl bucket_sweep: one sweep over the rows in order, bucket through W
 void bucket_sweep(std::vector<ContactRow>& rows, Particles& particles, BucketBody& bucket);
+// kernels/bucket.cl bucket_warm_start_coloured and bucket_sweep_coloured: the rows (in their own
+// order) colour by colour, each colour's rows against copies of the bucket with mobility s W
+// (their effective masses made with that split), the bucket moved by the copies' mean change
+void bucket_warm_start_coloured(const std::vector<ContactRow>& rows,
+                                const BucketColouring& colouring, Particles& particles);
+void bucket_sweep_coloured(std::vector<ContactRow>& rows, const BucketColouring& colouring,
+                           Particles& particles, BucketBody& bucket);
 }  // namespace reference
 
 // the device side: rows, the bucket's state, and the gather of the candidates' state
 class BucketRowBlock {
  public:
-  // `chunk`: rows the sweep's work-group loads into local memory at a time (its work-group size;
-  // the results do not depend on it, kernels/bucket.cl); 0 chooses by device: on a GPU the
+  // `chunk`: rows the serial sweep's work-group loads into local memory at a time (its work-group
+  // size; the results do not depend on it, kernels/bucket.cl); 0 chooses by device: on a GPU the
   // launches' usual work-group size (chunk x 152 bytes of local memory: 9.7 kB at 64), on a CPU
   // 1, where the caches hide the loads and the chunks' barriers cost 14 % of the walk (PoCL,
   // HD27-D200: 6.4 against 5.6 ms a step, bench/RESULTS.md 2026-11-27 "chunked")
+  // The coloured sweep's work-group is kColouredGroup work-items on every device (a power of two
+  // for its tree sum; its bits depend on it)
   explicit BucketRowBlock(Device& dev, size_t chunk = 0);
+  static constexpr size_t kColouredGroup = 64;
 
   // the candidates' state (centre/radius, velocity/inverse mass, omega/inverse inertia) from the
   // particle buffers, in the order of `index`
   Particles gather(const std::vector<int>& index, const Buffer<cl_float4>& position,
                    const Buffer<cl_float4>& velocity, const Buffer<cl_float4>& omega);
-  // rows with `a` already mapped to particle indices of the whole system
-  void set_rows(const std::vector<TlRow>& rows);
+  // rows with `a` already mapped to particle indices of the whole system. With a colouring
+  // (colour_bucket_rows of these rows, their effective masses made with its split) the warm start
+  // and the sweeps go colour by colour (BucketSweep::Coloured), else serially; rows() gives them
+  // back in this order either way
+  void set_rows(const std::vector<TlRow>& rows, const BucketColouring& colouring = {});
   void set_bucket(const BucketBody& bucket);
   int size() const { return rows_count_; }
 
@@ -134,13 +178,17 @@ class BucketRowBlock {
 
  private:
   Device& dev_;
-  Buffer<TlRow> rows_;
+  Buffer<TlRow> rows_;  // serial: the rows as given; coloured: in colour order
+  Buffer<int> colour_start_;
+  std::vector<int> order_;  // coloured: the given row of each device row; empty when serial
+  int colours_ = 0;
   Buffer<TlBucketBody> body_;
   Buffer<int> index_;
   Buffer<cl_float4> gathered_position_, gathered_velocity_, gathered_omega_;
   int rows_count_ = 0;
   size_t chunk_;
-  cl::Kernel gather_kernel_, warm_kernel_, sweep_kernel_;
+  cl::Kernel gather_kernel_, warm_kernel_, sweep_kernel_, warm_coloured_kernel_,
+      sweep_coloured_kernel_;
 };
 
 }  // namespace talus

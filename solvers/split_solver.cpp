@@ -160,7 +160,15 @@ std::vector<ContactRow> SplitSolver::start_bucket_rows(const NearBucket& n,
     vehicle.solve();
   }
   start.mobility = loader_.bucket_mobility();
-  set_bucket_effective_masses(rows, n.contacts, n.near, start.mobility);
+  // the coloured sweep's colours, by particle; its rows see the bucket split among a colour's
+  BucketColouring colouring;
+  if (settings_.bucket_sweep == BucketSweep::Coloured) {
+    std::vector<int> particle_of_row;
+    particle_of_row.reserve(rows.size());
+    for (const ContactRow& r : rows) particle_of_row.push_back(r.a);
+    colouring = colour_bucket_rows(particle_of_row);
+  }
+  set_bucket_effective_masses(rows, n.contacts, n.near, start.mobility, colouring.split);
   // the rows (particle indices of the whole system) and the solved bucket to the device
   std::vector<TlRow> device_rows;
   device_rows.reserve(rows.size());
@@ -170,7 +178,7 @@ std::vector<ContactRow> SplitSolver::start_bucket_rows(const NearBucket& n,
     device_rows.push_back(d);
   }
   StageScope upload(dev_, "transfers");
-  block_.set_rows(device_rows);
+  block_.set_rows(device_rows, colouring);
   BucketBody solved;
   const Vec6 twist0 = vehicle.solved_twist(loader_.bucket_body());
   solved.velocity = twist0.head<3>();

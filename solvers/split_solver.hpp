@@ -9,8 +9,9 @@
 //   3. last step's bucket impulses are matched to the new contacts (warm start) and their wrench
 //      goes into a first direct vehicle solve, which yields the bucket's twist and its
 //      articulated mobility W (Schur complement, with the active set under that load);
-//   4. PGS or Jacobi sweeps over the particle rows, each followed by one serial sweep over the
-//      bucket rows in which the bucket moves by W times every impulse change;
+//   4. PGS or Jacobi sweeps over the particle rows, each followed by one sweep over the bucket
+//      rows in which the bucket moves by W times every impulse change (serially, or colour by
+//      colour: CouplingSettings::bucket_sweep);
 //   5. the bucket rows' total wrench goes back into the direct solve. If the bucket twist it
 //      yields differs from the one the sweeps ended with (the vehicle's active set changed: a
 //      cylinder reached its force limit, a tyre started to slip), the sweeps go on from the new
@@ -38,6 +39,10 @@ struct CouplingSettings {
   double tolerance = 1.0e-3;       // [m/s] bucket point-velocity disagreement that ends the passes
   // sweeps in each pass after the first, as a fraction of the step's iterations (at least one)
   double pass_sweep_fraction = 0.2;
+  // how the bucket rows are swept (BucketSweep): the serial chain (true Gauss-Seidel for the
+  // bucket), or colour by colour with the bucket split among a colour's rows, a work-item a row,
+  // for devices where the chain's latency is what a sweep waits for (docs/digging.md)
+  BucketSweep bucket_sweep = BucketSweep::Serial;
   // measure the particle rows' RMS residual at the end of every step (CouplingStats::
   // particle_residual): one more kernel and a download per step, for convergence studies
   bool record_residual = false;

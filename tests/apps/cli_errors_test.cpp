@@ -321,6 +321,25 @@ TEST(CliErrors, StepCountsAndLoadsOutsideTheirRangeAreRefused) {
   EXPECT_EQ(cut.code, 2) << cut.err;
   EXPECT_NE(cut.err.find("--interface-damping-time at D400"), std::string::npos) << cut.err;
   EXPECT_FALSE(std::filesystem::exists("/tmp/talus_cli_seed"));
+  // the coloured bucket sweep: a pile scenario at a type-D level only, and a known word
+  for (const char* cmd : {"run --scenario hd27 --fidelity G400", "run --scenario load-carry"}) {
+    const Outcome o =
+        run("", std::string(cmd) + " --out /tmp/talus_cli_seed --bucket-sweep coloured");
+    EXPECT_EQ(o.code, 2) << cmd << ": " << o.err;
+    EXPECT_NE(o.err.find("--bucket-sweep coloured"), std::string::npos) << cmd << ": " << o.err;
+    EXPECT_NE(o.err.find("D level"), std::string::npos) << cmd << ": " << o.err;
+    EXPECT_FALSE(std::filesystem::exists("/tmp/talus_cli_seed")) << cmd;
+  }
+  for (const char* cmd : {"run --scenario hd27 --out /tmp/talus_cli_seed",
+                          "bench dig --scenario hd27 --json /tmp/talus_cli_seed"}) {
+    const Outcome o = run("", std::string(cmd) + " --bucket-sweep parallel");
+    EXPECT_EQ(o.code, 2) << cmd << ": " << o.err;
+    EXPECT_NE(o.err.find("--bucket-sweep: unknown bucket sweep 'parallel'; use 'serial' or "
+                         "'coloured'"),
+              std::string::npos)
+        << cmd << ": " << o.err;
+    EXPECT_FALSE(std::filesystem::exists("/tmp/talus_cli_seed")) << cmd;
+  }
   // the Jacobi sweep has no relaxation to take
   const Outcome jacobi = run(
       "", "run --scenario hd27 --out /tmp/talus_cli_relaxation --sweep jacobi --relaxation 1.3");

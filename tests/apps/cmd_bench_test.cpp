@@ -46,6 +46,20 @@ TEST(CmdBench, DigWritesTheCostBreakdown) {
   EXPECT_EQ(j.at("steps").get<int>(), 10);
   ASSERT_TRUE(j.at("stages").is_object());
   EXPECT_GT(j.at("stages").at("particle_sweeps").get<double>(), 0.0);
+  EXPECT_EQ(j.at("bucket_sweep"), "serial");
+  expect_stages_add_up(j);
+}
+
+// the coloured bucket sweep (issue 13) is a study of the same command: named in the JSON, the
+// bucket rows charged to their own stage
+TEST(CmdBench, DigWithTheColouredBucketSweep) {
+  const nlohmann::json j =
+      bench_dig("--scenario hd27 --level D400 --seconds 0.6 --bucket-sweep coloured",
+                "talus_bench_dig_coloured.json");
+  ASSERT_FALSE(j.is_null());
+  EXPECT_EQ(j.at("bucket_sweep"), "coloured");
+  EXPECT_GT(j.at("bucket_contacts").get<double>(), 0.0);
+  EXPECT_GT(j.at("stages").at("bucket_rows").get<double>(), 0.0);
   expect_stages_add_up(j);
 }
 

@@ -347,6 +347,14 @@ TEST(Digging, TheCuttingEdgesResistanceIsTheLawTimesItsStudyFactor) {
       DiggingSimulation(test::shared_device(), sc, fidelity_preset("D400"), PileBuild{}, d),
       InputError);
   d.avalanche = AvalancheOptions{};
+  // the coloured bucket sweep: type D only (a type-G bucket has no chain of particle rows)
+  d.coupling.bucket_sweep = BucketSweep::Coloured;
+  EXPECT_THROW(DiggingSimulation(test::shared_device(), sc, g400,
+                                 build_scenario_pile(test::shared_device(), sc,
+                                                     scenario_pile_profile(sc), g400, d, nullptr),
+                                 d),
+               InputError);
+  d.coupling.bucket_sweep = BucketSweep::Serial;
   d.edge_resistance = -0.1;
   EXPECT_THROW(DiggingSimulation(test::shared_device(), sc, g400,
                                  build_scenario_pile(test::shared_device(), sc,

@@ -49,7 +49,7 @@ struct LoadedBucket {
   std::unique_ptr<SplitSolver> split;
 
   LoadedBucket(double z_lo, double z_hi, int iterations, double density_factor = 1.0,
-               double tolerance = 0.0) {
+               double tolerance = 0.0, BucketSweep bucket_sweep = BucketSweep::Serial) {
     const BucketPose pose = bucket_pose(loader);
     particles = particles_in_bucket_frame(pose, Vec3(-0.95, -1.15, z_lo), Vec3(-0.45, 1.15, z_hi), 0.12, 3);
     for (size_t i = 0; i < particles.size(); ++i) {
@@ -64,16 +64,21 @@ struct LoadedBucket {
     dem = std::make_unique<DemWorld>(test::shared_device(), gravel(), settings, bounds_around(pose.position, 3.0),
                                      ground);
     dem->set_particles(particles);
-    split = std::make_unique<SplitSolver>(test::shared_device(), *dem, loader, CouplingSettings{});
+    CouplingSettings coupling;
+    coupling.bucket_sweep = bucket_sweep;
+    split = std::make_unique<SplitSolver>(test::shared_device(), *dem, loader, coupling);
   }
 };
+
+// both ways of sweeping the bucket rows, for the tests that must hold for either
+constexpr BucketSweep kBucketSweeps[] = {BucketSweep::Serial, BucketSweep::Coloured};
 
 TEST(SplitSolver, ImpulsesOnTheBucketBalanceTheParticles) {
   // no gravity on the particles and no other geometry: every momentum change of the particles
   // comes from the bucket, so the wrench the vehicle receives must be minus their total momentum
   // change (linear, and angular about the bucket's centre of mass)
-  vehicle::WheelLoader loader(machine_file());
-  const BucketPose pose = bucket_pose(loader);
+  const vehicle::WheelLoader standing(machine_file());
+  const BucketPose pose = bucket_pose(standing);
   Particles p = particles_in_bucket_frame(pose, Vec3(-1.0, -1.0, 0.048), Vec3(-0.2, 1.0, 0.5), 0.1, 7);
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
@@ -85,87 +90,101 @@ TEST(SplitSolver, ImpulsesOnTheBucketBalanceTheParticles) {
   settings.dt = 0.005;
   settings.iterations = 40;
   settings.gravity = Vec3::Zero();
-  DemWorld dem(test::shared_device(), gravel(), settings, bounds_around(pose.position, 4.0), {});
-  dem.set_particles(p);
-  SplitSolver split(test::shared_device(), dem, loader, CouplingSettings{});
-  const Vec3 com = loader.bodies()[loader.bucket_body()].position;
+  for (BucketSweep sweep : kBucketSweeps) {
+    SCOPED_TRACE(bucket_sweep_name(sweep));
+    vehicle::WheelLoader loader(machine_file());
+    DemWorld dem(test::shared_device(), gravel(), settings, bounds_around(pose.position, 4.0), {});
+    dem.set_particles(p);
+    CouplingSettings coupling;
+    coupling.bucket_sweep = sweep;
+    SplitSolver split(test::shared_device(), dem, loader, coupling);
+    const Vec3 com = loader.bodies()[loader.bucket_body()].position;
 
-  const Particles before = dem.particles();
-  split.step();
-  const Particles after = dem.particles();
-  Vec3 linear = Vec3::Zero(), angular = Vec3::Zero();
-  for (size_t i = 0; i < before.size(); ++i) {
-    const double m = before.mass(i);
-    const Vec3 dp = m * (after.velocity[i] - before.velocity[i]);
-    linear += dp;
-    angular += (before.position[i] - com).cross(dp) +
-               (after.omega[i] - before.omega[i]) / before.inv_inertia[i];
+    const Particles before = dem.particles();
+    split.step();
+    const Particles after = dem.particles();
+    Vec3 linear = Vec3::Zero(), angular = Vec3::Zero();
+    for (size_t i = 0; i < before.size(); ++i) {
+      const double m = before.mass(i);
+      const Vec3 dp = m * (after.velocity[i] - before.velocity[i]);
+      linear += dp;
+      angular += (before.position[i] - com).cross(dp) +
+                 (after.omega[i] - before.omega[i]) / before.inv_inertia[i];
+    }
+    const Vec6 on_bucket = split.stats().impulse;
+    std::printf(
+        "[ measured ] %s: %d bucket contacts; impulse on the bucket %.4f N s, %.4f N m s; "
+        "imbalance %.2e N s, %.2e N m s\n",
+        bucket_sweep_name(sweep), split.stats().bucket_contacts, on_bucket.head<3>().norm(),
+        on_bucket.tail<3>().norm(), (linear + on_bucket.head<3>()).norm(),
+        (angular + on_bucket.tail<3>()).norm());
+    ASSERT_GT(split.stats().bucket_contacts, 50);
+    ASSERT_GT(on_bucket.head<3>().norm(), 1.0);
+    // float impulses summed over hundreds of rows: 1e-4 of the total
+    EXPECT_LT((linear + on_bucket.head<3>()).norm(), 1e-4 * on_bucket.head<3>().norm());
+    EXPECT_LT((angular + on_bucket.tail<3>()).norm(), 1e-4 * on_bucket.tail<3>().norm() + 1e-3);
   }
-  const Vec6 on_bucket = split.stats().impulse;
-  std::printf("[ measured ] %d bucket contacts; impulse on the bucket %.4f N s, %.4f N m s; imbalance "
-              "%.2e N s, %.2e N m s\n", split.stats().bucket_contacts, on_bucket.head<3>().norm(),
-              on_bucket.tail<3>().norm(), (linear + on_bucket.head<3>()).norm(),
-              (angular + on_bucket.tail<3>()).norm());
-  ASSERT_GT(split.stats().bucket_contacts, 50);
-  ASSERT_GT(on_bucket.head<3>().norm(), 1.0);
-  // float impulses summed over hundreds of rows: 1e-4 of the total
-  EXPECT_LT((linear + on_bucket.head<3>()).norm(), 1e-4 * on_bucket.head<3>().norm());
-  EXPECT_LT((angular + on_bucket.tail<3>()).norm(), 1e-4 * on_bucket.tail<3>().norm() + 1e-3);
 }
 
 TEST(SplitSolver, ParticlesAtRestInTheBucketWeighTheirMass) {
   // a standing machine with gravel dropped into its bucket: once settled, the vertical force of the
   // particles on the bucket is their weight, and the lift cylinders carry the extra load
-  LoadedBucket b(0.08, 0.55, 40);
-  vehicle::WheelLoader& loader = b.loader;
-  SplitSolver& split = *b.split;
-  const Particles& p = b.particles;
-  const double dt = b.dem->settings().dt;
-  double weight = 0.0;
-  for (size_t i = 0; i < p.size(); ++i) weight += p.mass(i) * 9.81;
+  for (BucketSweep sweep : kBucketSweeps) {
+    SCOPED_TRACE(bucket_sweep_name(sweep));
+    LoadedBucket b(0.08, 0.55, 40, 1.0, 0.0, sweep);
+    vehicle::WheelLoader& loader = b.loader;
+    SplitSolver& split = *b.split;
+    const Particles& p = b.particles;
+    const double dt = b.dem->settings().dt;
+    double weight = 0.0;
+    for (size_t i = 0; i < p.size(); ++i) weight += p.mass(i) * 9.81;
 
-  // raise the boom for 0.4 s (the machine settles on its tyres and would put the bucket's
-  // bottom below the ground: the vehicle has no bucket-ground contact) and curl the bucket for
-  // 0.6 s so the gravel does not run out over the edge, then hold; 2 s in all, the force averaged
-  // over the last 0.5 s (the machine still rocks a little on its tyres)
-  loader.set_drive_speed(0.0);
-  const int steps = static_cast<int>(2.0 / dt), window = static_cast<int>(0.5 / dt);
-  Vec6 mean = Vec6::Zero();
-  // the same window's force by the bucket's faces
-  BucketFaceForces faces;
-  int max_passes = 0;
-  double max_residual = 0.0;
-  for (int k = 0; k < steps; ++k) {
-    const double t = k * dt;
-    loader.set_lift_speed(t < 0.4 ? 0.1 : 0.0);
-    loader.set_tilt_speed(t < 0.6 ? loader.tilt_spec().max_speed : 0.0);
-    split.step();
-    if (k >= steps - window) {
-      mean += split.stats().wrench / window;
-      faces.below += split.stats().faces.below / window;
-      faces.inside += split.stats().faces.inside / window;
-      faces.across += split.stats().faces.across / window;
-      max_passes = std::max(max_passes, split.stats().passes);
-      max_residual = std::max(max_residual, split.stats().residual);
+    // raise the boom for 0.4 s (the machine settles on its tyres and would put the bucket's
+    // bottom below the ground: the vehicle has no bucket-ground contact) and curl the bucket for
+    // 0.6 s so the gravel does not run out over the edge, then hold; 2 s in all, the force averaged
+    // over the last 0.5 s (the machine still rocks a little on its tyres)
+    loader.set_drive_speed(0.0);
+    const int steps = static_cast<int>(2.0 / dt), window = static_cast<int>(0.5 / dt);
+    Vec6 mean = Vec6::Zero();
+    // the same window's force by the bucket's faces
+    BucketFaceForces faces;
+    int max_passes = 0;
+    double max_residual = 0.0;
+    for (int k = 0; k < steps; ++k) {
+      const double t = k * dt;
+      loader.set_lift_speed(t < 0.4 ? 0.1 : 0.0);
+      loader.set_tilt_speed(t < 0.6 ? loader.tilt_spec().max_speed : 0.0);
+      split.step();
+      if (k >= steps - window) {
+        mean += split.stats().wrench / window;
+        faces.below += split.stats().faces.below / window;
+        faces.inside += split.stats().faces.inside / window;
+        faces.across += split.stats().faces.across / window;
+        max_passes = std::max(max_passes, split.stats().passes);
+        max_residual = std::max(max_residual, split.stats().residual);
+      }
     }
+    const double in_bucket =
+        loaded_mass(b.dem->particles(), loader.bucket_mesh(), bucket_pose(loader));
+    std::printf(
+        "[ measured ] %s: %zu particles, %.1f kg; %.1f kg in the bucket, weighing %.1f N; "
+        "vertical force on the bucket %.1f N (%+.2f%%); passes <= %d, coupling residual <= "
+        "%.2e m/s\n",
+        bucket_sweep_name(sweep), p.size(), weight / 9.81, in_bucket, in_bucket * 9.81, -mean.z(),
+        100.0 * (-mean.z() - in_bucket * 9.81) / (in_bucket * 9.81), max_passes, max_residual);
+    // nearly all the gravel stays in the curled bucket, and the bucket carries its weight
+    EXPECT_GT(in_bucket * 9.81, 0.98 * weight);
+    EXPECT_NEAR(-mean.z(), in_bucket * 9.81, 0.02 * in_bucket * 9.81);
+    EXPECT_LT(std::abs(mean.x()), 0.05 * weight);
+    EXPECT_LT(max_residual, CouplingSettings{}.tolerance);
+    std::printf("[ measured ] by faces, vertical: below %.1f N, inside %.1f N, across %.1f N\n",
+                faces.below.z(), faces.inside.z(), faces.across.z());
+    // the held gravel presses on the bottom's inside and the curled bucket's back wall; nothing
+    // lies under the raised bottom
+    EXPECT_EQ(faces.below.norm(), 0.0);
+    EXPECT_NEAR(-(faces.inside.z() + faces.across.z()), in_bucket * 9.81, 0.05 * in_bucket * 9.81);
+    EXPECT_GT(-faces.inside.z(), 0.5 * in_bucket * 9.81);
   }
-  const double in_bucket = loaded_mass(b.dem->particles(), loader.bucket_mesh(), bucket_pose(loader));
-  std::printf("[ measured ] %zu particles, %.1f kg; %.1f kg in the bucket, weighing %.1f N; vertical force "
-              "on the bucket %.1f N (%+.2f%%); passes <= %d, coupling residual <= %.2e m/s\n", p.size(),
-              weight / 9.81, in_bucket, in_bucket * 9.81, -mean.z(),
-              100.0 * (-mean.z() - in_bucket * 9.81) / (in_bucket * 9.81), max_passes, max_residual);
-  // nearly all the gravel stays in the curled bucket, and the bucket carries its weight
-  EXPECT_GT(in_bucket * 9.81, 0.98 * weight);
-  EXPECT_NEAR(-mean.z(), in_bucket * 9.81, 0.02 * in_bucket * 9.81);
-  EXPECT_LT(std::abs(mean.x()), 0.05 * weight);
-  EXPECT_LT(max_residual, CouplingSettings{}.tolerance);
-  std::printf("[ measured ] by faces, vertical: below %.1f N, inside %.1f N, across %.1f N\n",
-              faces.below.z(), faces.inside.z(), faces.across.z());
-  // the held gravel presses on the bottom's inside and the curled bucket's back wall; nothing
-  // lies under the raised bottom
-  EXPECT_EQ(faces.below.norm(), 0.0);
-  EXPECT_NEAR(-(faces.inside.z() + faces.across.z()), in_bucket * 9.81, 0.05 * in_bucket * 9.81);
-  EXPECT_GT(-faces.inside.z(), 0.5 * in_bucket * 9.81);
 }
 
 // the split by faces reads each contact's normal in the bucket's frame: a bucket turned about
@@ -344,23 +363,26 @@ TEST(SplitSolver, OuterPassesRunWhenTheVehicleActiveSetChangesAndConverge) {
 TEST(SplitSolver, TwoRunsAreBitIdentical) {
   // same inputs, same device, same work-group sizes: the same particles and the same machine to
   // the last bit (no unordered float accumulation anywhere in the coupled step)
-  auto run = [] {
-    LoadedBucket b(0.08, 0.55, 20);
-    b.loader.set_lift_speed(0.1);
-    b.loader.set_tilt_speed(0.1);
-    for (int k = 0; k < 60; ++k) b.split->step();
-    return std::make_pair(b.dem->particles(), b.loader.bodies());
-  };
-  const auto a = run();
-  const auto b = run();
-  ASSERT_EQ(a.first.size(), b.first.size());
-  for (size_t i = 0; i < a.first.size(); ++i) {
-    EXPECT_EQ(a.first.position[i], b.first.position[i]) << i;
-    EXPECT_EQ(a.first.velocity[i], b.first.velocity[i]) << i;
-  }
-  for (size_t i = 0; i < a.second.size(); ++i) {
-    EXPECT_EQ(a.second[i].position, b.second[i].position) << a.second[i].name;
-    EXPECT_EQ(a.second[i].velocity, b.second[i].velocity) << a.second[i].name;
+  for (BucketSweep sweep : kBucketSweeps) {
+    SCOPED_TRACE(bucket_sweep_name(sweep));
+    auto run = [sweep] {
+      LoadedBucket b(0.08, 0.55, 20, 1.0, 0.0, sweep);
+      b.loader.set_lift_speed(0.1);
+      b.loader.set_tilt_speed(0.1);
+      for (int k = 0; k < 60; ++k) b.split->step();
+      return std::make_pair(b.dem->particles(), b.loader.bodies());
+    };
+    const auto a = run();
+    const auto b = run();
+    ASSERT_EQ(a.first.size(), b.first.size());
+    for (size_t i = 0; i < a.first.size(); ++i) {
+      EXPECT_EQ(a.first.position[i], b.first.position[i]) << i;
+      EXPECT_EQ(a.first.velocity[i], b.first.velocity[i]) << i;
+    }
+    for (size_t i = 0; i < a.second.size(); ++i) {
+      EXPECT_EQ(a.second[i].position, b.second[i].position) << a.second[i].name;
+      EXPECT_EQ(a.second[i].velocity, b.second[i].velocity) << a.second[i].name;
+    }
   }
 }
 
