@@ -329,8 +329,10 @@ __kernel void bucket_sweep_coloured(__global TlRow* rows, __global const int* co
   for (int c = 0; c < colours; ++c) {
     int begin = colour_start[c];
     int end = colour_start[c + 1];
-    // the split: the colour's rows share the bucket
+    // the split: the colour's rows share the bucket, each sees its mobility s W
     float s = (float)(end - begin);
+    float W[36];
+    for (int i = 0; i < 36; ++i) W[i] = s * bucket->mobility[i];
     float3 dv = (float3)(0.0f), dw = (float3)(0.0f);
     for (int base = begin; base < end; base += size) {
       int r = base + k;
@@ -339,9 +341,7 @@ __kernel void bucket_sweep_coloured(__global TlRow* rows, __global const int* co
         TlRow row = rows[r];
         float4 va = velocity[row.a];
         float4 wa = omega[row.a];
-        // the copy's mobility s W and coupling s G (G = W J_b^T and G n as bucket_chunk_coupling)
-        float W[36];
-        for (int i = 0; i < 36; ++i) W[i] = s * bucket->mobility[i];
+        // the copy's coupling s G (G = W J_b^T and G n as bucket_chunk_coupling)
         float3 b = row.arm_b.xyz;
         float3 n = row.normal.xyz;
         float3 cr[3] = {(float3)(0.0f, b.z, -b.y), (float3)(-b.z, 0.0f, b.x),

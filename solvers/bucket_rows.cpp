@@ -178,12 +178,13 @@ void set_bucket_effective_masses(std::vector<ContactRow>& rows,
     // the bucket's point mobility at the contact: K_b = E W E^T, E = [I, -[arm]x]
     Eigen::Matrix<double, 3, 6> E;
     E << Mat3d::Identity(), -skew(row.arm_b);
-    const Mat3d K = s * (E * mobility * E.transpose());
+    Mat3d K = E * mobility * E.transpose();
+    if (!split.empty()) K *= s;
     // effective masses: exact along n, an upper bound across (see the header)
     const Mat3d across = Mat3d::Identity() - n * n.transpose();
     const double d_n = inv_m + n.dot(K * n) + row.sigma;
     const double d_t = inv_m + inv_i * c.arm_particle.squaredNorm() + largest_eigenvalue(across * K * across);
-    const double d_r = inv_i + s * d_r_bucket;
+    const double d_r = inv_i + (split.empty() ? d_r_bucket : s * d_r_bucket);
     row.inv_dn = 1.0 / d_n;
     row.inv_dt = d_t > 0.0 ? 1.0 / d_t : 0.0;
     row.inv_dr = d_r > 0.0 ? 1.0 / d_r : 0.0;
@@ -400,6 +401,18 @@ BucketRowBlock::BucketRowBlock(Device& dev, size_t chunk)
   sweep_kernel_ = dev.kernel(program, "bucket_sweep");
   warm_coloured_kernel_ = dev.kernel(program, "bucket_warm_start_coloured");
   sweep_coloured_kernel_ = dev.kernel(program, "bucket_sweep_coloured");
+  // the coloured sweep's one work-group must fit the device (its bits depend on the size, so it
+  // is not shrunk to fit)
+  for (cl::Kernel* k : {&warm_coloured_kernel_, &sweep_coloured_kernel_}) {
+    const size_t most = cl_checked("querying the coloured bucket sweep's work-group size", [&] {
+      return k->getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(dev.device());
+    });
+    if (most < kColouredGroup)
+      throw Error("the coloured bucket sweep needs work-groups of " +
+                  std::to_string(kColouredGroup) +
+                  " work-items; this device runs its kernels in at most " + std::to_string(most) +
+                  ": use the serial bucket sweep (--bucket-sweep serial) on it");
+  }
 }
 
 Particles BucketRowBlock::gather(const std::vector<int>& index, const Buffer<cl_float4>& position,

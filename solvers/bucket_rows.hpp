@@ -158,6 +158,7 @@ class BucketRowBlock {
   // for its tree sum; its bits depend on it)
   explicit BucketRowBlock(Device& dev, size_t chunk = 0);
   static constexpr size_t kColouredGroup = 64;
+  static_assert((kColouredGroup & (kColouredGroup - 1)) == 0, "the tree sum halves the group");
 
   // the candidates' state (centre/radius, velocity/inverse mass, omega/inverse inertia) from the
   // particle buffers, in the order of `index`

@@ -174,6 +174,10 @@ TEST(CmdBench, DigRefusesBadInputBeforeBuildingThePile) {
   EXPECT_NE(o.err.find("--seconds"), std::string::npos) << o.err;
   o = test::run_talus("", "bench dig --level D37 --quiet");
   EXPECT_EQ(o.code, 2) << o.err;
+  // the coloured bucket sweep is a type-D study
+  o = test::run_talus("", "bench dig --level G400 --bucket-sweep coloured --quiet");
+  EXPECT_EQ(o.code, 2) << o.err;
+  EXPECT_NE(o.err.find("--bucket-sweep coloured at G400"), std::string::npos) << o.err;
 }
 
 }  // namespace
