@@ -115,6 +115,8 @@ TEST(DiggingRunTest, Hd27AtD400WritesTheRunContractSnapshotsAndFigures) {
   EXPECT_NEAR(summary["particles"].get<double>(), 800, 0.15 * 800);  // paper Table 3
   EXPECT_GT(summary["loaded_mass_kg"].get<double>(), 0.0);
   EXPECT_GT(summary["work_J"].get<double>(), 0.0);
+  // the coupled step's bucket sweep, the default chain (--bucket-sweep)
+  EXPECT_EQ(summary["coupling"]["bucket_sweep"], "serial");
   // snapshots at 0, 3, 6, 9 s and their ParaView collection; the pile scan; the figures
   for (int k = 0; k < 4; ++k)
     EXPECT_TRUE(std::filesystem::exists(dir / "snapshots" / ("particles_" + std::to_string(k) + ".vtp"))) << k;
