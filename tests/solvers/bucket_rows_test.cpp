@@ -226,6 +226,22 @@ TEST(BucketRows, ChunksOfAnySizeGiveTheSerialWalkBitForBit) {
   EXPECT_NE(from_device(serial.bucket).velocity, c.bucket.velocity);
 }
 
+// the largest normal-row residual of `rows` (frictionless) [m/s]: the projected step's size in
+// velocity, zero where a row is complementary
+double worst_normal_residual(const std::vector<ContactRow>& rows, const Particles& p,
+                             const BucketBody& b) {
+  double worst = 0.0;
+  for (const auto& r : rows) {
+    const double un = r.normal.dot(b.velocity + b.omega.cross(r.arm_b) - p.velocity[r.a]);
+    const double res =
+        (std::max(0.0, r.impulse_n + (r.rhs - un - r.sigma * r.impulse_n) * r.inv_dn) -
+         r.impulse_n) /
+        r.inv_dn;
+    worst = std::max(worst, std::abs(res));
+  }
+  return worst;
+}
+
 TEST(BucketRows, FrictionlessSweepsConvergeToNonPenetration) {
   // the reference alone, normal rows only: with compliance the problem is a strictly convex QP,
   // on which projected Gauss-Seidel converges; every normal row ends satisfied (complementarity)
@@ -241,13 +257,7 @@ TEST(BucketRows, FrictionlessSweepsConvergeToNonPenetration) {
   double worst = 0.0;
   for (int s = 1; s <= 400; ++s) {
     reference::bucket_sweep(rows, p, b);
-    worst = 0.0;
-    for (const auto& r : rows) {
-      const double un = r.normal.dot(b.velocity + b.omega.cross(r.arm_b) - p.velocity[r.a]);
-      const double res = (std::max(0.0, r.impulse_n + (r.rhs - un - r.sigma * r.impulse_n) * r.inv_dn) -
-                          r.impulse_n) / r.inv_dn;
-      worst = std::max(worst, std::abs(res));
-    }
+    worst = worst_normal_residual(rows, p, b);
     if (s == 1 || s == 10 || s == 50 || s == 100 || s == 400) std::printf("[ measured ] %6d  %.3e\n", s, worst);
   }
   EXPECT_LT(worst, 1e-6);
@@ -555,22 +565,6 @@ TEST(BucketRows, ColouredSweepsKeepImpulsesInTheirConesAndMoveTheBucketByW) {
   const Vec6 moved = b.twist() - c.bucket.twist();
   const Vec6 expected = c.bucket.mobility * bucket_wrench_impulse(rows);
   EXPECT_LT((moved - expected).norm(), 1e-9 * (1.0 + expected.norm()));
-}
-
-// the largest normal-row residual of `rows` (frictionless) [m/s]: the projected step's size in
-// velocity, zero where a row is complementary
-double worst_normal_residual(const std::vector<ContactRow>& rows, const Particles& p,
-                             const BucketBody& b) {
-  double worst = 0.0;
-  for (const auto& r : rows) {
-    const double un = r.normal.dot(b.velocity + b.omega.cross(r.arm_b) - p.velocity[r.a]);
-    const double res =
-        (std::max(0.0, r.impulse_n + (r.rhs - un - r.sigma * r.impulse_n) * r.inv_dn) -
-         r.impulse_n) /
-        r.inv_dn;
-    worst = std::max(worst, std::abs(res));
-  }
-  return worst;
 }
 
 TEST(BucketRows, ColouredSweepsConvergeLikeTheSerialWalk) {
