@@ -358,6 +358,7 @@ TEST(BucketRows, MatchingPairsTheNearestNormalOfTheSameParticleOnce) {
 // the particle of each row
 std::vector<int> particles_of(const std::vector<ContactRow>& rows) {
   std::vector<int> out;
+  out.reserve(rows.size());
   for (const auto& r : rows) out.push_back(r.a);
   return out;
 }
@@ -492,6 +493,7 @@ TEST(BucketRows, ColouredKernelsMatchDoubleReferenceOnRandomContacts) {
   set_bucket_effective_masses(made, c.contacts, c.particles, c.bucket.mobility, colouring.split);
   auto rows = float_rows(made);
   std::vector<TlRow> device_rows;
+  device_rows.reserve(rows.size());
   for (const auto& r : rows) device_rows.push_back(to_device(r));
 
   constexpr int kSweeps = 5;
