@@ -251,10 +251,7 @@ void add_bench_dig(CLI::App& bench) {
     const FidelityPreset& preset = level_preset(opt->level);
     check_dig_seconds(scenario, opt->seconds);
     const BucketSweep bucket_sweep = parse_bucket_sweep(opt->bucket_sweep, "--bucket-sweep");
-    if (bucket_sweep != BucketSweep::Serial && is_multiscale(preset))
-      throw InputError("--bucket-sweep " + opt->bucket_sweep + " at " + preset.name +
-                       ": a type-G bucket meets the soil through its aggregate, with no chain of "
-                       "particle-bucket rows to colour; give a D level, or leave it serial");
+    check_bucket_sweep(bucket_sweep, preset, "--bucket-sweep");
     if (!opt->json.empty()) check_writable(opt->json, "--json");
     Device dev(run_device_choice(preset));
     DiggingOptions options;

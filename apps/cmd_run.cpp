@@ -530,13 +530,12 @@ void run_scenario(const RunOptions& o) {
   // the level and the sweep are checked for every scenario, though only a pile uses them
   const FidelityPreset level = level_preset(o.fidelity);
   parse_sweep(o.sweep, "--sweep");
-  if (parse_bucket_sweep(o.bucket_sweep, "--bucket-sweep") != BucketSweep::Serial &&
-      !(sc.pile && !is_multiscale(level)))
-    throw InputError("--bucket-sweep " + o.bucket_sweep + ": scenario '" + sc.name + "' at " +
-                     level.name +
-                     " has no chain of particle-bucket rows to colour (a type-G bucket meets the "
-                     "soil through its aggregate); give a pile scenario at a D level, or leave "
-                     "it serial");
+  const BucketSweep bucket_sweep = parse_bucket_sweep(o.bucket_sweep, "--bucket-sweep");
+  if (bucket_sweep != BucketSweep::Serial && !sc.pile)
+    throw InputError("--bucket-sweep " + o.bucket_sweep + ": scenario '" + sc.name +
+                     "' has no pile, so no particle-bucket rows to colour; give a pile scenario "
+                     "at a D level, or leave it serial");
+  check_bucket_sweep(bucket_sweep, level, "--bucket-sweep");
   if (o.seed_diameter != 1.0 && !sc.pile)
     throw InputError("--seed-diameter " + std::to_string(o.seed_diameter) + ": scenario '" +
                      sc.name +

@@ -76,6 +76,13 @@ std::vector<vehicle::RigidPlane> container_walls(const std::vector<StaticGeom>& 
   return walls;
 }
 
+void check_bucket_sweep(BucketSweep sweep, const FidelityPreset& level, const std::string& field) {
+  if (sweep != BucketSweep::Serial && is_multiscale(level))
+    throw InputError(field + " " + bucket_sweep_name(sweep) + " at " + level.name +
+                     ": a type-G bucket meets the soil through its aggregate, with no chain of "
+                     "particle-bucket rows to colour; give a D level, or leave it serial");
+}
+
 DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scenario, const FidelityPreset& preset,
                                      const PileBuild& pile, const DiggingOptions& options,
                                      vehicle::EffectSet* effects)
@@ -129,13 +136,7 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
                      ": only the type-G levels have a voxel surface that avalanches; at a type-D "
                      "level the particles make the slope themselves (use a G level or leave the "
                      "avalanche at its defaults)");
-  if (is_multiscale(preset) && options.coupling.bucket_sweep != BucketSweep::Serial)
-    throw InputError(
-        std::string("bucket_sweep ") + bucket_sweep_name(options.coupling.bucket_sweep) + " at " +
-        preset.name +
-        ": at a type-G level the bucket is a kinematic tool for the zone's particles "
-        "and meets the soil through the aggregate, so there is no chain of bucket rows "
-        "to colour; use a D level or leave it serial");
+  check_bucket_sweep(options.coupling.bucket_sweep, preset, "bucket_sweep");
   if (!is_multiscale(preset) && options.seed_diameter != 1.0)
     throw InputError("seed_diameter " + std::to_string(options.seed_diameter) + " at " +
                      preset.name +

@@ -50,6 +50,10 @@ inline constexpr double kMaxReposeAngle = 60.0;
 // k = 58 /s), so faster rates change nothing
 inline constexpr double kMaxAvalancheRate = 1000.0;
 
+// the bucket sweep at a level: the coloured one only at a type-D level (a type-G bucket meets the
+// soil through its aggregate, with no chain of particle-bucket rows); InputError naming `field`
+void check_bucket_sweep(BucketSweep sweep, const FidelityPreset& level, const std::string& field);
+
 struct DiggingOptions {
   PileBuildOptions pile;         // settling of the pile before the machine starts
   CouplingSettings coupling;     // bucket contacts and outer passes

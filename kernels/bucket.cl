@@ -126,27 +126,31 @@ __kernel void bucket_warm_start(__global const TlRow* rows, int n_rows, __global
 // same whatever the chunk, so the walk stays independent of the work-group size.
 #define TL_COUPLING_FLOATS 24  // G row-major (18 floats), then G n (6)
 
+// G = W J_b^T and G n of a row at lever arm b with normal n (W row-major, 36 floats)
+void bucket_coupling(const float* W, float3 b, float3 n, float* g) {
+  // column c of J_b^T: [e_c; arm_b x e_c]
+  float3 r[3] = {(float3)(0.0f, b.z, -b.y), (float3)(-b.z, 0.0f, b.x), (float3)(b.y, -b.x, 0.0f)};
+  for (int i = 0; i < 6; ++i) {
+    float3 w_lin = (float3)(W[6 * i], W[6 * i + 1], W[6 * i + 2]);
+    float3 w_ang = (float3)(W[6 * i + 3], W[6 * i + 4], W[6 * i + 5]);
+    float3 gi = w_lin + (float3)(dot(w_ang, r[0]), dot(w_ang, r[1]), dot(w_ang, r[2]));
+    g[3 * i] = gi.x;
+    g[3 * i + 1] = gi.y;
+    g[3 * i + 2] = gi.z;
+    g[18 + i] = dot(gi, n);
+  }
+}
+
 // G = W J_b^T and G n of each row of the chunk, one work-item a row
 void bucket_chunk_coupling(int count, __global const TlBucketBody* bucket,
                            __local const TlRow* chunk_rows, __local float* chunk_coupling) {
   int k = get_local_id(0);
   if (k < count) {
-    float3 b = chunk_rows[k].arm_b.xyz;
-    float3 n = chunk_rows[k].normal.xyz;
-    // column c of J_b^T: [e_c; arm_b x e_c]
-    float3 r[3] = {(float3)(0.0f, b.z, -b.y), (float3)(-b.z, 0.0f, b.x), (float3)(b.y, -b.x, 0.0f)};
-    __local float* g = chunk_coupling + TL_COUPLING_FLOATS * k;
-    for (int i = 0; i < 6; ++i) {
-      float3 w_lin = (float3)(bucket->mobility[6 * i], bucket->mobility[6 * i + 1],
-                              bucket->mobility[6 * i + 2]);
-      float3 w_ang = (float3)(bucket->mobility[6 * i + 3], bucket->mobility[6 * i + 4],
-                              bucket->mobility[6 * i + 5]);
-      float3 gi = w_lin + (float3)(dot(w_ang, r[0]), dot(w_ang, r[1]), dot(w_ang, r[2]));
-      g[3 * i] = gi.x;
-      g[3 * i + 1] = gi.y;
-      g[3 * i + 2] = gi.z;
-      g[18 + i] = dot(gi, n);
-    }
+    float W[36];
+    for (int i = 0; i < 36; ++i) W[i] = bucket->mobility[i];
+    float g[TL_COUPLING_FLOATS];
+    bucket_coupling(W, chunk_rows[k].arm_b.xyz, chunk_rows[k].normal.xyz, g);
+    for (int i = 0; i < TL_COUPLING_FLOATS; ++i) chunk_coupling[TL_COUPLING_FLOATS * k + i] = g[i];
   }
   barrier(CLK_LOCAL_MEM_FENCE);
 }
@@ -341,21 +345,9 @@ __kernel void bucket_sweep_coloured(__global TlRow* rows, __global const int* co
         TlRow row = rows[r];
         float4 va = velocity[row.a];
         float4 wa = omega[row.a];
-        // the copy's coupling s G (G = W J_b^T and G n as bucket_chunk_coupling)
-        float3 b = row.arm_b.xyz;
-        float3 n = row.normal.xyz;
-        float3 cr[3] = {(float3)(0.0f, b.z, -b.y), (float3)(-b.z, 0.0f, b.x),
-                        (float3)(b.y, -b.x, 0.0f)};
+        // the copy's coupling s G
         float G[TL_COUPLING_FLOATS];
-        for (int i = 0; i < 6; ++i) {
-          float3 w_lin = (float3)(W[6 * i], W[6 * i + 1], W[6 * i + 2]);
-          float3 w_ang = (float3)(W[6 * i + 3], W[6 * i + 4], W[6 * i + 5]);
-          float3 gi = w_lin + (float3)(dot(w_ang, cr[0]), dot(w_ang, cr[1]), dot(w_ang, cr[2]));
-          G[3 * i] = gi.x;
-          G[3 * i + 1] = gi.y;
-          G[3 * i + 2] = gi.z;
-          G[18 + i] = dot(gi, n);
-        }
+        bucket_coupling(W, row.arm_b.xyz, row.normal.xyz, G);
         float3 vk = vb, wk = wb;
         bucket_row_solve(&row, &va, &wa, W, G, &vk, &wk);
         rows[r].impulse_t = row.impulse_t;

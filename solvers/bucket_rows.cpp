@@ -269,16 +269,15 @@ std::vector<BucketImpulse> read_bucket_impulses(ByteReader& r, size_t particles)
 
 namespace reference {
 
-void bucket_warm_start(const std::vector<ContactRow>& rows, Particles& particles) {
-  for (const ContactRow& row : rows) {
-    const int a = row.a;
-    const Vec3 P = row.impulse_n * row.normal + row.impulse_t;
-    particles.velocity[a] -= particles.inv_mass[a] * P;
-    particles.omega[a] -= particles.inv_inertia[a] * (row.arm_a.cross(P) + row.impulse_r);
-  }
-}
-
 namespace {
+
+// one row's starting impulses on its particle (kernels/bucket.cl bucket_row_warm_start)
+void warm_start_bucket_row(const ContactRow& row, Particles& particles) {
+  const int a = row.a;
+  const Vec3 P = row.impulse_n * row.normal + row.impulse_t;
+  particles.velocity[a] -= particles.inv_mass[a] * P;
+  particles.omega[a] -= particles.inv_inertia[a] * (row.arm_a.cross(P) + row.impulse_r);
+}
 
 // one row against the bucket (kernels/bucket.cl bucket_row_solve): normal, friction, rolling,
 // the bucket moved through its mobility by every impulse change
@@ -324,6 +323,10 @@ void solve_bucket_row(ContactRow& row, Particles& particles, BucketBody& bucket)
 
 }  // namespace
 
+void bucket_warm_start(const std::vector<ContactRow>& rows, Particles& particles) {
+  for (const ContactRow& row : rows) warm_start_bucket_row(row, particles);
+}
+
 void bucket_sweep(std::vector<ContactRow>& rows, Particles& particles, BucketBody& bucket) {
   for (ContactRow& row : rows) solve_bucket_row(row, particles, bucket);
 }
@@ -331,13 +334,7 @@ void bucket_sweep(std::vector<ContactRow>& rows, Particles& particles, BucketBod
 void bucket_warm_start_coloured(const std::vector<ContactRow>& rows,
                                 const BucketColouring& colouring, Particles& particles) {
   // a particle's rows in colour order
-  for (int k : colouring.order) {
-    const ContactRow& row = rows.at(k);
-    const int a = row.a;
-    const Vec3 P = row.impulse_n * row.normal + row.impulse_t;
-    particles.velocity[a] -= particles.inv_mass[a] * P;
-    particles.omega[a] -= particles.inv_inertia[a] * (row.arm_a.cross(P) + row.impulse_r);
-  }
+  for (int k : colouring.order) warm_start_bucket_row(rows.at(k), particles);
 }
 
 void bucket_sweep_coloured(std::vector<ContactRow>& rows, const BucketColouring& colouring,
