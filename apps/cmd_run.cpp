@@ -181,6 +181,7 @@ DiggingOptions digging_options(const RunOptions& o) {
   options.seed_diameter = o.seed_diameter;
   options.edge_resistance = o.edge_resistance;
   options.excavation_reach = o.excavation_reach;
+  options.merge_speed = o.merge_speed;
   options.interface_damping_time = o.interface_damping_time;
   options.content_inertia = o.content_inertia;
   options.bucket_support = o.bucket_support;
@@ -243,13 +244,29 @@ class Snapshots {
   std::vector<Snapshot> taken_;
 };
 
+// how many particles a run simulated, over its steps: at type G the zone's and the bucket's,
+// which come and go (paper Table 3 bounds them per level); at type D the pile's, constant
+struct ParticleTally {
+  size_t most = 0;
+  double sum = 0.0;
+  long steps = 0;
+  void add(size_t n) {
+    most = std::max(most, n);
+    sum += static_cast<double>(n);
+    ++steps;
+  }
+  double mean() const { return steps > 0 ? sum / static_cast<double>(steps) : 0.0; }
+};
+
 // what summary.json tells beyond the contract: the level and its study settings, timing, the
-// pile, the coupling's work, the residuals when recorded, the field values, the effects
+// pile, the particles, the coupling's work, the residuals when recorded, the field values, the
+// effects
 nlohmann::json dig_details(const RunOptions& o, const vehicle::Scenario& sc,
                            const FidelityPreset& preset, const DiggingOptions& options,
                            const PileBuild& pile, const PileScan& scan,
-                           const DiggingSimulation& sim, double pile_wall, double dig_wall,
-                           const Device& dev, const vehicle::EffectSet& effects) {
+                           const DiggingSimulation& sim, const ParticleTally& tally,
+                           double pile_wall, double dig_wall, const Device& dev,
+                           const vehicle::EffectSet& effects) {
   const double sim_time = sim.time();
   // the aggregate's interfaces as the dig set them (type G)
   AggregateParameters interfaces;
@@ -257,6 +274,9 @@ nlohmann::json dig_details(const RunOptions& o, const vehicle::Scenario& sc,
   nlohmann::json details = {
       {"particles",
        static_cast<int>(sim.multiscale() ? sim.particle_count() : pile.particles.size())},
+      // the most particles at the end of any step, and their mean over the steps
+      {"particles_most", static_cast<long>(tally.most)},
+      {"particles_mean", tally.mean()},
       {"model", sim.multiscale() ? "multiscale (type G)" : "particles (type D)"},
       {"dt_s", preset.dt},
       {"iterations", preset.iterations},
@@ -293,6 +313,8 @@ nlohmann::json dig_details(const RunOptions& o, const vehicle::Scenario& sc,
         {"edge_resistance", options.edge_resistance},
         // how far ahead of the cutting edge the zone's soil turns dynamic [m] (0: the whole wedge)
         {"excavation_reach_m", options.excavation_reach},
+        // a zone particle slower than this may merge back into the voxels [m/s] (type G)
+        {"merge_speed_m_s", options.merge_speed},
         // the zone's particles on its failure plane (true) or its columns' staircase (type G)
         {"failure_plane_floor", options.failure_plane_floor},
         // the voxel surface's avalanche (type G; the defaults at type D, which has none)
@@ -463,6 +485,7 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
   const int load_every =
       std::max(1, static_cast<int>(std::lround(kLoadSampleInterval / preset.dt)));
   std::vector<std::pair<double, double>> load{{sim.time(), sim.loaded_mass()}};
+  ParticleTally tally;
   const double dig_wall = sim.run([&](int k) {
     // asked to stop: between steps, before anything of this step is written
     if (interrupt_requested()) {
@@ -472,6 +495,7 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
       throw_if_interrupted(where.str());
     }
     snapshots.after_step(k, sim.time(), sim);
+    tally.add(sim.particle_count());
     // the load, measured once for the sample and the note alike (each measure downloads the
     // particles)
     const bool sample = k % load_every == 0 || sim.done();
@@ -483,7 +507,7 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
       std::ostringstream note;
       note << std::fixed << std::setprecision(0);
       if (sim.multiscale())
-        note << sim.particle_count() << " zone particles, ";
+        note << sim.particle_count() << " particles, ";
       else
         note << sim.split().stats().bucket_contacts << " bucket contacts, ";
       note << loaded << " kg in the bucket";
@@ -497,8 +521,8 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
 
   // outputs: snapshots' collection, time series and summary, figures
   snapshots.finish();
-  run.summary.details =
-      dig_details(o, sc, preset, dig_options, pile, scan, sim, pile_wall, dig_wall, dev, effects);
+  run.summary.details = dig_details(o, sc, preset, dig_options, pile, scan, sim, tally, pile_wall,
+                                    dig_wall, dev, effects);
   run.dir = dir;
   // (before the run contract, whose summary.json, written last, marks the folder complete)
   write_file_atomically((dir / "load.csv").string(), load_csv(load));
@@ -557,6 +581,8 @@ void run_scenario(const RunOptions& o) {
               "type-G cutting edge to resist");
   type_g_only(o.excavation_reach != 0.0, "--excavation-reach " + std::to_string(o.excavation_reach),
               "type-G zone to excavate");
+  type_g_only(o.merge_speed != kMergeSpeed, "--merge-speed " + std::to_string(o.merge_speed),
+              "type-G particles to merge back into voxels");
   type_g_only(!o.failure_plane_floor, "--no-failure-plane-floor",
               "type-G zone whose floor to make of voxel columns");
   type_g_only(o.repose_angle != AvalancheOptions{}.repose_deg,
@@ -656,6 +682,13 @@ void add_run_command(CLI::App& app, const std::string& command_line) {
                   "ahead of the cutting edge [m]; 0 = the whole wedge (the default; "
                   "docs/validation.md \"The zone's excavation reach\")")
       ->check(non_negative_number())
+      ->capture_default_str();
+  cmd->add_option("--merge-speed", opts->merge_speed,
+                  "study, type G: a zone particle slower than this may merge back into the "
+                  "voxels [m/s], above 0; 0.1 = the zone's activation speed (the default; the "
+                  "reference engine merges below about 4 m/s: docs/multiscale.md \"The merge "
+                  "speed\")")
+      ->check(positive_number())
       ->capture_default_str();
   cmd->add_option("--repose-angle", opts->repose_angle,
                   "study, type G: the voxel surface's angle of repose, to which it avalanches "

@@ -46,6 +46,9 @@ struct RunOptions {
   // type G, a study: how far ahead of the cutting edge the zone's soil turns dynamic [m]; 0: the
   // whole wedge (--excavation-reach)
   double excavation_reach = 0.0;
+  // type G, a study: a zone particle slower than this may merge back into the voxels [m/s]
+  // (--merge-speed)
+  double merge_speed = kMergeSpeed;
   // type G, a study: the aggregate's interfaces' damping time [s]; 0: two of the level's steps
   // (--interface-damping-time)
   double interface_damping_time = 0.0;

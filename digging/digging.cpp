@@ -123,6 +123,12 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
                      preset.name +
                      ": only the type-G levels turn a zone of voxels into particles; use a G "
                      "level or leave it at 0");
+  if (!is_multiscale(preset) && options.merge_speed != kMergeSpeed)
+    throw InputError("merge_speed " + std::to_string(options.merge_speed) + " m/s at " +
+                     preset.name +
+                     ": only the type-G levels merge particles back into voxels; use a G level "
+                     "or leave it at " +
+                     std::to_string(kMergeSpeed) + " m/s");
   if (!is_multiscale(preset) && !options.failure_plane_floor)
     throw InputError("failure_plane_floor off at " + preset.name +
                      ": only the type-G levels have a zone of excavated voxel columns to stand "
@@ -171,6 +177,7 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
     terrain.relaxation = options.relaxation;
     terrain.seed_diameter = options.seed_diameter;
     terrain.excavation_reach = options.excavation_reach;
+    terrain.merge_speed = options.merge_speed;
     terrain.failure_plane_floor = options.failure_plane_floor;
     terrain.avalanche = options.avalanche;
     terrain.seed = options.pile.seed;

@@ -87,6 +87,11 @@ struct DiggingOptions {
   // moves the type-G loads toward D100's and RD21's work away from it (docs/validation.md "The
   // zone's excavation reach"); refused at a type-D level unless 0
   double excavation_reach = 0.0;
+  // type G, a study: a zone particle slower than this may merge back into the voxels [m/s]
+  // (MultiscaleOptions::merge_speed; kMergeSpeed, the default, the zone's activation speed; the
+  // reference engine merges below about 4 m/s: docs/multiscale.md "The merge speed"); refused at
+  // a type-D level unless the default, which has no voxels to merge into
+  double merge_speed = kMergeSpeed;
   // type G: the zone's particles stand on its failure plane, not on its excavated columns'
   // staircase (MultiscaleOptions::failure_plane_floor; the default since 2026-11-30: it brings
   // the type-G loads and work toward D100's, docs/validation.md "The zone's floor is its failure

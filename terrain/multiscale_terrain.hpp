@@ -64,13 +64,20 @@ inline constexpr double kMinSeedDiameter = 0.1;
 // [m/s] how fast a seed's diameter may grow: about the bucket's cutting speed (the soil a bucket
 // mobilises moves with it), a judgement, not a source's value
 inline constexpr double kGrowthSpeed = 1.0;
+// [m/s] a particle slower than this may merge back into the voxels: the zone's activation speed
+// (soil slower than the tool that mobilises it counts as at rest; SPEC §2.5, the reference
+// engine's 0.1 m/s). The reference engine's own merge threshold is about 4 m/s at a rate of about
+// 9 per second (SPEC §2.5); a study option (MultiscaleOptions::merge_speed, `--merge-speed`)
+// measures what the faster merge does (docs/multiscale.md "The merge speed")
+inline constexpr double kMergeSpeed = 0.1;
 
 struct MultiscaleOptions {
   BulkSoil soil;
   AvalancheOptions avalanche;
   Material particle_material = gravel();  // the zone's particles are the type-D gravel
   BucketMaterial bucket_material;         // particle-bucket contacts (friction 0.2, paper §4.4)
-  double merge_speed = 0.1;               // [m/s] a particle slower than this may merge (see above)
+  // [m/s] a particle slower than this may merge (see above); positive
+  double merge_speed = kMergeSpeed;
   double no_merge_margin = 0.5;           // [m] around the bucket's bounding box: no merging there
   double front_margin = 2.0;              // voxels ahead of the toe [m] (VoxelTerrainOptions)
   // [m] how far the bucket may press into the voxels before push_aside moves the soil: 0 without
@@ -134,7 +141,7 @@ class MultiscaleTerrain {
   // the terrain of a pile profile (placed where the pile stands) at a type-G level, with the
   // bucket's mesh (its profile frame) where `start` puts it. Throws InputError for a level that
   // is not type G and for options outside their ranges (seed_diameter, growth_speed,
-  // pressed_depth, excavation_reach, the avalanche's repose angle and rate)
+  // pressed_depth, excavation_reach, merge_speed, the avalanche's repose angle and rate)
   MultiscaleTerrain(Device& dev, const PileProfile& profile, const FidelityPreset& level,
                     const vehicle::BucketMesh& bucket, const KinematicBucket& start,
                     const MultiscaleOptions& options = {},

@@ -280,8 +280,8 @@ TEST(CliErrors, StepCountsAndLoadsOutsideTheirRangeAreRefused) {
   // a G level only
   for (const char* option :
        {" --no-content-inertia", " --edge-resistance 0", " --no-bucket-support",
-        " --interface-damping-time 0.01", " --excavation-reach 0.6", " --no-failure-plane-floor",
-        " --repose-angle 20", " --avalanche-rate 30"}) {
+        " --interface-damping-time 0.01", " --excavation-reach 0.6", " --merge-speed 4",
+        " --no-failure-plane-floor", " --repose-angle 20", " --avalanche-rate 30"}) {
     for (const char* cmd :
          {"run --scenario hd27 --fidelity D400", "run --scenario load-carry --fidelity G400"}) {
       const Outcome o = run("", std::string(cmd) + " --out /tmp/talus_cli_seed" + option);
@@ -302,6 +302,14 @@ TEST(CliErrors, StepCountsAndLoadsOutsideTheirRangeAreRefused) {
                             "--excavation-reach -1");
   EXPECT_EQ(reach.code, 2) << reach.err;
   EXPECT_NE(reach.err.find("--excavation-reach"), std::string::npos) << reach.err;
+  for (const char* speed : {"0", "-1", "nan"}) {
+    const Outcome merge = run("", std::string("run --scenario hd27 --fidelity G400 --out "
+                                              "/tmp/talus_cli_seed --merge-speed ") +
+                                      speed);
+    EXPECT_EQ(merge.code, 2) << speed << ": " << merge.err;
+    EXPECT_NE(merge.err.find("--merge-speed"), std::string::npos) << merge.err;
+    EXPECT_FALSE(std::filesystem::exists("/tmp/talus_cli_seed")) << speed;
+  }
   const Outcome damping = run("",
                               "run --scenario hd27 --fidelity G400 --out /tmp/talus_cli_seed "
                               "--interface-damping-time 0.7");

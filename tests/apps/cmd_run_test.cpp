@@ -15,6 +15,8 @@
 #include <utility>
 #include <vector>
 
+#include "terrain/multiscale_terrain.hpp"
+
 namespace {
 
 const std::string kTalus = std::string(TALUS_BINARY_DIR) + "/talus";
@@ -211,6 +213,15 @@ TEST(DiggingRunTest, Hd27AtG400WritesTheRunContractAndTheTerrain) {
   EXPECT_EQ(summary.at("fidelity").get<std::string>(), "G400");
   EXPECT_EQ(summary.at("model").get<std::string>(), "multiscale (type G)");
   EXPECT_GT(summary.at("loaded_mass_kg").get<double>(), 0.0);
+  // the particles over the steps: the most at any step's end bounds their mean and the count at
+  // the end; the zone's particles come and go, so the mean lies below the most (paper Table 3
+  // bounds G400's at about 55: docs/multiscale.md "How many particles")
+  const double most = summary.at("particles_most").get<double>();
+  EXPECT_GT(most, 0.0);
+  EXPECT_GE(most, summary.at("particles").get<double>());
+  EXPECT_LT(summary.at("particles_mean").get<double>(), most);
+  EXPECT_GT(summary.at("particles_mean").get<double>(), 0.0);
+  EXPECT_EQ(summary.at("coupling").at("merge_speed_m_s").get<double>(), talus::kMergeSpeed);
   for (const char* file :
        {"timeseries.csv", "channels.png", "trajectory.png", "side.png", "terrain.vts",
         "terrain_start.vts", "scan.csv", "aggregate.csv", "load.csv"})

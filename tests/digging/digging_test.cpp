@@ -332,6 +332,11 @@ TEST(Digging, TheCuttingEdgesResistanceIsTheLawTimesItsStudyFactor) {
       DiggingSimulation(test::shared_device(), sc, fidelity_preset("D400"), PileBuild{}, d),
       InputError);
   d.excavation_reach = 0.0;
+  d.merge_speed = 4.0;  // the zone particles' merge speed: type G only
+  EXPECT_THROW(
+      DiggingSimulation(test::shared_device(), sc, fidelity_preset("D400"), PileBuild{}, d),
+      InputError);
+  d.merge_speed = kMergeSpeed;
   d.failure_plane_floor = false;  // the zone's floor of voxel columns: type G only
   EXPECT_THROW(
       DiggingSimulation(test::shared_device(), sc, fidelity_preset("D400"), PileBuild{}, d),
