@@ -313,7 +313,8 @@ nlohmann::json dig_details(const RunOptions& o, const vehicle::Scenario& sc,
         {"edge_resistance", options.edge_resistance},
         // how far ahead of the cutting edge the zone's soil turns dynamic [m] (0: the whole wedge)
         {"excavation_reach_m", options.excavation_reach},
-        // a zone particle slower than this may merge back into the voxels [m/s] (type G)
+        // a zone particle slower than this may merge back into the voxels [m/s] (type G; the
+        // default at type D, which has no voxels)
         {"merge_speed_m_s", options.merge_speed},
         // the zone's particles on its failure plane (true) or its columns' staircase (type G)
         {"failure_plane_floor", options.failure_plane_floor},
@@ -686,8 +687,8 @@ void add_run_command(CLI::App& app, const std::string& command_line) {
   cmd->add_option("--merge-speed", opts->merge_speed,
                   "study, type G: a zone particle slower than this may merge back into the "
                   "voxels [m/s], above 0; 0.1 = the zone's activation speed (the default; the "
-                  "reference engine merges below about 4 m/s: docs/multiscale.md \"The merge "
-                  "speed\")")
+                  "reference engine merges below about 4 m/s: docs/multiscale.md \"How many "
+                  "particles\")")
       ->check(positive_number())
       ->capture_default_str();
   cmd->add_option("--repose-angle", opts->repose_angle,

@@ -58,7 +58,7 @@ DigCost measure_dig_cost(Device& dev, const vehicle::Scenario& scenario,
   DigCost cost;
   cost.scenario = scenario.name;
   cost.level = preset.name;
-  // the particle world: type D's pile, or type G's zone (its particles come and go: a mean)
+  // the particle world: type D's pile, or type G's terrain (its particles come and go: a mean)
   const bool type_g = sim.multiscale();
   const DemWorld& dem = type_g ? sim.terrain().dem() : sim.dem();
   cost.dt = preset.dt;

@@ -15,7 +15,9 @@ namespace talus {
 
 struct DigCost {
   std::string scenario, level;
-  double particles = 0.0;  // type D: the pile's; type G: the zone's, a mean over the measured steps
+  // type D: the pile's; type G: the terrain's (the zone's, the bucket's and those not yet merged
+  // back), a mean over the measured steps
+  double particles = 0.0;
   double dt = 0.0;                    // [s]
   int iterations = 0;                 // sweeps per step (the cap, with a sweep tolerance)
   double sweep_tolerance = 0.0;       // [m/s] DiggingOptions::sweep_tolerance (0: none)

@@ -124,11 +124,11 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
                      ": only the type-G levels turn a zone of voxels into particles; use a G "
                      "level or leave it at 0");
   if (!is_multiscale(preset) && options.merge_speed != kMergeSpeed)
-    throw InputError("merge_speed " + std::to_string(options.merge_speed) + " m/s at " +
+    throw InputError("merge_speed " + message_number(options.merge_speed) + " m/s at " +
                      preset.name +
                      ": only the type-G levels merge particles back into voxels; use a G level "
                      "or leave it at " +
-                     std::to_string(kMergeSpeed) + " m/s");
+                     message_number(kMergeSpeed) + " m/s");
   if (!is_multiscale(preset) && !options.failure_plane_floor)
     throw InputError("failure_plane_floor off at " + preset.name +
                      ": only the type-G levels have a zone of excavated voxel columns to stand "

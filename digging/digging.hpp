@@ -89,7 +89,7 @@ struct DiggingOptions {
   double excavation_reach = 0.0;
   // type G, a study: a zone particle slower than this may merge back into the voxels [m/s]
   // (MultiscaleOptions::merge_speed; kMergeSpeed, the default, the zone's activation speed; the
-  // reference engine merges below about 4 m/s: docs/multiscale.md "The merge speed"); refused at
+  // reference engine merges below about 4 m/s: docs/multiscale.md "How many particles"); refused at
   // a type-D level unless the default, which has no voxels to merge into
   double merge_speed = kMergeSpeed;
   // type G: the zone's particles stand on its failure plane, not on its excavated columns'

@@ -131,9 +131,10 @@ MultiscaleTerrain::MultiscaleTerrain(Device& dev, const PileProfile& profile,
                      std::to_string(options.excavation_reach) +
                      " m is not a distance ahead of the cutting edge (0: the whole zone)");
   if (!(options.merge_speed > 0.0 && std::isfinite(options.merge_speed)))
-    throw InputError("multiscale terrain: merge_speed " + std::to_string(options.merge_speed) +
+    throw InputError("multiscale terrain: merge_speed " + message_number(options.merge_speed) +
                      " m/s is not a positive speed: a particle slower than it may merge back "
-                     "into the voxels (0.1, the default)");
+                     "into the voxels (" +
+                     message_number(kMergeSpeed) + ", the default)");
   check_avalanche_options(options.avalanche);
   DemSettings settings;
   settings.dt = level.dt;

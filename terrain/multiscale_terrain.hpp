@@ -68,8 +68,8 @@ inline constexpr double kGrowthSpeed = 1.0;
 // (soil slower than the tool that mobilises it counts as at rest; SPEC §2.5, the reference
 // engine's 0.1 m/s). The reference engine's own merge threshold is about 4 m/s at a rate of about
 // 9 per second (SPEC §2.5); a study option (MultiscaleOptions::merge_speed, `--merge-speed`)
-// measures what the faster merge does (docs/multiscale.md "The merge speed")
-inline constexpr double kMergeSpeed = 0.1;
+// measures what the faster merge does (docs/multiscale.md "How many particles")
+inline constexpr double kMergeSpeed = BulkSoil{}.activation_speed;
 
 struct MultiscaleOptions {
   BulkSoil soil;

@@ -414,6 +414,34 @@ TEST(Digging, TheInterfacesDampingTimeIsTwoStepsOrTheStudys) {
   }
 }
 
+// the merge speed (DiggingOptions::merge_speed, a type-G study) reaches the terrain: FB35 at G400
+// with particles allowed to merge below 4 m/s instead of 0.1 m/s holds fewer of them on average
+// over the run (docs/multiscale.md "How many particles": pile 1, 84.3 -> 76.9 measured by talus
+// run, 2026-12-01), the most at a step about the same (the zone and the bucket set those)
+TEST(Digging, TheMergeSpeedReachesTheTypeGTerrain) {
+  const vehicle::Scenario sc = vehicle::load_scenario("fb35");
+  const FidelityPreset& g400 = level_preset("G400");
+  double mean[2] = {0.0, 0.0};
+  size_t most[2] = {0, 0};
+  for (const int fast : {0, 1}) {
+    DiggingOptions options;
+    options.merge_speed = fast ? 4.0 : kMergeSpeed;
+    const PileBuild pile = build_scenario_pile(test::shared_device(), sc, scenario_pile_profile(sc),
+                                               g400, options, nullptr);
+    DiggingSimulation sim(test::shared_device(), sc, g400, pile, options);
+    sim.run([&](int) {
+      mean[fast] += static_cast<double>(sim.particle_count()) / sim.steps_total();
+      most[fast] = std::max(most[fast], sim.particle_count());
+    });
+  }
+  std::printf(
+      "[ measured ] FB35-G400 pile 1: %.1f particles on average, %zu at most, merging below "
+      "0.1 m/s; %.1f and %zu below 4 m/s\n",
+      mean[0], most[0], mean[1], most[1]);
+  EXPECT_LT(mean[1], 0.97 * mean[0]);
+  EXPECT_NEAR(static_cast<double>(most[1]), static_cast<double>(most[0]), 0.05 * most[0]);
+}
+
 // cohesive soil (the soil_cohesion effect) resists the bucket more: FB35 at D400 pushes the flat
 // bucket deep into the pile at the traction the driveline has, and in cohesive gravel it gets less
 // far by breakout (7 s). Measured with the inputs retuned in issue 11: 3.10 m dry, 2.95 m at
