@@ -3,8 +3,10 @@
 // grid cell of a point, clamped into the grid (clamping merges outer cells, never splits them,
 // so no pair within one cell size is missed)
 int3 cell_of(float3 x, const TlStepParams p) {
+  // the lattice cell (from the bounds' corner: the same float operations with a grid region or
+  // without), then the grid's own index, clamped into it
   float3 rel = (x - p.grid_origin.xyz) / p.cell_size;
-  int3 c = convert_int3_rtn(rel);
+  int3 c = convert_int3_rtn(rel) - (int3)(p.grid_i0, p.grid_j0, p.grid_k0);
   return clamp(c, (int3)(0, 0, 0), (int3)(p.grid_nx - 1, p.grid_ny - 1, p.grid_nz - 1));
 }
 

@@ -39,8 +39,12 @@ typedef struct {
 // everything a step's kernels need besides the arrays, passed by value
 typedef struct {
   tl_float4 gravity;      // xyz [m/s^2]
-  tl_float4 grid_origin;  // xyz lower corner of the broad-phase grid [m]
+  tl_float4 grid_origin;  // xyz lower corner of the broad-phase lattice (the bounds') [m]
   tl_float cell_size;     // edge of a grid cell [m], >= largest diameter + margin
+  // the grid's cells: grid_nx x grid_ny x grid_nz of the lattice, from its cell (grid_i0,
+  // grid_j0, grid_k0) (DemWorld::set_grid_region: a sub-box where the particles are; 0, 0, 0 and
+  // the whole bounds without one). A particle's cell is counted from the lattice's origin, so a
+  // sub-box holds each particle in the same lattice cell as the whole grid would
   tl_int grid_nx, grid_ny, grid_nz;
   tl_float dt;            // timestep h [s]
   tl_float young;         // particle Young's modulus E [Pa] (walls: same material)
@@ -67,6 +71,7 @@ typedef struct {
   // Gauss-Seidel step (projected SOR), folded into the rows' inverse effective masses by
   // prepare_rows (DemSettings::relaxation); 1 is plain PGS
   tl_float relaxation;
+  tl_int grid_i0, grid_j0, grid_k0;  // the grid's first cell on the lattice (see grid_nx)
   tl_int pad_params[2];
 } TlStepParams;
 

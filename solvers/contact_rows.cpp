@@ -23,6 +23,9 @@ StepParams from_device(const TlStepParams& p) {
   out.grid_nx = p.grid_nx;
   out.grid_ny = p.grid_ny;
   out.grid_nz = p.grid_nz;
+  out.grid_i0 = p.grid_i0;
+  out.grid_j0 = p.grid_j0;
+  out.grid_k0 = p.grid_k0;
   out.dt = p.dt;
   out.young = p.young;
   out.poisson = p.poisson;

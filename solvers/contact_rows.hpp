@@ -17,6 +17,7 @@ struct StepParams {
   Vec3 grid_origin = Vec3::Zero();
   double cell_size = 0.0;
   int grid_nx = 1, grid_ny = 1, grid_nz = 1;
+  int grid_i0 = 0, grid_j0 = 0, grid_k0 = 0;  // the grid's first cell on the lattice
   double dt = 0.0;
   double young = 0.0;
   double poisson = 0.0;

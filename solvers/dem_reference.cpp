@@ -170,11 +170,11 @@ std::vector<int> exclusive_scan(const std::vector<int>& values) {
 }
 
 int cell_of(const Vec3& x, const StepParams& p) {
-  // floor of the position in cell units, clamped into the grid
+  // floor of the position in cell units of the lattice, then the grid's own index clamped into it
   Vec3 rel = (x - p.grid_origin) / p.cell_size;
-  int cx = std::clamp(static_cast<int>(std::floor(rel.x())), 0, p.grid_nx - 1);
-  int cy = std::clamp(static_cast<int>(std::floor(rel.y())), 0, p.grid_ny - 1);
-  int cz = std::clamp(static_cast<int>(std::floor(rel.z())), 0, p.grid_nz - 1);
+  int cx = std::clamp(static_cast<int>(std::floor(rel.x())) - p.grid_i0, 0, p.grid_nx - 1);
+  int cy = std::clamp(static_cast<int>(std::floor(rel.y())) - p.grid_j0, 0, p.grid_ny - 1);
+  int cz = std::clamp(static_cast<int>(std::floor(rel.z())) - p.grid_k0, 0, p.grid_nz - 1);
   return (cz * p.grid_ny + cy) * p.grid_nx + cx;
 }
 

@@ -98,6 +98,14 @@ void DemWorld::set_material(const Material& material) {
   update_params();
 }
 
+void DemWorld::set_grid_region(const std::optional<Bounds>& region) {
+  if (region && !(region->lo.allFinite() && region->hi.allFinite() &&
+                  (region->lo.array() <= region->hi.array()).all()))
+    throw Error("DemWorld::set_grid_region: the region must be a finite box with lo <= hi");
+  grid_region_ = region;
+  update_params();
+}
+
 void DemWorld::set_geoms(std::vector<StaticGeom> geoms, GeomChange change) {
   geoms_ = std::move(geoms);
   ++geoms_version_;
@@ -133,15 +141,35 @@ void DemWorld::update_params() {
   double cell = particle_count_ > 0 ? 2.0 * max_radius_ * (1.0 + settings_.margin_rel) + speculative
                                     : extent.maxCoeff();
   Eigen::Vector3i dims = (extent / cell).array().ceil().cast<int>().cwiseMax(1);
-  double cells = double(dims.x()) * dims.y() * dims.z();
+  p.grid_origin = to_float4(bounds_.lo, 0.0);
+  p.cell_size = static_cast<float>(cell);
+  // the grid: the bounds' whole lattice, or the cells of it that hold the grid region grown by a
+  // cell each way (set_grid_region; the region is the caller's in double, the kernels place a
+  // particle in float: a cell to spare holds it where the two round apart)
+  Eigen::Vector3i first = Eigen::Vector3i::Zero(), count = dims;
+  if (grid_region_ && particle_count_ > 0) {
+    const Vec3 origin = xyz(p.grid_origin);
+    const double cell_f = p.cell_size;
+    const auto lattice = [&](double x, int axis) {
+      const double c = std::floor((x - origin[axis]) / cell_f);
+      return static_cast<int>(std::clamp(c, 0.0, double(dims[axis] - 1)));
+    };
+    for (int axis = 0; axis < 3; ++axis) {
+      first[axis] = std::max(0, lattice(grid_region_->lo[axis], axis) - 1);
+      const int last = std::min(dims[axis] - 1, lattice(grid_region_->hi[axis], axis) + 1);
+      count[axis] = std::max(1, last - first[axis] + 1);
+    }
+  }
+  double cells = double(count.x()) * count.y() * count.z();
   if (cells > kMaxGridCells)
     throw InputError("Bounds: the broad-phase grid would have " + std::to_string(cells) +
                      " cells; shrink the bounds to the region particles can reach");
-  p.grid_origin = to_float4(bounds_.lo, 0.0);
-  p.cell_size = static_cast<float>(cell);
-  p.grid_nx = dims.x();
-  p.grid_ny = dims.y();
-  p.grid_nz = dims.z();
+  p.grid_nx = count.x();
+  p.grid_ny = count.y();
+  p.grid_nz = count.z();
+  p.grid_i0 = first.x();
+  p.grid_j0 = first.y();
+  p.grid_k0 = first.z();
   p.dt = static_cast<float>(settings_.dt);
   p.young = static_cast<float>(material_.young);
   p.poisson = static_cast<float>(material_.poisson);
@@ -170,20 +198,22 @@ void DemWorld::bin_geoms() {
   const TlStepParams& p = params_;
   const int nx = p.grid_nx, ny = p.grid_ny;
   // the lists on the device are those of this geometry and these columns already
-  const GeomBinning key{geoms_version_,     p.cell_size, p.grid_origin.s[0],
-                        p.grid_origin.s[1], nx,          ny};
+  const GeomBinning key{geoms_version_, p.cell_size, p.grid_origin.s[0], p.grid_origin.s[1], nx, ny,
+                        p.grid_i0,      p.grid_j0};
   if (binned_for_ == key) return;
   const double cell = p.cell_size;
   const Vec3 origin(p.grid_origin.s[0], p.grid_origin.s[1], p.grid_origin.s[2]);
   // the columns a geometry can reach: its bounds grown by one cell, which holds the farthest a
   // particle's centre can be from a surface it touches (radius and margin, cell size above),
   // with half a cell to spare for the kernel's float rounding of a particle's column; clamped to
-  // the grid as the kernel clamps a particle's cell. Planes reach everywhere
+  // the grid as the kernel clamps a particle's cell (a grid region's border columns list what
+  // lies beyond them, as the whole grid's do). Planes reach everywhere
   struct ColumnRange {
     int i0, i1, j0, j1;
   };
-  const auto column = [&](double x, double x0, int n) {
-    return std::clamp(static_cast<int>(std::floor((x - x0) / cell)), 0, n - 1);
+  const auto column = [&](double x, double x0, int first, int n) {
+    const double c = std::floor((x - x0) / cell) - first;
+    return static_cast<int>(std::clamp(c, 0.0, double(n - 1)));
   };
   std::vector<ColumnRange> ranges;
   ranges.reserve(geoms_.size());
@@ -193,10 +223,10 @@ void DemWorld::bin_geoms() {
       continue;
     }
     const Vec3 reach = g.axes.cwiseAbs() * g.half + Vec3::Constant(cell);
-    ranges.push_back({column(g.centre.x() - reach.x(), origin.x(), nx),
-                      column(g.centre.x() + reach.x(), origin.x(), nx),
-                      column(g.centre.y() - reach.y(), origin.y(), ny),
-                      column(g.centre.y() + reach.y(), origin.y(), ny)});
+    ranges.push_back({column(g.centre.x() - reach.x(), origin.x(), p.grid_i0, nx),
+                      column(g.centre.x() + reach.x(), origin.x(), p.grid_i0, nx),
+                      column(g.centre.y() - reach.y(), origin.y(), p.grid_j0, ny),
+                      column(g.centre.y() + reach.y(), origin.y(), p.grid_j0, ny)});
   }
   // count per column, prefix sum, then fill in geometry order (each list ascending)
   std::vector<int> start(static_cast<size_t>(nx) * ny + 1, 0);

@@ -68,6 +68,16 @@ class DemWorld {
   // replaces the static geometry (walls removed or moved, the type-G terrain's boxes); `change`
   // says which contacts keep last step's impulses
   void set_geoms(std::vector<StaticGeom> geoms, GeomChange change = GeomChange::Replaced);
+  // the broad-phase grid over the cells of the bounds' grid that hold `region` (grown by a cell
+  // each way) instead of all of them: a small system in large bounds (the type-G zone's
+  // particles in the pile's container) clears, scans and sorts its few cells, not the
+  // container's (G50: 5 of 28 ms a step; bench/RESULTS.md 2026-12-01). A particle keeps its cell
+  // of the bounds' lattice, so while every particle lies in the region the contacts are the same,
+  // in the same order, bit for bit; one outside it is clamped into the border cells as one
+  // outside the bounds always was (every pair still found, their order may differ). The caller
+  // sets it before each step from where its particles are; nullopt: the whole bounds again
+  void set_grid_region(const std::optional<Bounds>& region);
+  const std::optional<Bounds>& grid_region() const { return grid_region_; }
   // replaces the contact material (e.g. friction switched on after a dense fill)
   void set_material(const Material& material);
   const Material& material() const { return material_; }
@@ -143,6 +153,7 @@ class DemWorld {
   Material material_;
   DemSettings settings_;
   Bounds bounds_;
+  std::optional<Bounds> grid_region_;  // set_grid_region's; none: the whole bounds
   std::vector<StaticGeom> geoms_;
   // what the columns' lists were binned for: the geometry (set_geoms counts its versions) and the
   // grid's columns. update_params runs at every change of particles, geometry or settings and
@@ -151,10 +162,11 @@ class DemWorld {
   struct GeomBinning {
     std::uint64_t geoms_version = 0;
     float cell_size = 0.0f, origin_x = 0.0f, origin_y = 0.0f;
-    int nx = 0, ny = 0;
+    int nx = 0, ny = 0, i0 = 0, j0 = 0;
     bool operator==(const GeomBinning& o) const {
       return geoms_version == o.geoms_version && cell_size == o.cell_size &&
-             origin_x == o.origin_x && origin_y == o.origin_y && nx == o.nx && ny == o.ny;
+             origin_x == o.origin_x && origin_y == o.origin_y && nx == o.nx && ny == o.ny &&
+             i0 == o.i0 && j0 == o.j0;
     }
   };
   std::uint64_t geoms_version_ = 0;

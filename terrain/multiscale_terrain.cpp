@@ -68,6 +68,16 @@ double sphere_mass(double d, double rho) { return rho * M_PI / 6.0 * d * d * d; 
 // the diameter of a sphere of mass m at density rho [m], sphere_mass's inverse
 double sphere_diameter(double m, double rho) { return std::cbrt(6.0 * m / (M_PI * rho)); }
 
+// the box of the particles' centres (at least one particle)
+Bounds centres_box(const Particles& particles) {
+  Bounds box{particles.position[0], particles.position[0]};
+  for (const Vec3& x : particles.position) {
+    box.lo = box.lo.cwiseMin(x);
+    box.hi = box.hi.cwiseMax(x);
+  }
+  return box;
+}
+
 BucketPose pose_of(const KinematicBucket& b) {
   BucketPose pose;
   pose.position = b.position;
@@ -237,6 +247,9 @@ void MultiscaleTerrain::step(const KinematicBucket& bucket) {
   tool.omega = bucket.omega;
   if (!ledger_.empty()) {
     stage.emplace(dev, "terrain_geometry");
+    // the broad phase's grid over the particles' cells alone, not the container's (the same
+    // contacts in the same order: DemWorld::set_grid_region), then the boxes binned on it
+    dem_->set_grid_region(centres_box(particles));
     const std::vector<StaticGeom> geoms = geometry(particles);
     // boxes remade for this step's columns: the particle pairs keep their warm start (until
     // 2026-11-27 every contact started from zero here, each step)
@@ -358,44 +371,49 @@ int MultiscaleTerrain::spawn(Particles& particles, const std::vector<ExcavatedCo
     }
     return f;
   };
-  Particles slots;
-  const int layers = std::max(1, static_cast<int>(kSpawnHeight / d));
-  for (int k = 0; k < layers; ++k)
-    for (const ExcavatedColumn& c : sites_) {
-      const double floor = floor_of(c.i, c.j);
-      slots.add(Vec3(voxels_.column_x(c.i), voxels_.column_y(c.j),
-                     floor + 0.5 * d * (1.0 + kSizeSpread) + k * d),
-                0.5 * d * (1.0 + kSizeSpread), options_.particle_material.density);
-    }
-  std::vector<int> all(slots.size());
-  for (size_t k = 0; k < all.size(); ++k) all[k] = static_cast<int>(k);
-  std::vector<bool> blocked(slots.size(), false);
-  for (const BucketContact& c : bucket_scene_.find_bucket_contacts(slots, all, pose, 0.0))
-    blocked[c.particle] = true;
-  // fill the free slots in order with seeds while the pool holds the next one's mass; each
-  // seed's full diameter drawn as the particles' sizes always were (a seed of fraction 1 is the
-  // full particle, made as before growth existed). The grid holds the particles as they are and
-  // the seeds made here at their full size
+  // the slots, layer by layer over the sites (each site's floor found once): fill the free slots
+  // in order with seeds while the pool holds the next one's mass; each seed's full diameter
+  // drawn as the particles' sizes always were (a seed of fraction 1 is the full particle, made as
+  // before growth existed). The grid holds the particles as they are and the seeds made here at
+  // their full size. A layer's slots are made and asked of the bucket only when the pool reaches
+  // them (at G50 the pool runs out within a few of the 40 layers; each slot's answer is its own,
+  // so the seeds are the same)
+  std::vector<double> floors;
+  floors.reserve(sites_.size());
+  for (const ExcavatedColumn& c : sites_) floors.push_back(floor_of(c.i, c.j));
   CentreGrid grid(d * (1.0 + kSizeSpread));
   for (size_t k = 0; k < particles.size(); ++k)
     grid.add(particles.position[k], particles.radius[k]);
+  const int layers = std::max(1, static_cast<int>(kSpawnHeight / d));
+  std::vector<int> all(sites_.size());
+  for (size_t k = 0; k < all.size(); ++k) all[k] = static_cast<int>(k);
   int made = 0;
-  for (size_t k = 0; k < slots.size(); ++k) {
-    const double seed_d = fraction == 1.0 ? next_d : fraction * next_d;
-    const double mass = sphere_mass(seed_d, rho);
-    if (pool_ < mass) break;
-    if (blocked[k]) continue;
-    const Vec3 x = slots.position[k];
-    // the seed's slot must hold its full size: a seed placed in a gap its full size does not
-    // fit overfills the zone as it grows (docs/multiscale.md "Growth": measured)
-    if (grid.touches(x, 0.5 * next_d)) continue;
-    particles.add(x, 0.5 * seed_d, rho);
-    ledger_.push_back(mass);
-    full_.push_back(next_d);
-    pool_ -= mass;
-    grid.add(x, 0.5 * next_d);
-    ++made;
-    next_d = d * (1.0 + spread(sizes_));
+  for (int layer = 0; layer < layers; ++layer) {
+    Particles slots;
+    for (size_t s = 0; s < sites_.size(); ++s)
+      slots.add(Vec3(voxels_.column_x(sites_[s].i), voxels_.column_y(sites_[s].j),
+                     floors[s] + 0.5 * d * (1.0 + kSizeSpread) + layer * d),
+                0.5 * d * (1.0 + kSizeSpread), options_.particle_material.density);
+    std::vector<bool> blocked(slots.size(), false);
+    for (const BucketContact& c : bucket_scene_.find_bucket_contacts(slots, all, pose, 0.0))
+      blocked[c.particle] = true;
+    for (size_t k = 0; k < slots.size(); ++k) {
+      const double seed_d = fraction == 1.0 ? next_d : fraction * next_d;
+      const double mass = sphere_mass(seed_d, rho);
+      if (pool_ < mass) return made;
+      if (blocked[k]) continue;
+      const Vec3 x = slots.position[k];
+      // the seed's slot must hold its full size: a seed placed in a gap its full size does not
+      // fit overfills the zone as it grows (docs/multiscale.md "Growth": measured)
+      if (grid.touches(x, 0.5 * next_d)) continue;
+      particles.add(x, 0.5 * seed_d, rho);
+      ledger_.push_back(mass);
+      full_.push_back(next_d);
+      pool_ -= mass;
+      grid.add(x, 0.5 * next_d);
+      ++made;
+      next_d = d * (1.0 + spread(sizes_));
+    }
   }
   // a draw for a particle not made is dropped; the sequence, so every size, is the same on every
   // run
@@ -432,11 +450,7 @@ std::vector<StaticGeom> MultiscaleTerrain::geometry(const Particles& particles) 
   std::vector<StaticGeom> geoms = pile_container(profile_);
   if (particles.size() == 0) return geoms;
   // the columns under the particles' box, grown by a particle: each a box up to its surface
-  Vec3 lo = particles.position[0], hi = particles.position[0];
-  for (const Vec3& x : particles.position) {
-    lo = lo.cwiseMin(x);
-    hi = hi.cwiseMax(x);
-  }
+  const auto [lo, hi] = centres_box(particles);
   const double grow = 2.0 * level_.diameter;
   const double h = voxels_.cell();
   const int i0 = std::max(0, static_cast<int>(std::floor((lo.x() - grow - voxels_.x0()) / h)));

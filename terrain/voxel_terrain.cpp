@@ -47,6 +47,8 @@ VoxelTerrain::VoxelTerrain(double x0, double y0, double z0, double cell, int nx,
   mass_.assign(n, 0.0);
   volume_.assign(n, 0.0);
   column_volume_.assign(static_cast<size_t>(nx) * ny, 0.0);
+  full_sums_.assign(static_cast<size_t>(nz) + 1, 0.0);
+  for (int k = 0; k < nz; ++k) full_sums_[k + 1] = full_sums_[k] + cell * cell * cell;
 }
 
 VoxelTerrain VoxelTerrain::from_profile(const PileProfile& profile,
@@ -111,10 +113,20 @@ double VoxelTerrain::column_volume(int i, int j) const {
   return column_volume_[static_cast<size_t>(j) * nx_ + i];
 }
 
-void VoxelTerrain::sum_column_volume(int i, int j) {
-  double v = 0.0;
-  for (int k = 0; k < nz_; ++k) v += volume_[index(i, j, k)];
+void VoxelTerrain::sum_column_volume(int i, int j, int first, int end) {
+  double v = full_sums_[first];
+  for (int k = first; k < std::min(end, nz_); ++k) v += volume_[index(i, j, k)];
   column_volume_[static_cast<size_t>(j) * nx_ + i] = v;
+}
+
+int VoxelTerrain::unchanged_cells(int i, int j, double z) const {
+  const double cap = h_ * h_ * h_;
+  // two cells under z's: a cell's top lies a rounding of h above k h, far below z
+  const double below = std::floor((z - z0_) / h_) - 2.0;
+  const int first = below > 0.0 ? static_cast<int>(std::min(below, double(nz_))) : 0;
+  for (int k = 0; k < first; ++k)
+    if (volume_[index(i, j, k)] != cap) return k;
+  return first;
 }
 
 double VoxelTerrain::total_mass() const {
@@ -143,15 +155,15 @@ Heightmap VoxelTerrain::surface(const embree::Device& device) const {
   return Heightmap(x0_ + 0.5 * h_, y0_ + 0.5 * h_, h_, nx_, ny_, surface_heights(), device);
 }
 
-void VoxelTerrain::restack(int i, int j, const std::vector<Layer>& layers) {
+void VoxelTerrain::restack(int i, int j, const std::vector<Layer>& layers, int first) {
   const double cap = h_ * h_ * h_;
-  for (int k = 0; k < nz_; ++k) mass_[index(i, j, k)] = volume_[index(i, j, k)] = 0.0;
-  int k = 0;
+  for (int k = first; k < nz_; ++k) mass_[index(i, j, k)] = volume_[index(i, j, k)] = 0.0;
+  int k = first;
   double room = cap;
   for (Layer layer : layers) {
     while (layer.volume > 0.0) {
       if (k >= nz_) {
-        sum_column_volume(i, j);
+        sum_column_volume(i, j, first, k);
         throw Error("voxel terrain: a column overflows its " + std::to_string(nz_) + " cells");
       }
       size_t c = index(i, j, k);
@@ -177,11 +189,12 @@ void VoxelTerrain::restack(int i, int j, const std::vector<Layer>& layers) {
       }
     }
   }
-  sum_column_volume(i, j);
+  // the cells above k were emptied above (adding their zeros would change no bit)
+  sum_column_volume(i, j, first, k + 1);
 }
 
 SoilTaken VoxelTerrain::split(int i, int j, double z_lo, double z_hi, std::vector<Layer>* below,
-                              std::vector<Layer>* above) const {
+                              std::vector<Layer>* above, int first) const {
   SoilTaken inside;
   const double area = h_ * h_;
   // the interval in the column's own height, clamped to its soil
@@ -189,7 +202,7 @@ SoilTaken VoxelTerrain::split(int i, int j, double z_lo, double z_hi, std::vecto
   double b = std::min(z_hi - z0_, column_volume(i, j) / area);
   if (!(b > a)) return inside;
   // each cell's soil spans [k h, k h + V / h^2]: split it into below, inside and above [a, b]
-  for (int k = 0; k < nz_; ++k) {
+  for (int k = first; k < nz_; ++k) {
     size_t c = index(i, j, k);
     double m = mass_[c], v = volume_[c];
     if (v <= 0.0) break;
@@ -220,11 +233,13 @@ SoilTaken VoxelTerrain::take(int i, int j, double z_lo, double z_hi) {
   std::vector<Layer>& above = scratch_above_;
   below.clear();
   above.clear();
-  const SoilTaken taken = split(i, j, z_lo, z_hi, &below, &above);
+  // the full cells wholly under the interval stay as they are
+  const int first = unchanged_cells(i, j, z_lo);
+  const SoilTaken taken = split(i, j, z_lo, z_hi, &below, &above, first);
   if (taken.volume <= 0.0 && taken.mass <= 0.0) return taken;
   // what lay above drops onto what lay below
   below.insert(below.end(), above.begin(), above.end());
-  restack(i, j, below);
+  restack(i, j, below, first);
   return taken;
 }
 
@@ -239,13 +254,15 @@ void VoxelTerrain::deposit(int i, int j, double mass, double compaction) {
   if (column_volume(i, j) + volume > nz_ * cap * (1.0 + kVolumeRounding))
     throw Error("voxel terrain: column (" + std::to_string(i) + ", " + std::to_string(j) +
                 ") cannot take " + std::to_string(mass) + " kg more: it would rise above the grid");
-  // the column's layers as they are (one per cell), the new soil on top
+  // the column's layers as they are (one per cell) from the first that can change (the full
+  // cells under its surface stay), the new soil on top
+  const int first = unchanged_cells(i, j, z0_ + column_volume(i, j) / (h_ * h_));
   std::vector<Layer>& layers = scratch_below_;
   layers.clear();
-  for (int k = 0; k < nz_ && volume_[index(i, j, k)] > 0.0; ++k)
+  for (int k = first; k < nz_ && volume_[index(i, j, k)] > 0.0; ++k)
     layers.push_back({mass_[index(i, j, k)], volume_[index(i, j, k)]});
   layers.push_back({mass, volume});
-  restack(i, j, layers);
+  restack(i, j, layers, first);
 }
 
 void VoxelTerrain::save_state(ByteWriter& w) const {

@@ -23,6 +23,7 @@
 // side walls, the last column ends at the rear wall, the first lies `front_margin` in front of
 // the pile's toe, where soil pushed off the face lands.
 #pragma once
+#include <climits>
 #include <vector>
 
 #include "host/binary.hpp"
@@ -128,14 +129,27 @@ class VoxelTerrain {
   struct Layer {
     double mass, volume;
   };
-  void restack(int i, int j, const std::vector<Layer>& layers);
+  // The cells under `first` are left as they are: a writer that changes only a column's top
+  // restacks and sums from there (a G50 step's avalanche takes thin layers off thousands of
+  // columns 40-80 cells tall; bench/RESULTS.md 2026-12-01), with the same bits as from the bottom
+  // (unchanged_cells says why)
+  void restack(int i, int j, const std::vector<Layer>& layers, int first = 0);
   // the column's soil split at heights z_lo < z_hi: what lies inside (returned) and, when asked
-  // for, the layers below and above
+  // for, the layers below and above, from cell `first` up (the layers of the cells under it are
+  // left out)
   SoilTaken split(int i, int j, double z_lo, double z_hi, std::vector<Layer>* below,
-                  std::vector<Layer>* above) const;
+                  std::vector<Layer>* above, int first = 0) const;
+  // how many of column (i, j)'s bottom cells a change at height z and above leaves as they are:
+  // those exactly full (h^3) and wholly two cells or more under z. Restacking them afresh would
+  // lay each back bit for bit (a full cell's mass into an empty cell, its volume exactly h^3), and
+  // the column's sum up to them is full_sums_'s, so starting above them changes no bit
+  int unchanged_cells(int i, int j, double z) const;
   // column_volume_ of column (i, j) summed afresh from its cells, as every writer of a column
-  // ends with
-  void sum_column_volume(int i, int j);
+  // ends with: the sum of its `first` bottom cells (full, unchanged_cells) from full_sums_, then
+  // the cells up to `end` one by one, bottom to top (those from `end` up must be empty)
+  void sum_column_volume(int i, int j, int first = 0, int end = INT_MAX);
+  // full_sums_[k]: h^3 added k times, one after another (the sum of k full cells, bottom up)
+  std::vector<double> full_sums_;
   std::vector<double> mass_;  // [kg] per cell
   // [m^3] per cell: h^3 exactly in every cell under a column's top one. Volume, not compaction,
   // is stored so that volumes add exactly; compaction is derived, m / (rho_bank V)

@@ -215,6 +215,95 @@ TEST(ReferenceBroadPhase, CellListsMatchExactly) {
   EXPECT_GT(want.cell_start.back() - want.cell_start[top_layer], 0);
 }
 
+// the box of the particles' centres
+Bounds centres_box(const Particles& ps) {
+  Bounds box{ps.position[0], ps.position[0]};
+  for (const Vec3& x : ps.position) {
+    box.lo = box.lo.cwiseMin(x);
+    box.hi = box.hi.cwiseMax(x);
+  }
+  return box;
+}
+
+// a grid region (DemWorld::set_grid_region, the type-G zone's) that holds every particle, in
+// bounds four times the particles' extent: the grid keeps only the lattice cells around them, and
+// sixty steps, the region set anew before each from where the particles are, end with the whole
+// grid's bytes
+TEST(ReferenceBroadPhase, AGridRegionAroundTheParticlesGivesTheWholeGridsBits) {
+  uint64_t seed = test::fresh_seed();
+  SCOPED_TRACE(test::seed_note(seed));
+  std::mt19937_64 rng(seed);
+  Scene s = test::random_scene(rng);
+  const Bounds box = centres_box(s.particles);
+  const Vec3 extent = box.hi - box.lo;
+  s.bounds = Bounds{box.lo - 1.5 * extent, box.hi + 1.5 * extent};
+  auto whole = make_world(s);
+  auto fitted = make_world(s);
+  const size_t n = s.particles.size();
+  for (int step = 0; step < 60; ++step) {
+    fitted->set_grid_region(centres_box(fitted->particles()));
+    if (step == 0) {
+      const ref::StepParams full = params_of(*whole), part = params_of(*fitted);
+      EXPECT_LT(part.cells() * 8, full.cells()) << "the region's grid is not smaller";
+      EXPECT_GT(part.grid_i0 + part.grid_j0 + part.grid_k0, 0);
+    }
+    whole->step();
+    fitted->step();
+    ASSERT_EQ(whole->stats().contacts, fitted->stats().contacts) << "step " << step;
+  }
+  auto bytes = [&](DemWorld& w) {
+    auto x = w.buffers().position.download(n);
+    auto v = w.buffers().velocity.download(n);
+    auto o = w.buffers().omega.download(n);
+    x.insert(x.end(), v.begin(), v.end());
+    x.insert(x.end(), o.begin(), o.end());
+    return x;
+  };
+  const auto a = bytes(*whole), b = bytes(*fitted);
+  ASSERT_EQ(a.size(), b.size());
+  EXPECT_EQ(0, std::memcmp(a.data(), b.data(), a.size() * sizeof(a[0])));
+}
+
+// a grid region that holds the lower half of the particles alone: the device places each particle
+// as the reference does (its lattice cell, offset to the region's grid, the rest clamped into the
+// border cells), and the narrow phase still finds every pair the whole grid finds
+TEST(ReferenceBroadPhase, AGridRegionClampsTheParticlesOutsideItAndMissesNoPair) {
+  uint64_t seed = test::fresh_seed();
+  SCOPED_TRACE(test::seed_note(seed));
+  std::mt19937_64 rng(seed);
+  const Scene s = test::random_scene(rng);
+  Bounds region = centres_box(s.particles);
+  region.hi.z() = 0.5 * (region.lo.z() + region.hi.z());
+  auto whole = make_world(s);
+  auto fitted = make_world(s);
+  fitted->set_grid_region(region);
+  expect_grid_as_assumed(s, *whole);
+  const ref::StepParams p = params_of(*fitted);
+  EXPECT_LT(p.grid_nz, params_of(*whole).grid_nz);
+  fitted->broad_phase();
+  const ref::CellLists want = ref::cell_lists(fitted->particles(), p);
+  const DemBuffers& b = fitted->buffers();
+  const size_t n = fitted->size();
+  EXPECT_EQ(b.particle_cell.download(n), want.particle_cell);
+  EXPECT_EQ(b.cell_start.download(p.cells() + 1), want.cell_start);
+  EXPECT_EQ(b.cell_particles.download(n), want.cell_particles);
+  // the top layer of the region's grid holds the clamped upper half
+  const int top_layer = (p.grid_nz - 1) * p.grid_ny * p.grid_nx;
+  EXPECT_GT(want.cell_start.back() - want.cell_start[top_layer], static_cast<int>(n / 4));
+  // the same pairs, as sets (their order may differ where particles share a clamped cell)
+  whole->broad_phase();
+  whole->narrow_phase();
+  fitted->narrow_phase();
+  auto pairs = [](const std::vector<ref::Contact>& cs) {
+    std::set<std::pair<int, int>> out;
+    for (const ref::Contact& c : cs) out.insert({c.a, c.b});
+    return out;
+  };
+  const auto got = pairs(current_contacts(*fitted)), all = pairs(current_contacts(*whole));
+  EXPECT_EQ(got, all);
+  EXPECT_GT(all.size(), n / 4);  // a test with pairs to find
+}
+
 // the contacts of one narrow phase on the device against the reference's own detection: the
 // same pairs in the same order, geometry within float rounding; returns how many of each kind
 struct ContactKinds {
