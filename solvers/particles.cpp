@@ -4,6 +4,8 @@
 #include <cmath>
 #include <tuple>
 
+#include "host/error.hpp"
+
 namespace talus {
 
 void Particles::add(const Vec3& x, double r, double density) {
@@ -36,6 +38,16 @@ Particles Particles::permuted(const std::vector<size_t>& order) const {
     out.inv_inertia.push_back(inv_inertia[i]);
   }
   return out;
+}
+
+Bounds centres_box(const Particles& particles) {
+  if (particles.size() == 0) throw Error("centres_box: no particles");
+  Bounds box{particles.position[0], particles.position[0]};
+  for (const Vec3& x : particles.position) {
+    box.lo = box.lo.cwiseMin(x);
+    box.hi = box.hi.cwiseMax(x);
+  }
+  return box;
 }
 
 std::vector<size_t> spatial_order(const Particles& particles, double cell) {

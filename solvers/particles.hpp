@@ -94,4 +94,7 @@ struct Bounds {
   Vec3 hi = Vec3::Zero();
 };
 
+// the box of the particles' centres (radii not included); at least one particle, Error otherwise
+Bounds centres_box(const Particles& particles);
+
 }  // namespace talus

@@ -68,16 +68,6 @@ double sphere_mass(double d, double rho) { return rho * M_PI / 6.0 * d * d * d; 
 // the diameter of a sphere of mass m at density rho [m], sphere_mass's inverse
 double sphere_diameter(double m, double rho) { return std::cbrt(6.0 * m / (M_PI * rho)); }
 
-// the box of the particles' centres (at least one particle)
-Bounds centres_box(const Particles& particles) {
-  Bounds box{particles.position[0], particles.position[0]};
-  for (const Vec3& x : particles.position) {
-    box.lo = box.lo.cwiseMin(x);
-    box.hi = box.hi.cwiseMax(x);
-  }
-  return box;
-}
-
 BucketPose pose_of(const KinematicBucket& b) {
   BucketPose pose;
   pose.position = b.position;

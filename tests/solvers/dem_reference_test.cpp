@@ -215,16 +215,6 @@ TEST(ReferenceBroadPhase, CellListsMatchExactly) {
   EXPECT_GT(want.cell_start.back() - want.cell_start[top_layer], 0);
 }
 
-// the box of the particles' centres
-Bounds centres_box(const Particles& ps) {
-  Bounds box{ps.position[0], ps.position[0]};
-  for (const Vec3& x : ps.position) {
-    box.lo = box.lo.cwiseMin(x);
-    box.hi = box.hi.cwiseMax(x);
-  }
-  return box;
-}
-
 // a grid region (DemWorld::set_grid_region, the type-G zone's) that holds every particle, in
 // bounds four times the particles' extent: the grid keeps only the lattice cells around them, and
 // sixty steps, the region set anew before each from where the particles are, end with the whole
