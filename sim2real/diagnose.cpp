@@ -1201,6 +1201,7 @@ class Search {
                step, evaluations);
       fitted = score(d_.calibration, x);
       s.x = x;
+      s.score = fitted;
     }
     f.candidate = *s.c;
     const auto effect = make_candidate(*s.c, s.x, options_.plugins);

@@ -102,8 +102,16 @@ void DemWorld::set_grid_region(const std::optional<Bounds>& region) {
   if (region && !(region->lo.allFinite() && region->hi.allFinite() &&
                   (region->lo.array() <= region->hi.array()).all()))
     throw Error("DemWorld::set_grid_region: the region must be a finite box with lo <= hi");
+  // a grid refused (too many cells) leaves the world with the region it had
+  const std::optional<Bounds> before = grid_region_;
   grid_region_ = region;
-  update_params();
+  try {
+    update_params();
+  } catch (...) {
+    grid_region_ = before;
+    update_params();
+    throw;
+  }
 }
 
 void DemWorld::set_geoms(std::vector<StaticGeom> geoms, GeomChange change) {
@@ -163,7 +171,9 @@ void DemWorld::update_params() {
   double cells = double(count.x()) * count.y() * count.z();
   if (cells > kMaxGridCells)
     throw InputError("Bounds: the broad-phase grid would have " + std::to_string(cells) +
-                     " cells; shrink the bounds to the region particles can reach");
+                     (grid_region_
+                          ? " cells over the grid region; shrink the region"
+                          : " cells; shrink the bounds to the region particles can reach"));
   p.grid_nx = count.x();
   p.grid_ny = count.y();
   p.grid_nz = count.z();
@@ -191,7 +201,6 @@ void DemWorld::update_params() {
     sweep_one_group_rows_ = settings_.one_group_rows;
     sweep_ = make_sweep(settings_, dev_, p.particles);
   }
-  bin_geoms();
 }
 
 void DemWorld::bin_geoms() {
@@ -543,6 +552,9 @@ void DemWorld::broad_phase() {
 }
 
 void DemWorld::narrow_phase() {
+  // the static geometry's column lists for this grid and geometry (made here, where they are
+  // read, so a step whose grid region and geometry both change bins once)
+  bin_geoms();
   DemBuffers& b = buffers_;
   const TlStepParams& p = params_;
   size_t n = particle_count_;

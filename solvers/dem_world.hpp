@@ -144,7 +144,7 @@ class DemWorld {
  private:
   void update_params();
   // the static geometry binned by the grid's (x, y) columns (DemBuffers::geom_column_*), made
-  // whenever the grid or the geometry changes
+  // by the narrow phase when the grid or the geometry changed since the last binning
   void bin_geoms();
   // one step; records the residual after every sweep when `history` is given
   void step_impl(std::vector<double>* history);
@@ -156,9 +156,8 @@ class DemWorld {
   std::optional<Bounds> grid_region_;  // set_grid_region's; none: the whole bounds
   std::vector<StaticGeom> geoms_;
   // what the columns' lists were binned for: the geometry (set_geoms counts its versions) and the
-  // grid's columns. update_params runs at every change of particles, geometry or settings and
-  // at every step; binning only when these changed saves a type-G step two of its three binnings
-  // of the same boxes (issue 14)
+  // grid's columns. The narrow phase bins before it reads them, only when these changed: a type-G
+  // step, whose boxes and grid region change every step, bins once (issue 14)
   struct GeomBinning {
     std::uint64_t geoms_version = 0;
     float cell_size = 0.0f, origin_x = 0.0f, origin_y = 0.0f;

@@ -442,6 +442,8 @@ TEST(ReferenceNarrowPhase, ManyBoxesBinnedByColumnGiveEveryContact) {
   // geometries than there are
   EXPECT_GT(k.boxes.size(), 20u);
   auto world = make_world(s);
+  world->broad_phase();
+  world->narrow_phase();  // bins the geometry it reads
   const std::vector<int> start = world->buffers().geom_column_start.download(
       static_cast<size_t>(world->params().grid_nx) * world->params().grid_ny + 1);
   const size_t columns = start.size() - 1;
