@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstring>
 #include <functional>
+#include <limits>
 #include <map>
 #include <memory>
 #include <set>
@@ -257,6 +258,32 @@ TEST(ReferenceBroadPhase, AGridRegionAroundTheParticlesGivesTheWholeGridsBits) {
 // a grid region that holds the lower half of the particles alone: the device places each particle
 // as the reference does (its lattice cell, offset to the region's grid, the rest clamped into the
 // border cells), and the narrow phase still finds every pair the whole grid finds
+// a region that is not a finite box (NaN, infinite, lo above hi) is refused and leaves the grid
+// the world had; nullopt brings the whole bounds' grid back
+TEST(ReferenceBroadPhase, ABadGridRegionIsRefusedAndChangesNothing) {
+  RandomWorld rw = random_world();
+  SCOPED_TRACE(rw.seed_note);
+  DemWorld& w = *rw.world;
+  const ref::StepParams whole = params_of(w);
+  Bounds half = centres_box(w.particles());
+  half.hi.z() = 0.5 * (half.lo.z() + half.hi.z());
+  w.set_grid_region(half);
+  const ref::StepParams part = params_of(w);
+  ASSERT_LT(part.grid_nz, whole.grid_nz);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  for (const Bounds& bad : {Bounds{Vec3(nan, 0, 0), half.hi}, Bounds{half.lo, Vec3(0, inf, 0)},
+                            Bounds{half.hi + Vec3::Ones(), half.lo}}) {
+    EXPECT_THROW(w.set_grid_region(bad), Error);
+    ASSERT_TRUE(w.grid_region().has_value());
+    EXPECT_EQ(params_of(w).grid_nz, part.grid_nz);
+    EXPECT_EQ(params_of(w).grid_k0, part.grid_k0);
+  }
+  w.set_grid_region(std::nullopt);
+  EXPECT_EQ(params_of(w).grid_nz, whole.grid_nz);
+  EXPECT_EQ(params_of(w).grid_k0, 0);
+}
+
 TEST(ReferenceBroadPhase, AGridRegionClampsTheParticlesOutsideItAndMissesNoPair) {
   uint64_t seed = test::fresh_seed();
   SCOPED_TRACE(test::seed_note(seed));
