@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -467,6 +468,57 @@ TEST(DiagnoseTest, AFitOfThePileTheDataWereDugOnIsRefusedByTheChaosCheck) {
   }
   EXPECT_TRUE(checked) << "TALUS_TEST_SEED=" << seed << ": no draw of " << kChaosDraws
                        << " gave a fit that explains half of its own pile's dig";
+}
+
+// issue 17's parameter recovery on pile data, blind and CI-sized: cylinder friction drawn in
+// 8-16 kN, four HD27-G400 digs on four fresh piles (the data's grains, not the model's: its
+// ensemble is piles 2-9) by an operator who varies the inputs 10 %, with default sensor noise;
+// three calibrate and one is held out; friction and hydraulic lag (the distractor the eight-pile
+// study met most) are the candidates. The friction must be named alone, fitted within kRecovery
+// of the truth, and the paper's mean error must fall. Measured over forty fresh draws of this very
+// design (docs/sim2real.md section 5, "A blind pile test in CI"): named alone in 40, within 10 %
+// in 35, within 15 % in 37, the worst 19.4 % (twice), the mean error cut in every one; 76-129 s a
+// diagnosis on one core. The bar is half as much again as the worst of forty, the issue's 10 % the
+// documented study's (8 of 10 with six digs, 35 of 40 with these four)
+TEST(DiagnoseTest, CylinderFrictionIsRecoveredFromFourDigsOnFreshPiles) {
+  constexpr double kRecovery = 0.30;
+  const unsigned seed = test_seed();
+  std::mt19937_64 rng(seed);
+  const double force = std::uniform_real_distribution<double>(8e3, 16e3)(rng);
+  const std::string context =
+      "TALUS_TEST_SEED=" + std::to_string(seed) + ", friction " + std::to_string(force) + " N";
+  std::cerr << "diagnose pile test: " << context << "\n";
+  const fs::path base = fs::temp_directory_path() / ("talus_diagnose_pile_" + std::to_string(seed));
+  fs::remove_all(base);
+  // the data's piles: fresh seeds from 10 on, away from the model's 2-9
+  const unsigned first_pile = 10 + static_cast<unsigned>(rng() % 1000000) * 4;
+  std::string data;
+  for (unsigned k = 0; k < 4; ++k) {
+    const fs::path run = base / ("run" + std::to_string(k));
+    const std::string cmd =
+        kTalus +
+        " synth --scenario hd27 --fidelity G400 --noise default --vary-inputs 0.1 --quiet" +
+        " --seed " + std::to_string(seed + k) + " --pile-seed " + std::to_string(first_pile + k) +
+        " --effect cylinder_friction:force=" + std::to_string(force) + " --out " + run.string() +
+        " 2>/dev/null";
+    ASSERT_EQ(exit_code(cmd), 0) << cmd;
+    data += " " + run.string();
+  }
+  const fs::path json = base / "diagnosis.json";
+  const std::string cmd = kTalus + " diagnose --quiet --data" + data +
+                          " --fidelity G400 --pile-ensemble 8 --pile-seed 2 --max-effects 1" +
+                          " --candidates 'hydraulic_lag,cylinder_friction' --json " +
+                          json.string() + " > /dev/null";
+  ASSERT_EQ(exit_code(cmd), 0) << cmd;
+  const auto j = nlohmann::json::parse(std::ifstream(json));
+  ASSERT_EQ(j["effects_found"].size(), 1u) << context << ": " << j["effects_found"].dump();
+  EXPECT_EQ(j["effects_found"][0]["name"], "cylinder_friction") << context;
+  const double fitted = j["effects_found"][0]["params"].value("force", 0.0);
+  EXPECT_LE(std::abs(fitted - force), kRecovery * force)
+      << context << ": fitted " << fitted << " N (" << 100.0 * (fitted - force) / force << " %)";
+  const double before = j["error_before"]["mean"], after = j["error_after"]["mean"];
+  EXPECT_LT(after, before) << context << ": mean error " << before << " -> " << after;
+  fs::remove_all(base);
 }
 
 TEST(DiagnoseTest, TheThreadCountDoesNotChangeTheDiagnosis) {
