@@ -471,18 +471,17 @@ TEST(DiagnoseTest, AFitOfThePileTheDataWereDugOnIsRefusedByTheChaosCheck) {
 }
 
 // issue 17's parameter recovery on pile data, blind and CI-sized: cylinder friction drawn in
-// 8-16 kN, four HD27-G400 digs on four fresh piles (the data's grains, not the model's: its
-// ensemble is piles 2-9) by an operator who varies the inputs 10 %, with default sensor noise;
-// three calibrate and one is held out; friction and hydraulic lag (the distractor the eight-pile
-// study met most) are the candidates. The friction must be named alone, fitted within kRecovery
-// of the truth, and the paper's mean error must fall. Measured over forty fresh draws of this very
-// design (docs/sim2real.md section 5, "A blind pile test in CI"): named alone in 40, within 10 %
-// in 35, within 15 % in 37, the worst 19.4 % (twice), the mean error cut in every one; 76-129 s a
-// diagnosis on one core. The bar is half as much again as the worst of forty, the issue's 10 % the
-// documented study's (8 of 10 with six digs, 35 of 40 with these four)
+// 8-16 kN, kDigs HD27-G400 digs on fresh piles by an operator who varies the inputs 10 %, with
+// default sensor noise; the last one held out; friction and hydraulic lag (the distractor the
+// eight-pile study met most) the candidates, eight model piles. The friction must be named alone
+// (a pair may be added in one round), fitted within kRecovery of the truth, and the paper's mean
+// error must fall. The bar is 1.5 times the worst of forty draws of this design (19.4 %; 35 of
+// them within the issue's 10 %: docs/sim2real.md section 5, "A blind pile test in CI")
 TEST(DiagnoseTest, CylinderFrictionIsRecoveredFromFourDigsOnFreshPiles) {
   constexpr double kRecovery = 0.30;
+  constexpr unsigned kDigs = 4;
   const unsigned seed = test_seed();
+  RecordProperty("seed", std::to_string(seed));
   std::mt19937_64 rng(seed);
   const double force = std::uniform_real_distribution<double>(8e3, 16e3)(rng);
   const std::string context =
@@ -490,10 +489,11 @@ TEST(DiagnoseTest, CylinderFrictionIsRecoveredFromFourDigsOnFreshPiles) {
   std::cerr << "diagnose pile test: " << context << "\n";
   const fs::path base = fs::temp_directory_path() / ("talus_diagnose_pile_" + std::to_string(seed));
   fs::remove_all(base);
-  // the data's piles: fresh seeds from 10 on, away from the model's 2-9
-  const unsigned first_pile = 10 + static_cast<unsigned>(rng() % 1000000) * 4;
+  // the data's piles: kDigs consecutive seeds from one of a million blocks above 9, so never the
+  // model's 2-9 (a type-G pile is its voxels and this seed's grains: nothing is cached)
+  const unsigned first_pile = 10 + static_cast<unsigned>(rng() % 1000000) * kDigs;
   std::string data;
-  for (unsigned k = 0; k < 4; ++k) {
+  for (unsigned k = 0; k < kDigs; ++k) {
     const fs::path run = base / ("run" + std::to_string(k));
     const std::string cmd =
         kTalus +
