@@ -87,7 +87,8 @@ bool is_multiscale(const FidelityPreset& preset);
 // name (terrain/pile_cache), and D400 (800) was not measured beyond the noise
 DeviceChoice device_choice_for(const FidelityPreset& preset);
 // the largest zone, in paper Table 3's particles, stepped in the calling thread: G200 (480; 245
-// here) ran in 0.66 of the time, G100 (3,500; 1,774 here) in 1.16 (the threads win from there on)
+// here) ran in 0.66 of the time; G100 (3,500) in 0.89-0.96 on HD27 and RD21 (1,100-2,100 here)
+// but 1.24-1.27 on FB35 (7,300), whose zone keeps both cores busy (bench/RESULTS.md 2026-12-01)
 constexpr int kInHostThreadParticles = 1000;
 // for what runs several levels on one device (talus sweep): in the calling thread only if every
 // level would be
