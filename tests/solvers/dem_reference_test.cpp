@@ -255,9 +255,6 @@ TEST(ReferenceBroadPhase, AGridRegionAroundTheParticlesGivesTheWholeGridsBits) {
   EXPECT_EQ(0, std::memcmp(a.data(), b.data(), a.size() * sizeof(a[0])));
 }
 
-// a grid region that holds the lower half of the particles alone: the device places each particle
-// as the reference does (its lattice cell, offset to the region's grid, the rest clamped into the
-// border cells), and the narrow phase still finds every pair the whole grid finds
 // a region that is not a finite box (NaN, infinite, lo above hi) is refused and leaves the grid
 // the world had; nullopt brings the whole bounds' grid back
 TEST(ReferenceBroadPhase, ABadGridRegionIsRefusedAndChangesNothing) {
@@ -284,6 +281,9 @@ TEST(ReferenceBroadPhase, ABadGridRegionIsRefusedAndChangesNothing) {
   EXPECT_EQ(params_of(w).grid_k0, 0);
 }
 
+// a grid region that holds the lower half of the particles alone: the device places each particle
+// as the reference does (its lattice cell, offset to the region's grid, the rest clamped into the
+// border cells), and the narrow phase still finds every pair the whole grid finds
 TEST(ReferenceBroadPhase, AGridRegionClampsTheParticlesOutsideItAndMissesNoPair) {
   uint64_t seed = test::fresh_seed();
   SCOPED_TRACE(test::seed_note(seed));
