@@ -102,40 +102,40 @@ int visit_contacts(int i, int write, int limit, __global const float4* position,
   // fixed particles (zero inverse mass) need no rows among themselves or with static geometry
   int fixed_i = velocity[i].w == 0.0f;
   int count = 0;
-  // particle pairs (i, j) with j > i in the 27 surrounding cells
+  // particle pairs (i, j) with j > i in the 27 surrounding cells. The cells are numbered x
+  // fastest and their particles stored in cell order, so a row's three cells x-1, x, x+1 (those
+  // inside the grid) are one run of cell_particles: nine runs, visited in the order of the 27
+  // cells (z, y, x, then index), so the contacts and their order are the same
+  int x_first = max(ci.x - 1, 0);
+  int x_last = min(ci.x + 1, p.grid_nx - 1);
   for (int dz = -1; dz <= 1; ++dz) {
     int z = ci.z + dz;
     if (z < 0 || z >= p.grid_nz) continue;
     for (int dy = -1; dy <= 1; ++dy) {
       int y = ci.y + dy;
       if (y < 0 || y >= p.grid_ny) continue;
-      for (int dx = -1; dx <= 1; ++dx) {
-        int x = ci.x + dx;
-        if (x < 0 || x >= p.grid_nx) continue;
-        int cell = cell_index((int3)(x, y, z), p);
-        int end = cell_start[cell + 1];
-        for (int k = cell_start[cell]; k < end; ++k) {
-          int j = cell_particles[k];
-          if (j <= i || (fixed_i && velocity[j].w == 0.0f)) continue;
-          float4 pj = position[j];
-          float3 d = pj.xyz - xi;
-          // farther apart than the widest margin any pair can have (contact_margin's, with the
-          // full speculative reach): no contact, rejected on the squared distance before the root,
-          // the division and the velocities' loads. The 1e-4 slack is far above float rounding,
-          // so the test below still decides every pair it could accept: the same contacts
-          float widest = ri + pj.w + p.margin_rel * min(ri, pj.w) + p.speculative;
-          if (dot(d, d) > 1.0001f * widest * widest) continue;
-          float3 n;
-          float gap = pair_gap(xi, ri, pj, &n);
-          float closing = dot(velocity[i].xyz - velocity[j].xyz, n);
-          if (gap >= contact_margin(ri, pj.w, closing, p)) continue;
-          if (write && count >= limit) return count;
-          if (write)
-            emit_pair(out + count, i, j, ri, pj.w, n, gap, p, prev_offsets, prev, has_prev);
-          else if (count < slots)
-            partners[count] = j;
-          ++count;
-        }
+      int end = cell_start[cell_index((int3)(x_last, y, z), p) + 1];
+      for (int k = cell_start[cell_index((int3)(x_first, y, z), p)]; k < end; ++k) {
+        int j = cell_particles[k];
+        if (j <= i || (fixed_i && velocity[j].w == 0.0f)) continue;
+        float4 pj = position[j];
+        float3 d = pj.xyz - xi;
+        // farther apart than the widest margin any pair can have (contact_margin's, with the
+        // full speculative reach): no contact, rejected on the squared distance before the root,
+        // the division and the velocities' loads. The 1e-4 slack is far above float rounding,
+        // so the test below still decides every pair it could accept: the same contacts
+        float widest = ri + pj.w + p.margin_rel * min(ri, pj.w) + p.speculative;
+        if (dot(d, d) > 1.0001f * widest * widest) continue;
+        float3 n;
+        float gap = pair_gap(xi, ri, pj, &n);
+        float closing = dot(velocity[i].xyz - velocity[j].xyz, n);
+        if (gap >= contact_margin(ri, pj.w, closing, p)) continue;
+        if (write && count >= limit) return count;
+        if (write)
+          emit_pair(out + count, i, j, ri, pj.w, n, gap, p, prev_offsets, prev, has_prev);
+        else if (count < slots)
+          partners[count] = j;
+        ++count;
       }
     }
   }
