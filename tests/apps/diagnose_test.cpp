@@ -16,6 +16,7 @@
 #include <random>
 #include <set>
 #include <string>
+#include <vector>
 
 namespace {
 
@@ -519,6 +520,79 @@ TEST(DiagnoseTest, CylinderFrictionIsRecoveredFromFourDigsOnFreshPiles) {
   const double before = j["error_before"]["mean"], after = j["error_after"]["mean"];
   EXPECT_LT(after, before) << context << ": mean error " << before << " -> " << after;
   fs::remove_all(base);
+}
+
+// the fitted value of each of an effect's parameters against the one the data were made with,
+// as a relative error
+double relative_error(const nlohmann::json& found, const std::string& parameter, double truth) {
+  return std::abs(found["params"][parameter].get<double>() - truth) / truth;
+}
+
+TEST(DiagnoseTest, AValueBelowTheScansFirstCentreIsFitted) {
+  // the case: a plug-in effect whose true value (here k of drive_drag, in [0, 0.2] s/m)
+  // lies so near zero that the scan's first centre, 0.011, fits worse than no effect at all
+  // (below 0.0055 its error exceeds the truth's); only the points the scan adds towards zero
+  // (0.0028, 0.0007, 0.0002) come near it. Measured first (docs/sim2real.md section 3, 20 draws in
+  // [0.002, 0.005]): every one named, the median error 0.4 %, the worst 10.7 % (k = 0.0025, where
+  // the noise weighs most); the bar is twice that
+  constexpr double kNearZeroRecovery = 0.2;
+  const unsigned seed = test_seed();
+  std::mt19937_64 rng(seed);
+  const double k = std::uniform_real_distribution<double>(0.002, 0.005)(rng);
+  const std::string context =
+      "TALUS_TEST_SEED=" + std::to_string(seed) + ", k " + std::to_string(k);
+  const fs::path base =
+      fs::temp_directory_path() / ("talus_diagnose_near_zero_" + std::to_string(seed));
+  fs::remove_all(base);
+  const std::string plugin = std::string(" --effect-plugin ") + TALUS_FIT_EFFECTS;
+  synthesise(base, plugin + " --effect drive_drag:k=" + std::to_string(k), seed);
+  const auto j = diagnose(base, plugin + " --candidates drive_drag");
+  ASSERT_GE(j["effects_found"].size(), 1u) << context;
+  ASSERT_EQ(j["effects_found"][0]["name"], "drive_drag") << context;
+  EXPECT_LE(relative_error(j["effects_found"][0], "k", k), kNearZeroRecovery)
+      << context << ": fitted " << j["effects_found"][0].dump();
+  fs::remove_all(base);
+}
+
+TEST(DiagnoseTest, FitsOfTwoAndThreeParametersRunToConvergence) {
+  // two plug-in candidates of two and three parameters (the lift's, tilt's and drive's command
+  // losses, each acting on its own command, so the data decide each one), drawn in [0.05, 0.3]:
+  // every parameter must come back within kConvergedRecovery. BOBYQA alone stopped at its first
+  // short step, far from the optimum; restarted until a restart gains nothing, and each parameter
+  // then probed alone across steps of the objective (sim2real/diagnose minimise), every
+  // parameter came back within 1.4 % (docs/sim2real.md section 3 has the draws)
+  constexpr double kConvergedRecovery = 0.05;
+  const unsigned seed = test_seed();
+  std::mt19937_64 rng(seed);
+  auto loss = [&] { return std::uniform_real_distribution<double>(0.05, 0.3)(rng); };
+  const std::string plugin = std::string(" --effect-plugin ") + TALUS_FIT_EFFECTS;
+  struct Case {
+    std::string effect;
+    std::vector<std::string> parameters;
+  };
+  const std::vector<Case> cases = {{"cylinder_losses", {"lift", "tilt"}},
+                                   {"command_losses", {"lift", "tilt", "drive"}}};
+  for (const Case& c : cases) {
+    std::vector<double> truth;
+    std::string spec = c.effect + ":";
+    for (const std::string& p : c.parameters) {
+      truth.push_back(loss());
+      spec += (truth.size() > 1 ? "," : "") + p + "=" + std::to_string(truth.back());
+    }
+    const std::string context = "TALUS_TEST_SEED=" + std::to_string(seed) + ", " + spec;
+    const fs::path base =
+        fs::temp_directory_path() / ("talus_diagnose_" + c.effect + "_" + std::to_string(seed));
+    fs::remove_all(base);
+    synthesise(base, plugin + " --effect " + spec, seed);
+    const auto j = diagnose(base, plugin + " --max-effects 1 --candidates " + c.effect);
+    ASSERT_GE(j["effects_found"].size(), 1u) << context;
+    ASSERT_EQ(j["effects_found"][0]["name"], c.effect) << context;
+    for (std::size_t i = 0; i < truth.size(); ++i)
+      EXPECT_LE(relative_error(j["effects_found"][0], c.parameters[i], truth[i]),
+                kConvergedRecovery)
+          << context << ": " << c.parameters[i] << " fitted " << j["effects_found"][0].dump();
+    fs::remove_all(base);
+  }
 }
 
 TEST(DiagnoseTest, TheThreadCountDoesNotChangeTheDiagnosis) {
