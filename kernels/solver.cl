@@ -202,8 +202,7 @@ void load_bodies(const TlRow* row, __global const float4* velocity, __global con
 
 // one PGS row update: the row's contact solved against its bodies' velocities, which it writes
 // back with the row's impulses
-TL_INLINE void pgs_row(__global TlRow* rows, int k, __global float4* velocity,
-                       __global float4* omega) {
+void pgs_row(__global TlRow* rows, int k, __global float4* velocity, __global float4* omega) {
   TlRow row = rows[k];
   int a = row.a;
   int b = row.b;
