@@ -163,21 +163,24 @@ double nlopt_objective(unsigned n, const double* x, double* gradient, void* data
   }
 }
 
-// each parameter alone moved by ±1, 2, 3 and 4 quarters of `step` (BOBYQA's first step, half the
-// scan's spacing) from x, within [0, 1] and the evaluations left (counted down), then, where none
-// of those is better, by quarters of a quarter, and so on down to the fit's tolerance; the first
-// scale's best point that lowers f(x) = best by kFitImprovement or more replaces x and best
-// (true), else nothing changes (false). Why both ends: the objective can be discontinuous in a
-// parameter (a cylinder reaching its end stop or not), and a restart from the lower side of such
-// a step never crosses it: lift and tilt losses of 0.083 and 0.133 on load-carry fitted at 0.068
-// (objective 5.79) where the truth's basin, 0.075-0.092 wide, scores 0.13; and BOBYQA, restarted
-// with the same first step, retraces its path to the same end on a smooth slope a few
-// thousandths long (a tilt loss of 0.0553 fitted at 0.0515, objective 0.247 against the truth's
-// 0.119; docs/sim2real.md section 3)
+// each parameter alone moved by ±1, 2, 3 and 4 quarters of `step` (BOBYQA's first step: half the
+// scan's spacing in a candidate's fit) from x, within [0, 1] and the evaluations left (counted
+// down), then, where none of those gains kFitImprovement, by quarters of a quarter, and so on
+// down to the fit's tolerance; the first scale's best point that lowers f(x) = best by
+// kFitImprovement or more replaces x and best (true), else nothing changes (false). Four probes a
+// side at each scale cover the whole interval to the next coarser scale's first probe. Why both
+// ends: the objective can be discontinuous in a parameter (something in the run switches with
+// it), and a restart from the lower side of such a step never crosses it: lift and tilt losses of
+// 0.083 and 0.133 on load-carry fitted at 0.068 (objective 5.79) where the truth's basin, from
+// 0.075 up, scores 0.13; and BOBYQA, restarted with the same first step, retraces its path to the
+// same end on a smooth slope a few thousandths long (a tilt loss of 0.0553 fitted at 0.0515,
+// objective 0.247 against the truth's 0.119; docs/sim2real.md section 3)
 bool probe_axes(const std::function<double(const std::vector<double>&)>& f, std::vector<double>& x,
                 double& best, double step, int& left) {
   constexpr int kProbesPerSide = 4;
-  for (double quarter = 0.25 * step; quarter >= kFitTolerance && left > 0; quarter *= 0.25) {
+  constexpr double kProbeScaleRatio = 1.0 / kProbesPerSide;  // each scale a quarter of the last
+  for (double quarter = kProbeScaleRatio * step; quarter >= kFitTolerance && left > 0;
+       quarter *= kProbeScaleRatio) {
     std::vector<double> found = x;
     double lowest = best;
     for (std::size_t i = 0; i < x.size(); ++i) {
@@ -238,8 +241,9 @@ double minimise(const std::function<double(const std::vector<double>&)>& f, std:
     const double gain = best - reached;
     best = std::min(best, reached);
     if (n == 1 || left <= 0) break;
-    // a restart that gained (almost) nothing: the axes probed; nothing better there, converged
-    if (!(gain >= kFitImprovement) && !probe_axes(f, x, best, step, left)) break;
+    // a restart that gained (almost) nothing: the axes probed; nothing better there, converged.
+    // A probe that used the last evaluations ends it too (NLopt takes a budget of 0 as none)
+    if (!(gain >= kFitImprovement) && (!probe_axes(f, x, best, step, left) || left <= 0)) break;
   }
   return best;
 }

@@ -3,8 +3,9 @@
  * parameter acts on its own command, so the data decide every parameter, and a test can hold the
  * fit to the value the data were made with:
  *   drive_drag       the drive command loses k u|u|, k in [0, 0.2] s/m: a range from zero, where
- *                    a true k near 0.006 lies below the scan's first centre (0.011) and only the
- *                    points the scan adds towards zero come near it (docs/sim2real.md section 3)
+ *                    a true k below 0.0055 (the test draws 0.0025-0.005) fits worse at the scan's
+ *                    first centre (0.011) than at zero, and only the points the scan adds towards
+ *                    zero come near it (docs/sim2real.md section 3)
  *   cylinder_losses  the lift and tilt commands each scaled by (1 - loss): two parameters, fitted
  *                    by BOBYQA to convergence
  *   command_losses   the lift, tilt and drive commands each scaled by (1 - loss): three
