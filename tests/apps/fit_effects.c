@@ -5,7 +5,9 @@
  *   drive_drag       the drive command loses k u|u|, k in [0, 0.2] s/m: a range from zero, where
  *                    a true k below 0.0055 (the test draws 0.0025-0.005) fits worse at the scan's
  *                    first centre (0.011) than at zero, and only the points the scan adds towards
- *                    zero come near it (docs/sim2real.md section 3)
+ *                    zero come near it (docs/sim2real.md section 3). The law of
+ *                    hidden_effects.c's speed_loss, written again on purpose: that file's effects
+ *                    are never given to the loop, these are
  *   cylinder_losses  the lift and tilt commands each scaled by (1 - loss): two parameters, fitted
  *                    by BOBYQA to convergence
  *   command_losses   the lift, tilt and drive commands each scaled by (1 - loss): three
