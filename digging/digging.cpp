@@ -195,7 +195,7 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
     if (options.bucket_support)
       support_ = std::make_unique<BucketSupport>(loader_->system(), loader_->bucket_body(),
                                                  loader_->bucket_mesh(), terrain.soil);
-    sensors_ = vehicle::start_with_effects(*loader_, effects_, log_);
+    sensors_ = vehicle::start_with_effects(*loader_, effects_, log_, scenario_);
     return;
   }
   // the particles: the level's timestep and sweeps, speculative contacts for thrown gravel
@@ -213,7 +213,7 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
   dem_->set_particles(pile.particles);
   split_ = std::make_unique<SplitSolver>(dev, *dem_, *loader_, options.coupling);
   // the effects start with the settled machine at t = 0
-  sensors_ = vehicle::start_with_effects(*loader_, effects_, log_);
+  sensors_ = vehicle::start_with_effects(*loader_, effects_, log_, scenario_);
 }
 
 double DiggingSimulation::run(const std::function<void(int)>& after_step) {

@@ -369,7 +369,7 @@ Simulation::Simulation(const SimulationOptions& options) : impl_(std::make_uniqu
     m.loader = std::make_unique<vehicle::WheelLoader>(vehicle::machine_file(m.scenario),
                                                       m.scenario.payload);
     vehicle::check_payload_holds(m.scenario, *m.loader);
-    m.sensors = vehicle::start_with_effects(*m.loader, m.effects->set, m.log);
+    m.sensors = vehicle::start_with_effects(*m.loader, m.effects->set, m.log, m.scenario);
   }
   m.state_key += "particles=" + std::to_string(particle_count()) + "\n";
 }

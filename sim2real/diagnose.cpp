@@ -817,13 +817,14 @@ class Search {
       measured.push_back(&runs_[i]);
       simulated.push_back(&current_runs_[i]);
     }
-    say("discovery: " + std::to_string(3 + channels.size()) +
-        " targets (the drive, lift and tilt speeds" +
+    const std::vector<DiscoveryTarget> targets = discovery_targets(channels);
+    say("discovery: " + std::to_string(targets.size()) +
+        " targets (the drive, lift and tilt speeds, the tractive force" +
         (channels.empty() ? std::string() : ", the readings with an excess of their own") + ")");
     // the machine of the first calibration run (every run of one diagnosis replays one machine)
     const vehicle::MachineDescription machine =
         vehicle::parse_machine(vehicle::machine_file(replays_[d_.calibration.front()]->scenario()));
-    for (const DiscoveryTarget& target : discovery_targets(channels)) {
+    for (const DiscoveryTarget& target : targets) {
       DiscoveredCorrection c = fit_correction(
           target, regression_data(target, measured, simulated, command_limit(target, machine)));
       if (c.terms.empty()) {
@@ -951,6 +952,14 @@ class Search {
     std::vector<double> x(span.size(), 0.5);
     minimise(log_ratio, x, kDiscoveryRefineStep, kFitEvaluations);
     c = at(x);
+    // a term the refinement took to exactly zero (its box's edge: span = |coefficient|) does
+    // nothing in the simulation: it leaves the expression, as a term the regression never chose
+    // (the sixth documentation run printed two such terms, docs/discovery.md)
+    const auto zero = [](const DiscoveredTerm& term) { return term.coefficient == 0.0; };
+    if (!std::all_of(c.terms.begin(), c.terms.end(), zero)) {
+      c.terms.erase(std::remove_if(c.terms.begin(), c.terms.end(), zero), c.terms.end());
+      describe_correction(c);
+    }
     c.refined = true;
     evaluate(c);
     return c;

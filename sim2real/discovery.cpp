@@ -127,19 +127,43 @@ std::vector<double> cross_validated_mse(const Eigen::MatrixXd& x, const Eigen::V
 }  // namespace
 
 std::string DiscoveryTarget::label() const {
-  return kind == CorrectionKind::actuator ? target + " speed" : target + " reading";
+  switch (kind) {
+    case CorrectionKind::actuator:
+      return target + " speed";
+    case CorrectionKind::traction:
+      return "tractive force";
+    case CorrectionKind::sensor:
+      break;
+  }
+  return target + " reading";
 }
 std::string DiscoveryTarget::effect_name() const {
-  return kind == CorrectionKind::actuator ? "learned_actuator_correction"
-                                          : "learned_sensor_correction";
+  switch (kind) {
+    case CorrectionKind::actuator:
+      return "learned_actuator_correction";
+    case CorrectionKind::traction:
+      return "learned_traction_correction";
+    case CorrectionKind::sensor:
+      break;
+  }
+  return "learned_sensor_correction";
 }
 std::string DiscoveryTarget::option() const {
-  return (kind == CorrectionKind::actuator ? "actuator=" : "channel=") + target;
+  switch (kind) {
+    case CorrectionKind::actuator:
+      return "actuator=" + target;
+    case CorrectionKind::traction:
+      return "";  // one drive, nothing to choose
+    case CorrectionKind::sensor:
+      break;
+  }
+  return "channel=" + target;
 }
 
 std::vector<DiscoveryTarget> discovery_targets(const std::vector<std::string>& sensor_channels) {
   std::vector<DiscoveryTarget> out;
   for (const char* a : {"drive", "lift", "tilt"}) out.push_back({CorrectionKind::actuator, a});
+  out.push_back({CorrectionKind::traction, "traction"});
   for (const auto& c : sensor_channels) {
     channel_column(c);  // a known channel
     out.push_back({CorrectionKind::sensor, c});
@@ -148,7 +172,7 @@ std::vector<DiscoveryTarget> discovery_targets(const std::vector<std::string>& s
 }
 
 double command_limit(const DiscoveryTarget& target, const vehicle::MachineDescription& machine) {
-  if (target.kind == CorrectionKind::sensor) return std::numeric_limits<double>::infinity();
+  if (target.kind != CorrectionKind::actuator) return std::numeric_limits<double>::infinity();
   if (target.target == "drive") return machine.driveline.top_speed;
   for (const auto& c : machine.cylinders)
     if (c.role == target.target) return c.max_speed;
@@ -179,11 +203,27 @@ RegressionData regression_data(const DiscoveryTarget& target,
                                                       : meta.tilt;
     const vehicle::PiecewiseLinear command(
         target.kind == CorrectionKind::actuator ? inputs : Series2{{0.0, 0.0}});
-    // an actuator's force and the power through the lag the correction reads them with
-    const Channel force_channel = target.target == "drive"  ? Channel::f_traction
-                                  : target.target == "lift" ? Channel::f_lift
-                                                            : Channel::f_tilt;
+    // an actuator's force (the traction's: the load, f_lift) and the power through the lag the
+    // correction reads them with
+    const Channel force_channel = target.kind == CorrectionKind::traction ? Channel::f_lift
+                                  : target.target == "drive"              ? Channel::f_traction
+                                  : target.target == "lift"               ? Channel::f_lift
+                                                                          : Channel::f_tilt;
     std::vector<double> force = m[force_channel], power = m[Channel::power];
+    // the stroke a feature reads: the cylinder's own (the drive's and the traction's: the boom's),
+    // as measured for an actuator and the traction and as simulated for a sensor; the digging phase
+    // from the simulated run's marks, the phase its effects saw (the replay takes the measured
+    // run's marks where it has them)
+    const std::vector<double>& stroke = target.kind == CorrectionKind::sensor ? s[Channel::d_lift]
+                                        : target.target == "tilt"             ? m[Channel::d_tilt]
+                                                                              : m[Channel::d_lift];
+    const RunSummary& marks = simulated[i]->summary;
+    const auto digging = [&](double when) {
+      return marks.dig_start_s && marks.dig_end_s && when >= *marks.dig_start_s &&
+                     when < *marks.dig_end_s
+                 ? 1.0
+                 : 0.0;
+    };
     for (std::size_t j = 1; j < n; ++j) {
       force[j] = vehicle::lag_step(force[j - 1], m[force_channel][j], t[j] - t[j - 1]);
       power[j] = vehicle::lag_step(power[j - 1], m[Channel::power][j], t[j] - t[j - 1]);
@@ -194,6 +234,8 @@ RegressionData regression_data(const DiscoveryTarget& target,
     std::vector<double> clipped(n, 0.0);
     for (std::size_t j = 0; j < n; ++j) {
       CorrectionInputs in;
+      in.stroke = stroke[j];
+      in.digging = digging(t[j]);
       if (target.kind == CorrectionKind::actuator) {
         // the command from the operator's inputs; the state as measured
         in.a = command(t[j]);
@@ -203,6 +245,14 @@ RegressionData regression_data(const DiscoveryTarget& target,
         in.force = force[j];
         in.power = power[j];
         clipped[j] = std::clamp(in.a, -limit, limit) - in.a;
+      } else if (target.kind == CorrectionKind::traction) {
+        // the drive's speed and the load as measured
+        const std::vector<double>& v = m[Channel::v_drive];
+        in.a = v[j];
+        for (std::size_t d = 0; d < vehicle::kCorrectionDelays.size(); ++d)
+          in.a_delayed[d] = value_at(t, v, t[j] - vehicle::kCorrectionDelays[d]);
+        in.force = force[j];
+        in.power = power[j];
       } else {
         // the simulated reading stands for the truth the sensor distorts
         const std::vector<double>& truth = s.columns[channel_column(target.target)];
@@ -240,6 +290,8 @@ RegressionData regression_data(const DiscoveryTarget& target,
         }
         // on the command's scale
         y += window_mean(j, [&](std::size_t i) { return clipped[i]; });
+      } else if (target.kind == CorrectionKind::traction) {
+        y = m[Channel::f_traction][j] - s[Channel::f_traction][j];
       } else {
         y = m.columns[channel_column(target.target)][j] -
             s.columns[channel_column(target.target)][j];
@@ -411,8 +463,8 @@ DiscoveredCorrection fit_correction(const DiscoveryTarget& target, const Regress
     term.feature = f.name;
     term.expression = vehicle::correction_expression(f, symbols);
     const std::string feature_unit = vehicle::correction_unit(f, symbols);
-    term.unit =
-        feature_unit == "1" ? symbols.a_unit : "(" + symbols.a_unit + ")/(" + feature_unit + ")";
+    term.unit = feature_unit == "1" ? symbols.corrected_unit
+                                    : "(" + symbols.corrected_unit + ")/(" + feature_unit + ")";
     term.coefficient = c[static_cast<Eigen::Index>(i)];
     term.half_width = half[static_cast<Eigen::Index>(i)];
     // the features these data cannot tell from it
@@ -433,12 +485,12 @@ void describe_correction(DiscoveredCorrection& c) {
   const vehicle::CorrectionSymbols symbols =
       vehicle::correction_symbols(c.target.kind, c.target.target);
   c.spec = c.target.effect_name() + ":" + c.target.option();
-  c.expression = "Δ" + symbols.a + " [" + symbols.a_unit + "] =";
+  c.expression = "Δ" + symbols.corrected + " [" + symbols.corrected_unit + "] =";
   for (std::size_t i = 0; i < c.terms.size(); ++i) {
     const DiscoveredTerm& term = c.terms[i];
     char value[40];
     std::snprintf(value, sizeof value, "%.17g", term.coefficient);
-    c.spec += "," + term.feature + "=" + value;
+    c.spec += (c.spec.back() == ':' ? "" : ",") + term.feature + "=" + value;
     c.expression += (i == 0 ? " " : " + ") + format(term.coefficient) + " (±" +
                     format(term.half_width, 2) + ") " + term.unit +
                     (term.feature == "one" ? "" : " · " + term.expression);

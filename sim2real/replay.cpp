@@ -21,7 +21,7 @@ vehicle::SensorLog simulate_on_flat_ground(const vehicle::Scenario& sc, vehicle:
   vehicle::SensorLog log(100.0);
   const int steps = static_cast<int>(std::llround(sc.duration / sc.timestep));
   // the first sample at rest, through the effects (an empty set is the identity)
-  vehicle::start_with_effects(loader, effects, log);
+  vehicle::start_with_effects(loader, effects, log, sc);
   for (int k = 0; k < steps; ++k) {
     // feedforward targets at the start of the step; the clock counts steps
     const double h = sc.timestep;
@@ -44,6 +44,11 @@ Run vehicle_run(const vehicle::Scenario& scenario, const vehicle::SensorLog& log
   run.summary.fidelity = "vehicle";
   run.summary.loaded_mass_kg = scenario.payload;
   run.summary.work_J = log.work();
+  // the digging phase its effects saw (vehicle::start_with_effects), where the scenario has one
+  if (scenario.dig_end > scenario.dig_start) {
+    run.summary.dig_start_s = scenario.dig_start;
+    run.summary.dig_end_s = scenario.dig_end;
+  }
   return run;
 }
 

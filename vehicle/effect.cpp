@@ -209,9 +209,17 @@ void EffectSet::reset(WheelLoader& loader, double t) {
   reset_done_ = true;
 }
 
+void EffectSet::set_dig_phase(double start, double end) {
+  if (!std::isfinite(start) || !std::isfinite(end))
+    throw Error("effects: the digging phase [" + std::to_string(start) + ", " +
+                std::to_string(end) + ") s is not finite");
+  dig_start_ = start;
+  dig_end_ = end;
+}
+
 ActuatorCommands EffectSet::commands(double t, double h, ActuatorCommands commands) {
   if (!reset_done_) throw Error("effects: reset() the effect set on the machine before the first step");
-  const EffectContext context{t, h, previous_, *loader_};
+  const EffectContext context{t, h, previous_, *loader_, digging(t)};
   for (auto& e : effects_) e->on_commands(context, commands);
   return commands;
 }
@@ -230,7 +238,7 @@ void EffectSet::before_step(double t, double h, WheelLoader& loader) {
   loader.set_drive_power_limit(power_limit_);
   if (effects_.empty()) return;
   StepControls controls(loader);
-  const EffectContext context{t, h, previous_, loader};
+  const EffectContext context{t, h, previous_, loader, digging(t)};
   for (auto& e : effects_) e->on_step(context, controls);
   // the summed wrenches (set_external_wrench replaces a body's wrench; only bodies that got one)
   const auto& wrenches = controls.wrenches();
@@ -242,7 +250,7 @@ void EffectSet::before_step(double t, double h, WheelLoader& loader) {
 SensorSample EffectSet::sensors(double h, const SensorSample& truth) {
   if (!reset_done_) throw Error("effects: reset() the effect set on the machine before reading sensors");
   SensorSample s = truth;
-  const EffectContext context{truth.t, h, previous_, *loader_};
+  const EffectContext context{truth.t, h, previous_, *loader_, digging(truth.t)};
   for (auto& e : effects_) {
     const SensorSample before = s;
     e->on_sensors(context, s);
@@ -284,8 +292,10 @@ void EffectSet::restore_state(ByteReader& r) {
   previous_ = read_sample(r, "effects' previous sample");
 }
 
-SensorSample start_with_effects(WheelLoader& loader, EffectSet& effects, SensorLog& log) {
+SensorSample start_with_effects(WheelLoader& loader, EffectSet& effects, SensorLog& log,
+                                const Scenario& scenario) {
   effects.reset(loader, 0.0);
+  effects.set_dig_phase(scenario.dig_start, scenario.dig_end);
   const SensorSample reported = effects.sensors(0.0, read_sensors(loader, 0.0));
   log.after_step(reported, 0.0);
   return reported;

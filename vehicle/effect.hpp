@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "vehicle/scenario.hpp"
 #include "vehicle/sensors.hpp"
 #include "vehicle/wheel_loader.hpp"
 
@@ -59,6 +60,9 @@ struct EffectContext {
   double h = 0.0;  // s: the timestep
   const SensorSample& previous;  // the true sensors before the step (not what effects report)
   const WheelLoader& loader;
+  // t lies in the run's digging phase [dig_start, dig_end) (EffectSet::set_dig_phase; the phase
+  // the metrics compare and the residuals' "dig" phase); false in a run without one
+  bool digging = false;
 };
 
 // what on_step may change for the coming step
@@ -171,6 +175,10 @@ class EffectSet {
   // before a run, at time t: resets every effect, takes the machine's current limits as its own
   // (restored before every step) and the true sensors now as the previous sample
   void reset(WheelLoader& loader, double t);
+  // the run's digging phase [start, end) [s] (a scenario's dig_start and dig_end, or a measured
+  // run's marks), which the hooks' EffectContext::digging reports; none (always false) until set
+  // or when end <= start
+  void set_dig_phase(double start, double end);
   // the hooks of one step [t, t + h], in order; `commands` at the step's start
   ActuatorCommands commands(double t, double h, ActuatorCommands commands);
   // restores the machine's limits, runs on_step, applies the summed wrenches to the bodies
@@ -195,6 +203,8 @@ class EffectSet {
   std::array<std::pair<double, double>, 3> force_range_{};
   double power_limit_ = 0.0;
   bool reset_done_ = false;
+  double dig_start_ = 0.0, dig_end_ = 0.0;  // s: the digging phase, none while equal
+  bool digging(double t) const { return dig_end_ > dig_start_ && t >= dig_start_ && t < dig_end_; }
 };
 
 // the built-in effects' names, in the order docs/effects.md lists them
@@ -206,9 +216,11 @@ std::unique_ptr<Effect> make_builtin_effect(const std::string& name);
 // empty effect set is the identity: commands pass unchanged, the machine keeps its own limits and
 // the sensors report the truth, so a run without effects takes the same path bit for bit.
 
-// the start of a run at t = 0: resets the effects on the settled machine and logs the first
-// sample through them; returns what the sensors report
-SensorSample start_with_effects(WheelLoader& loader, EffectSet& effects, SensorLog& log);
+// the start of a run at t = 0: resets the effects on the settled machine, gives them the
+// scenario's digging phase [dig_start, dig_end) (none when dig_end <= dig_start) and logs the
+// first sample through them; returns what the sensors report
+SensorSample start_with_effects(WheelLoader& loader, EffectSet& effects, SensorLog& log,
+                                const Scenario& scenario);
 
 // one step [t, t_end] (t_end = t + h, passed so a run's clock can count steps rather than add
 // them up): commands through on_commands, limits and wrenches through on_step, `advance` moves

@@ -38,13 +38,26 @@ const CorrectionFeature kDelay02{"delay_02", "{a}(t−0.2 s) − {a}", "{a}",
                                  [](const CorrectionInputs& x) { return x.a_delayed[1] - x.a; }};
 const CorrectionFeature kDelay04{"delay_04", "{a}(t−0.4 s) − {a}", "{a}",
                                  [](const CorrectionInputs& x) { return x.a_delayed[2] - x.a; }};
+// the phase: an indicator of the digging phase ([dig] is 1 inside it), alone (a loss or offset
+// that only the dig brings) and times the quantity (a gain that changes while the bucket digs)
+const CorrectionFeature kDigging{"digging", "[dig]", "1",
+                                 [](const CorrectionInputs& x) { return x.digging; }};
+const CorrectionFeature kDiggingTimes{"digging_times", "[dig]·{a}", "{a}",
+                                      [](const CorrectionInputs& x) { return x.digging * x.a; }};
+// the stroke times the quantity: a loss or gain that grows along the stroke (a worn bore, a load
+// cell whose lever arm turns with the boom)
+const CorrectionFeature kStrokeTimes{"stroke_times", "{s}·{a}", "m·{a}",
+                                     [](const CorrectionInputs& x) { return x.stroke * x.a; }};
 
 // the actuator dictionary: offsets, the command and its sign and square (speed-dependent losses),
 // the command clipped at three widths (dead bands), the force alone and with the command (leakage
 // with pressure, friction), the power, delayed differences (a lag) and a force-scaled one (a delay
-// that grows with load). Not the actuator's own achieved speed: the regression would learn the
-// tautology "the correction is the measured speed minus the command", which in the simulation feeds
-// the previous speed back as the command and stalls the actuator
+// that grows with load), the stroke alone and with the command (a speed that depends on where the
+// piston is: end-of-stroke cushioning, a worn bore) and the digging phase alone and with the
+// command (a loss only the dig brings). The last four came after the first fifteen (2026-12-01),
+// appended so the older entries keep their order. Not the actuator's own achieved speed: the
+// regression would learn the tautology "the correction is the measured speed minus the command",
+// which in the simulation feeds the previous speed back as the command and stalls the actuator
 const std::vector<CorrectionFeature> kActuatorFeatures = {
     kOne,
     {"command", "{a}", "{a}", [](const CorrectionInputs& x) { return x.a; }},
@@ -65,11 +78,16 @@ const std::vector<CorrectionFeature> kActuatorFeatures = {
     kDelay04,
     {"abs_force_delay_02", "|{F}|·({a}(t−0.2 s) − {a})", "N·{a}",
      [](const CorrectionInputs& x) { return std::abs(x.force) * (x.a_delayed[1] - x.a); }},
+    {"stroke", "{s}", "m", [](const CorrectionInputs& x) { return x.stroke; }},
+    kStrokeTimes,
+    kDigging,
+    kDiggingTimes,
 };
 
 // the sensor dictionary: an offset, a gain, a square law, a load-dependent gain (the lift force
-// carries the load), the rate (a first-order sensor lag reads x − τ ẋ), the lift force alone and
-// delayed differences (a transport delay)
+// carries the load), the rate (a first-order sensor lag reads x − τ ẋ), the lift force alone,
+// delayed differences (a transport delay), a gain that changes with the boom's stroke and the
+// digging phase alone and as a gain (the last three appended 2026-12-01)
 const std::vector<CorrectionFeature> kSensorFeatures = {
     kOne,
     {"reading", "{a}", "{a}", [](const CorrectionInputs& x) { return x.a; }},
@@ -82,6 +100,31 @@ const std::vector<CorrectionFeature> kSensorFeatures = {
     kDelay01,
     kDelay02,
     kDelay04,
+    kStrokeTimes,
+    kDigging,
+    kDiggingTimes,
+};
+
+// sign(v) of the drive's speed, linear below kTractionSignRampSpeed
+double speed_sign(double v) { return std::clamp(v / kTractionSignRampSpeed, -1.0, 1.0); }
+
+// the traction dictionary: a constant force (a load dragged along), a force against the motion
+// (rolling resistance) alone and growing with the load the axles carry (|f_lift|), forces
+// growing with the speed (driveline drag) and its square (ploughing), the 0.1 s delayed difference
+// of the speed (−0.1 s times the acceleration: a mass the model lacks), and the digging phase
+// alone and against the motion (a resistance only the pile brings)
+const std::vector<CorrectionFeature> kTractionFeatures = {
+    kOne,
+    {"sign_speed", "sign({a})", "1", [](const CorrectionInputs& x) { return speed_sign(x.a); }},
+    {"abs_force_sign_speed", "|{F}|·sign({a})", "N",
+     [](const CorrectionInputs& x) { return std::abs(x.force) * speed_sign(x.a); }},
+    {"speed", "{a}", "{a}", [](const CorrectionInputs& x) { return x.a; }},
+    {"speed_squared", "{a}·|{a}|", "{a}^2",
+     [](const CorrectionInputs& x) { return x.a * std::abs(x.a); }},
+    kDelay01,
+    kDigging,
+    {"digging_sign_speed", "[dig]·sign({a})", "1",
+     [](const CorrectionInputs& x) { return x.digging * speed_sign(x.a); }},
 };
 
 // every "{key}" in text replaced by its value
@@ -173,15 +216,15 @@ class LearnedCorrection : public Effect {
     for (const auto& f : features_) {
       coefficient_index_.push_back(
           add_parameter({f.name, 0.0, -kMaxCorrectionCoefficient, kMaxCorrectionCoefficient,
-                         coefficient_unit(symbols.a_unit, correction_unit(f, symbols)),
+                         coefficient_unit(symbols.corrected_unit, correction_unit(f, symbols)),
                          "coefficient of " + correction_expression(f, symbols)}));
     }
   }
   void redefine_units(const CorrectionSymbols& symbols) {
     for (std::size_t k = 0; k < features_.size(); ++k)
-      redefine_parameter(coefficient_index_[k], -kMaxCorrectionCoefficient,
-                         kMaxCorrectionCoefficient,
-                         coefficient_unit(symbols.a_unit, correction_unit(features_[k], symbols)));
+      redefine_parameter(
+          coefficient_index_[k], -kMaxCorrectionCoefficient, kMaxCorrectionCoefficient,
+          coefficient_unit(symbols.corrected_unit, correction_unit(features_[k], symbols)));
   }
   // the correction at x (the coefficients read once per call: a handful of features)
   double correction(const CorrectionInputs& x) const {
@@ -244,6 +287,8 @@ class LearnedActuatorCorrection : public LearnedCorrection {
     x.a = target;
     x.force = force_;
     x.power = power_;
+    x.stroke = which == "tilt" ? c.previous.d_tilt : c.previous.d_lift;
+    x.digging = c.digging ? 1.0 : 0.0;
     delay(c.t, x);
     target += correction(x);
   }
@@ -263,6 +308,64 @@ class LearnedActuatorCorrection : public LearnedCorrection {
 
  private:
   int actuator_ = 0;
+  bool lagged_ = false;
+  double force_ = 0.0, power_ = 0.0;  // N, W: through the lag
+};
+
+// --- learned_traction_correction ------------------------------------------------------------
+class LearnedTractionCorrection : public LearnedCorrection {
+ public:
+  LearnedTractionCorrection()
+      : LearnedCorrection("learned_traction_correction",
+                          "a discovered force against the machine's motion: Σ c_k φ_k [N] the "
+                          "drive must overcome",
+                          CorrectionKind::traction) {
+    declare_coefficients(correction_symbols(CorrectionKind::traction, "traction"));
+  }
+  void reset(const WheelLoader& loader) override {
+    (void)loader;
+    clear_history();
+    lagged_ = false;
+  }
+  void on_step(const EffectContext& c, StepControls& controls) override {
+    // the load and the power through the pressure lag (the first step starts it at the reading)
+    force_ = lagged_ ? lag_step(force_, c.previous.f_lift, c.h) : c.previous.f_lift;
+    power_ = lagged_ ? lag_step(power_, c.previous.power, c.h) : c.previous.power;
+    lagged_ = true;
+    CorrectionInputs x;
+    x.a = c.previous.v_drive;
+    x.force = force_;
+    x.power = power_;
+    x.stroke = c.previous.d_lift;
+    x.digging = c.digging ? 1.0 : 0.0;
+    delay(c.t, x);
+    const double force = correction(x);
+    // −Δf along the headings, the same share at every wheel's centre (as tyre_rolling_resistance
+    // acts), so it turns the machine no more than its own tyres do
+    const auto& tyres = c.loader.tyres();
+    if (force == 0.0) return;
+    const double share = force / static_cast<double>(tyres.size());
+    for (const TyreContact* tyre : tyres) {
+      Vec6 w = Vec6::Zero();
+      w.head<3>() = -share * tyre->longitudinal();
+      controls.add_wrench(tyre->wheel(), w);
+    }
+  }
+  // the delay line, then the lagged load and power
+  void save_state(ByteWriter& w) const override {
+    LearnedCorrection::save_state(w);
+    w.u8(lagged_ ? 1 : 0);
+    w.f64(force_);
+    w.f64(power_);
+  }
+  void restore_state(ByteReader& r) override {
+    LearnedCorrection::restore_state(r);
+    lagged_ = r.u8("traction correction") != 0;
+    force_ = r.f64("traction correction");
+    power_ = r.f64("traction correction");
+  }
+
+ private:
   bool lagged_ = false;
   double force_ = 0.0, power_ = 0.0;  // N, W: through the lag
 };
@@ -300,11 +403,12 @@ class LearnedSensorCorrection : public LearnedCorrection {
     clear_history();
   }
   void on_sensors(const EffectContext& c, SensorSample& s) override {
-    (void)c;
     CorrectionInputs x;
     x.a = s.*field_;
     x.force = s.f_lift;
     x.power = s.power;
+    x.stroke = s.d_lift;
+    x.digging = c.digging ? 1.0 : 0.0;
     delay(s.t, x);
     // the rate over kRateSpan of the true readings the effect saw, as the data path takes it
     x.rate = (x.a - history_at(s.t - kRateSpan)) / kRateSpan;
@@ -324,7 +428,15 @@ class LearnedSensorCorrection : public LearnedCorrection {
 }  // namespace
 
 const std::vector<CorrectionFeature>& correction_features(CorrectionKind kind) {
-  return kind == CorrectionKind::actuator ? kActuatorFeatures : kSensorFeatures;
+  switch (kind) {
+    case CorrectionKind::actuator:
+      return kActuatorFeatures;
+    case CorrectionKind::sensor:
+      return kSensorFeatures;
+    case CorrectionKind::traction:
+      return kTractionFeatures;
+  }
+  throw Error("learned correction: unknown kind");
 }
 
 CorrectionSymbols correction_symbols(CorrectionKind kind, const std::string& target) {
@@ -334,13 +446,28 @@ CorrectionSymbols correction_symbols(CorrectionKind kind, const std::string& tar
       throw Error("learned correction: no actuator '" + target + "' (drive, lift, tilt)");
     s.a = "u_" + target;
     s.a_unit = "m/s";
+    s.corrected = s.a;
+    s.corrected_unit = s.a_unit;
     s.force = target == "drive" ? "f_traction" : "f_" + target;
+    s.stroke = target == "tilt" ? "d_tilt" : "d_lift";
+    return s;
+  }
+  if (kind == CorrectionKind::traction) {
+    if (target != "traction")
+      throw Error("learned correction: the traction kind's target is 'traction', not '" + target +
+                  "'");
+    s.corrected = "f_traction";
+    s.corrected_unit = "N";
+    s.a = "v_drive";
+    s.a_unit = "m/s";
     return s;
   }
   for (std::size_t c = 1; c < kChannelCount; ++c) {
     if (target == kSensorChannels[c].name) {
       s.a = target;
       s.a_unit = kSensorChannels[c].unit;
+      s.corrected = s.a;
+      s.corrected_unit = s.a_unit;
       s.rate = "d" + target + "/dt";
       s.rate_unit = s.a_unit + "/s";
       return s;
@@ -350,8 +477,9 @@ CorrectionSymbols correction_symbols(CorrectionKind kind, const std::string& tar
 }
 
 std::string correction_expression(const CorrectionFeature& f, const CorrectionSymbols& s) {
-  return substitute(f.expression,
-                    {{"{a}", s.a}, {"{v}", s.rate}, {"{F}", s.force}, {"{P}", s.power}});
+  return substitute(
+      f.expression,
+      {{"{a}", s.a}, {"{v}", s.rate}, {"{F}", s.force}, {"{P}", s.power}, {"{s}", s.stroke}});
 }
 
 std::string correction_unit(const CorrectionFeature& f, const CorrectionSymbols& s) {
@@ -359,14 +487,17 @@ std::string correction_unit(const CorrectionFeature& f, const CorrectionSymbols&
 }
 
 std::vector<std::string> learned_effect_names() {
-  return {"learned_actuator_correction", "learned_sensor_correction"};
+  return {"learned_actuator_correction", "learned_traction_correction",
+          "learned_sensor_correction"};
 }
 
 std::unique_ptr<Effect> make_learned_effect(const std::string& name) {
   if (name == "learned_actuator_correction") return std::make_unique<LearnedActuatorCorrection>();
+  if (name == "learned_traction_correction") return std::make_unique<LearnedTractionCorrection>();
   if (name == "learned_sensor_correction") return std::make_unique<LearnedSensorCorrection>();
   throw InputError("no learned correction named '" + name +
-                   "'; they are learned_actuator_correction and " + "learned_sensor_correction");
+                   "'; they are learned_actuator_correction, learned_traction_correction and "
+                   "learned_sensor_correction");
 }
 
 }  // namespace talus::vehicle

@@ -4,6 +4,11 @@
 //   actuator  Δu = Σ c_k φ_k   added to the drive, lift or tilt target speed (on_commands), so the
 //                              achieved speed moves by Δu while the actuator is not force-limited
 //   sensor    Δx = Σ c_k φ_k   added to what one sensor channel reports (on_sensors)
+//   traction  Δf = Σ c_k φ_k   a force [N] against the machine's motion the drive must overcome
+//                              (on_step: −Δf along each tyre's heading, shared by the tyres), so
+//                              the tractive force rises by Δf and, where the engine's power or the
+//                              tyres' grip binds, the machine slows (a resistance, a mass the model
+//                              lacks; the drive speed target cannot say which)
 // Its parameters are the coefficients c_k of every feature of its dictionary (zero: not used), so
 // a discovered correction is an ordinary effect: `--effect learned_actuator_correction:
 // actuator=lift,force=-1.2e-7` runs it, to_json reports it, diagnose adds it like a candidate.
@@ -23,8 +28,8 @@
 
 namespace talus::vehicle {
 
-// the two kinds of learned correction, each with its own dictionary
-enum class CorrectionKind { actuator, sensor };
+// the three kinds of learned correction, each with its own dictionary
+enum class CorrectionKind { actuator, sensor, traction };
 
 // the delays of the dictionary's delayed differences [s]: a tenth to about half a second, the
 // span of hydraulic and sensor latencies (the built-in sensor_delay's range is 0–1 s)
@@ -52,20 +57,30 @@ inline constexpr double kRateSpan = 0.01;
 //  actuator: a = its target speed [m/s], force = its force reading [N] (cylinder: positive pushes
 //            it longer; drive: traction) and power = the machine's power reading [W], both of the
 //            previous sample through the lag kForceLag, a_delayed[i] = a at t −
-//            kCorrectionDelays[i]; rate is not used
+//            kCorrectionDelays[i], stroke = the cylinder's stroke of the previous sample [m] (the
+//            drive's is the boom's, d_lift: where the load sits on the axles); rate is not used
 //  sensor:   a = the channel's true reading, rate = its rate of change [unit/s], force = the lift
-//            force [N] (the bucket's load shows in it), power [W], a_delayed as above
+//            force [N] (the bucket's load shows in it), power [W], a_delayed as above, stroke =
+//            the lift stroke d_lift [m] (the boom's position, which turns a load cell's geometry)
+//  traction: a = the drive's speed v_drive of the previous sample [m/s], force = the lift force
+//            [N] (the load on the axles) and power [W] through the lag kForceLag, a_delayed[i] = v
+//            at t − kCorrectionDelays[i] (a delayed difference is an acceleration: a mass), stroke
+//            = d_lift; rate is not used
+//  all:      digging = 1 inside the run's digging phase [dig_start, dig_end), else 0
+//            (EffectContext::digging; a run without phase marks is never digging)
 struct CorrectionInputs {
   double a = 0.0;
   double rate = 0.0;
   double force = 0.0;
   double power = 0.0;
+  double stroke = 0.0;
+  double digging = 0.0;
   std::array<double, kCorrectionDelays.size()> a_delayed{};
 };
 
 // one dictionary entry: its parameter name, how it reads in an equation and its unit, both as
-// templates where {a}, {v}, {F}, {P} stand for the quantity, its rate, the force and the power
-// (correction_expression and correction_unit substitute them), and its value
+// templates where {a}, {v}, {F}, {P}, {s} stand for the quantity, its rate, the force, the power
+// and the stroke (correction_expression and correction_unit substitute them), and its value
 struct CorrectionFeature {
   const char* name;        // [a-z0-9_]+: the effect's parameter
   const char* expression;  // e.g. "|{F}|·({a}(t−0.2 s) − {a})"
@@ -76,12 +91,16 @@ struct CorrectionFeature {
 // the dictionary of a kind, in a fixed order
 const std::vector<CorrectionFeature>& correction_features(CorrectionKind kind);
 
-// the names and units a kind's quantities take in equations: the actuator's command and force
-// ("u_lift", "f_lift"), or the channel's name, its rate and the lift force
+// the names and units a kind's quantities take in equations: what it corrects ("u_lift" [m/s],
+// "f_tilt" [N], the tractive force "f_traction" [N]), and the quantity a features read: the
+// actuator's command and force ("u_lift", "f_lift"), the channel, its rate and the lift force, or
+// the drive's speed and the lift force
 struct CorrectionSymbols {
-  std::string a, a_unit, rate, rate_unit, force = "f_lift", power = "P";
+  std::string corrected, corrected_unit;
+  std::string a, a_unit, rate, rate_unit, force = "f_lift", power = "P", stroke = "d_lift";
 };
-// the symbols of the actuator ("drive", "lift", "tilt") or sensor channel ("f_traction", ...)
+// the symbols of the actuator ("drive", "lift", "tilt"), the sensor channel ("f_traction", ...)
+// or, for the traction kind, "traction"
 CorrectionSymbols correction_symbols(CorrectionKind kind, const std::string& target);
 
 // a feature's expression and unit with the symbols substituted: "f_lift·sign(u_lift)", "N"
@@ -92,6 +111,10 @@ std::string correction_unit(const CorrectionFeature& f, const CorrectionSymbols&
 std::vector<std::string> learned_effect_names();
 // a learned correction with all coefficients zero; talus::InputError for another name
 std::unique_ptr<Effect> make_learned_effect(const std::string& name);
+
+// below this drive speed a traction feature's sign(v) ramps linearly to zero [m/s]: a machine at
+// rest is not pushed (tyre_rolling_resistance's ramp, far below any driving speed, 0.5-3.6 m/s)
+inline constexpr double kTractionSignRampSpeed = 0.01;
 
 // the largest magnitude of a coefficient, in SI units of the correction per feature unit: far
 // beyond any physical correction (a leakage of 1e6 m/s per N is nonsense), only a guard against

@@ -63,6 +63,10 @@ struct Hidden {
 //              two differ in their ratio alone)
 //  load_gain   f_tilt or f_traction read (1 + k |f_lift|), 0.5-2e-6 /N (9-35 % at 175 kN). Its own
 //              feature: the load times the reading
+//  inertia     a mass of 1,000-3,000 kg the model lacks (7-20 % of the wa320's 15,175 kg: a
+//              counterweight or payload error), a force −k dv/dt on the frames: 3-9 kN of traction
+//              at load-carry's 3 m/s²; the tractive-force target's (since 2026-12-01). Its own
+//              features: the delayed differences of the speed (−τ times the acceleration)
 Hidden draw_hidden(std::mt19937_64& rng) {
   auto uniform = [&](double a, double b) {
     return std::uniform_real_distribution<double>(a, b)(rng);
@@ -75,7 +79,7 @@ Hidden draw_hidden(std::mt19937_64& rng) {
     std::snprintf(s, sizeof s, "%.4g", v);
     return std::string(s);
   };
-  switch (std::uniform_int_distribution<int>(0, 4)(rng)) {
+  switch (std::uniform_int_distribution<int>(0, 5)(rng)) {
     case 0:
       return {
           "leakage:k=" + num(tilt ? uniform(4e-7, 1.2e-6) : uniform(1e-7, 3e-7)) + "," + cylinder,
@@ -94,6 +98,10 @@ Hidden draw_hidden(std::mt19937_64& rng) {
       return {"speed_loss:k=" + num(uniform(0.02, 0.06)),
               "drive speed",
               {"command_squared", "command"}};
+    case 4:
+      return {"inertia:k=" + num(uniform(1000.0, 3000.0)),
+              "tractive force",
+              {"delay_01", "delay_02", "delay_04"}};
     default: {
       const bool traction = uniform(0.0, 1.0) < 0.5;
       return {

@@ -1,14 +1,17 @@
 /* Effects the sim-to-real loop is never told about (issue 17's blind discovery tests,
  * tests/apps/discovery_test.cpp): written only here, loaded by `talus synth --effect-plugin` to
  * make the "measured" runs and never given to `talus diagnose`, which must find a term for them
- * from the residual alone. Five families, each acting where a real machine's would: leakage
- * cylinder leakage with pressure: the speed falls by k |F| in the direction of motion on the lift
- * or tilt cylinder (held cylinders do not leak: their valve is closed) dead_band   a valve dead
- * band δ: u → sign(u) max(|u| − δ, 0) on the lift or tilt command load_delay  a transport delay
- * that grows with load: u(t) → u(t − k |F|) on a cylinder speed_loss  a drive loss growing with
- * speed: u → u − k u |u| on the drive's target speed load_gain   a load cell whose gain depends on
- * the load: x → x (1 + k |f_lift|) on f_tilt or f_traction "cylinder" 0 is lift and 1 tilt;
- * "channel" 0 is f_tilt and 1 f_traction. */
+ * from the residual alone. Six families, each acting where a real machine's would. leakage:
+ * cylinder leakage with pressure, the speed falls by k |F| in the direction of motion on the lift
+ * or tilt cylinder (held cylinders do not leak: their valve is closed). dead_band: a valve dead
+ * band δ, u → sign(u) max(|u| − δ, 0) on the lift or tilt command. load_delay: a transport delay
+ * that grows with load, u(t) → u(t − k |F|) on a cylinder. speed_loss: a drive loss growing with
+ * speed, u → u − k u |u| on the drive's target speed. load_gain: a load cell whose gain depends on
+ * the load, x → x (1 + k |f_lift|) on f_tilt or f_traction. inertia: a mass k the model lacks,
+ * a force −k dv/dt on the frames (since 2026-12-01, for the tractive-force target). dig_loss: the
+ * lift gets (1 − k) of its command inside a digging phase given by its parameters (pile runs only,
+ * the phase features' test). "cylinder" 0 is lift and 1
+ * tilt; "channel" 0 is f_tilt and 1 f_traction. */
 #include <math.h>
 #include <stdlib.h>
 
@@ -22,6 +25,7 @@ typedef struct hidden {
   double which;    /* cylinder or channel, 0 or 1 */
   int started;     /* the pressure below has a value */
   double pressure; /* the cylinder's force through the oil's compliance [N] */
+  double start, end; /* dig_loss: the digging phase it acts in [s] */
   int count;       /* load_delay: samples in the history */
   double t[HISTORY], u[HISTORY];
 } hidden;
@@ -125,6 +129,37 @@ static void speed_loss(void* self, const talus_effect_context* c, talus_commands
   u->drive -= e->k * u->drive * fabs(u->drive);
 }
 
+/* a mass the model lacks (a heavier counterweight, mud on the frames): a force −k dv/dt along
+ * the world's x axis, the heading of the straight runs the tests drive, half on each frame; the
+ * acceleration from the drive speeds of the last two samples */
+static void inertia(void* self, const talus_effect_context* c, talus_step_controls* controls) {
+  hidden* e = (hidden*)self;
+  const double v = c->previous->v_drive;
+  const double a = e->started ? (v - e->pressure) / c->h : 0.0;
+  const double force[3] = {-0.5 * e->k * a, 0.0, 0.0};
+  const double torque[3] = {0.0, 0.0, 0.0};
+  e->pressure = v; /* the previous speed (the struct's spare state) */
+  e->started = 1;
+  controls->add_wrench(controls->host, "rear_frame", force, torque);
+  controls->add_wrench(controls->host, "front_frame", force, torque);
+}
+
+/* dig_loss's parameters: the share lost, then the phase's start and end */
+static void set_window(void* self, int index, double value) {
+  hidden* e = (hidden*)self;
+  if (index == 0) e->k = value;
+  if (index == 1) e->start = value;
+  if (index == 2) e->end = value;
+}
+
+/* flow the dig takes from the lift (a priority valve feeding the tilt while the bucket is in the
+ * pile): the lift gets (1 − k) of its command inside [start, end), the digging phase as the
+ * scenario marks it */
+static void dig_loss(void* self, const talus_effect_context* c, talus_commands* u) {
+  const hidden* e = (const hidden*)self;
+  if (c->t >= e->start && c->t < e->end) u->lift *= 1.0 - e->k;
+}
+
 static void load_gain(void* self, const talus_effect_context* c, talus_sensor_sample* s) {
   const hidden* e = (const hidden*)self;
   const double gain = 1.0 + e->k * fabs(s->f_lift);
@@ -146,6 +181,12 @@ static const talus_effect_parameter kLoadDelay[] = {
     {"k", 1e-6, 0.0, 1e-5, "s/N", "delay per newton"}, kCylinder};
 static const talus_effect_parameter kSpeedLoss[] = {
     {"k", 0.03, 0.0, 0.2, "s/m", "loss per (m/s)^2"}};
+static const talus_effect_parameter kInertia[] = {
+    {"k", 2000.0, 0.0, 2e4, "kg", "the mass the model lacks"}};
+static const talus_effect_parameter kDigLoss[] = {
+    {"k", 0.3, 0.0, 0.9, "1", "share of the lift command lost in the dig"},
+    {"start", 0.0, 0.0, 100.0, "s", "the digging phase's start"},
+    {"end", 0.0, 0.0, 100.0, "s", "the digging phase's end"}};
 static const talus_effect_parameter kLoadGain[] = {
     {"k", 1e-6, 0.0, 1e-5, "1/N", "gain per newton of lift force"},
     {"channel", 0.0, 0.0, 1.0, "1", "0: f_tilt, 1: f_traction"}};
@@ -161,10 +202,14 @@ static const talus_effect_type kEffects[] = {
      speed_loss, NULL, NULL, NULL},
     {"load_gain", "load-dependent load-cell gain", 2, kLoadGain, create, destroy, set_parameter,
      reset, NULL, NULL, load_gain, NULL},
+    {"inertia", "a mass the model lacks", 1, kInertia, create, destroy, set_parameter, reset, NULL,
+     inertia, NULL, NULL},
+    {"dig_loss", "lift flow lost in the dig", 3, kDigLoss, create, destroy, set_window, reset,
+     dig_loss, NULL, NULL, NULL},
 };
 
 static const talus_effect_plugin_info kInfo = {TALUS_EFFECT_ABI_VERSION,
-                                               "talus hidden test effects", 5, kEffects};
+                                               "talus hidden test effects", 7, kEffects};
 #endif
 
 const talus_effect_plugin_info* talus_effect_plugin_entry(void);

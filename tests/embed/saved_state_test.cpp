@@ -150,18 +150,23 @@ TEST(SavedState, MachineAloneContinuesBitIdentically) {
   expect_bit_identical_continuation(o, 150, 250);
 }
 
-// effects with a memory (a lag, a delay line, a learned correction's delay line and force lag)
-// are saved with the run: the machine alone and a dig continue bit for bit with them
+// effects with a memory (a lag, a delay line, a learned correction's delay line and force lag,
+// the traction correction's too) are saved with the run: the machine alone and a dig continue bit
+// for bit with them
 TEST(SavedState, EffectsMemoriesContinueBitIdentically) {
   SimulationOptions o;
   o.scenario = "load-carry";
   o.effects = {"hydraulic_lag:time_constant=0.3", "sensor_delay:channel=f_lift,delay=0.2",
-               "learned_actuator_correction:actuator=lift,delay_02=0.5,force=-1e-8"};
+               "learned_actuator_correction:actuator=lift,delay_02=0.5,force=-1e-8",
+               "learned_traction_correction:delay_01=-2e4,abs_force_sign_speed=0.01"};
   expect_bit_identical_continuation(o, 300, 300);
+  // a dig: the learned correction's phase features read the scenario's digging phase (1.1 s on)
+  // in the continued run as in the whole one
   SimulationOptions dig;
   dig.scenario = "hd27";
   dig.level = "D400";
-  dig.effects = {"engine_power_sharing", "hydraulic_lag"};
+  dig.effects = {"engine_power_sharing", "hydraulic_lag",
+                 "learned_actuator_correction:actuator=drive,digging_times=-0.2"};
   expect_bit_identical_continuation(dig, 100, 40);
   // a state saved without the effects is another simulation's
   SimulationOptions plain = o;

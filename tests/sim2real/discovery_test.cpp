@@ -13,6 +13,7 @@
 
 #include "host/error.hpp"
 #include "synthetic_runs.hpp"
+#include "vehicle/effect_plugin.hpp"
 #include "vehicle/learned_correction.hpp"
 #include "vehicle/scenario.hpp"
 
@@ -166,13 +167,16 @@ TEST(Discovery, NoiseAloneGivesNoTerms) {
   }
 }
 
-TEST(Discovery, TargetsAreTheActuatorsThenTheGivenChannels) {
+TEST(Discovery, TargetsAreTheActuatorsTheTractionThenTheGivenChannels) {
   const auto t = discovery_targets({"f_traction"});
-  ASSERT_EQ(t.size(), 4u);
+  ASSERT_EQ(t.size(), 5u);
   EXPECT_EQ(t[0].label(), "drive speed");
   EXPECT_EQ(t[1].option(), "actuator=lift");
-  EXPECT_EQ(t[3].effect_name(), "learned_sensor_correction");
-  EXPECT_EQ(t[3].option(), "channel=f_traction");
+  EXPECT_EQ(t[3].label(), "tractive force");
+  EXPECT_EQ(t[3].effect_name(), "learned_traction_correction");
+  EXPECT_EQ(t[3].option(), "");
+  EXPECT_EQ(t[4].effect_name(), "learned_sensor_correction");
+  EXPECT_EQ(t[4].option(), "channel=f_traction");
   EXPECT_THROW(discovery_targets({"f_nothing"}), Error);
 }
 
@@ -281,6 +285,106 @@ TEST(Discovery, ACylindersFeaturesAreMeansOverItsRatesWindow) {
   }
   EXPECT_LT(worst, 0.05 * kLoss);
   EXPECT_GE(onset, 10) << "too few rows inside an onset for the check above to see a window";
+}
+
+TEST(Discovery, AStrokeDependentLossAndALossOfTheDiggingPhaseAreFoundAsTheirTerms) {
+  // a lift that loses 0.3 d_lift u (a loss growing along the stroke) everywhere and a further
+  // 0.2 u inside the digging phase [3, 6) s (flow the dig takes elsewhere), its strokes integrated
+  // finely (1e-5 s) from commands at several levels; the phase comes from the simulated run's
+  // marks, the phase its effects saw. The fit must keep exactly the two terms, within 2 %
+  const Series2 lift = {{0.0, 0.0},   {0.5, 0.0},   {0.7, 0.15}, {2.0, 0.15}, {2.2, 0.08},
+                        {4.0, 0.08},  {4.2, -0.1},  {5.0, -0.1}, {5.2, 0.12}, {7.0, 0.12},
+                        {7.2, -0.05}, {9.5, -0.05}, {9.6, 0.0}};
+  const vehicle::PiecewiseLinear command(lift);
+  constexpr double kStrokeLoss = 0.3, kDigLoss = 0.2;  // 1/m, 1
+  constexpr double kDigStart = 3.0, kDigEnd = 6.0;     // s
+  Pair p;
+  TimeSeries m, sim;
+  double d_data = 0.2, d_sim = 0.2;  // m: the strokes start mid-way
+  constexpr int kSub = 1000;
+  for (int k = 0; k <= 1000; ++k) {
+    if (k > 0)
+      for (int q = 0; q < kSub; ++q) {
+        const double t = 0.01 * (k - 1) + 0.01 * (q + 0.5) / kSub;
+        const double u = command(t), dig = t >= kDigStart && t < kDigEnd ? 1.0 : 0.0;
+        d_sim += 0.01 / kSub * u;
+        d_data += 0.01 / kSub * (u - kStrokeLoss * d_data * u - kDigLoss * dig * u);
+      }
+    for (std::size_t c = 0; c < kChannelCount; ++c) {
+      m.columns[c].push_back(0.0);
+      sim.columns[c].push_back(0.0);
+    }
+    m[Channel::t].back() = sim[Channel::t].back() = 0.01 * k;
+    m[Channel::d_lift].back() = d_data;
+    sim[Channel::d_lift].back() = d_sim;
+    m[Channel::f_lift].back() = sim[Channel::f_lift].back() = 1.5e5;
+  }
+  p.measured.run.series = m;
+  p.measured.meta.lift = lift;
+  p.measured.meta.drive = p.measured.meta.tilt = {{0.0, 0.0}, {10.0, 0.0}};
+  p.simulated.series = sim;
+  p.simulated.summary.dig_start_s = kDigStart;
+  p.simulated.summary.dig_end_s = kDigEnd;
+  const DiscoveryTarget lift_target{CorrectionKind::actuator, "lift"};
+  const RegressionData d = regression_data(lift_target, {&p.measured}, {&p.simulated}, 1.0);
+  const DiscoveredCorrection c = fit_correction(lift_target, d);
+  ASSERT_EQ(c.terms.size(), 2u) << c.expression;
+  for (const auto& term : c.terms) {
+    if (term.feature == "stroke_times") {
+      EXPECT_NEAR(term.coefficient, -kStrokeLoss, 0.02 * kStrokeLoss) << c.expression;
+    } else {
+      EXPECT_EQ(term.feature, "digging_times") << c.expression;
+      EXPECT_NEAR(term.coefficient, -kDigLoss, 0.02 * kDigLoss) << c.expression;
+    }
+  }
+  EXPECT_NE(c.expression.find("d_lift·u_lift"), std::string::npos) << c.expression;
+  EXPECT_NE(c.expression.find("[dig]·u_lift"), std::string::npos) << c.expression;
+  // without marks the run has no digging phase: its features are zero and stay out of the fit
+  p.simulated.summary.dig_start_s.reset();
+  p.simulated.summary.dig_end_s.reset();
+  const RegressionData none = regression_data(lift_target, {&p.measured}, {&p.simulated}, 1.0);
+  EXPECT_EQ(
+      none.features.col(feature_index(CorrectionKind::actuator, "digging")).cwiseAbs().maxCoeff(),
+      0.0);
+}
+
+TEST(Discovery, AResistanceGrowingWithTheLoadIsFoundAsATractionTerm) {
+  // the data's tractive force reads 0.02 |f_lift| sign(v) more than the simulation's (a rolling
+  // resistance that grows with the load carried), while the machine drives forward and back with
+  // and without a load; the regression must keep that one term, within 1 %, and its spec must run
+  const Series2 drive = {{0.0, 0.0}, {1.0, 2.0}, {4.0, 2.0}, {5.0, -1.5}, {8.0, -1.5}, {9.0, 0.0}};
+  const vehicle::PiecewiseLinear speed(drive);
+  Pair p;
+  TimeSeries m, sim;
+  for (int k = 0; k <= 1000; ++k) {
+    const double t = 0.01 * k, v = speed(t);
+    const double load = t < 2.5 || t > 6.5 ? 1.6e5 : 2e4;  // N: the bucket loaded, then empty
+    const double sign = std::clamp(v / vehicle::kTractionSignRampSpeed, -1.0, 1.0);
+    for (std::size_t c = 0; c < kChannelCount; ++c) {
+      m.columns[c].push_back(0.0);
+      sim.columns[c].push_back(0.0);
+    }
+    m[Channel::t].back() = sim[Channel::t].back() = t;
+    m[Channel::v_drive].back() = sim[Channel::v_drive].back() = v;
+    m[Channel::f_lift].back() = sim[Channel::f_lift].back() = load;
+    sim[Channel::f_traction].back() = 4e3 * v;
+    m[Channel::f_traction].back() = 4e3 * v + 0.02 * load * sign;
+  }
+  p.measured.run.series = m;
+  p.measured.meta.drive = drive;
+  p.measured.meta.lift = p.measured.meta.tilt = {{0.0, 0.0}, {10.0, 0.0}};
+  p.simulated.series = sim;
+  const DiscoveryTarget traction{CorrectionKind::traction, "traction"};
+  EXPECT_EQ(traction.label(), "tractive force");
+  const RegressionData d = regression_data(traction, {&p.measured}, {&p.simulated}, 0.0);
+  const DiscoveredCorrection c = fit_correction(traction, d);
+  // the load reaches the feature through the pressure lag, so the fit is near, not exact
+  ASSERT_EQ(c.terms.size(), 1u) << c.expression;
+  EXPECT_EQ(c.terms[0].feature, "abs_force_sign_speed") << c.expression;
+  EXPECT_NEAR(c.terms[0].coefficient, 0.02, 0.01 * 0.02) << c.expression;
+  EXPECT_EQ(c.expression.rfind("Δf_traction [N] =", 0), 0u) << c.expression;
+  EXPECT_EQ(c.spec.rfind("learned_traction_correction:abs_force_sign_speed=", 0), 0u) << c.spec;
+  EXPECT_NO_THROW(vehicle::make_effect(c.spec));
 }
 
 TEST(Discovery, JsonCarriesTheEquationCoefficientsAndIntervals) {

@@ -383,6 +383,44 @@ TEST(EffectTest, SetAppliesInOrderAndRefusesBucketWrenches) {
   EXPECT_THROW(controls.set_lift_force_range(1.0, -1.0), Error);
 }
 
+// an effect that records, per hook, whether its context said the run was digging
+class PhaseProbe : public Effect {
+ public:
+  PhaseProbe() : Effect("phase_probe", "records EffectContext::digging") {}
+  void on_commands(const EffectContext& c, ActuatorCommands&) override {
+    commands.emplace_back(c.t, c.digging);
+  }
+  void on_sensors(const EffectContext& c, SensorSample&) override {
+    sensors.emplace_back(c.t, c.digging);
+  }
+  std::vector<std::pair<double, bool>> commands, sensors;
+};
+
+TEST(EffectTest, TheContextSaysWhetherTheRunIsInTheScenariosDiggingPhase) {
+  // a scenario with a digging phase [0.0525, 0.1025) s (marks between steps): every hook inside
+  // it reads digging, none outside; without marks (dig_end <= dig_start) nothing is digging
+  for (const double dig_end : {0.1025, 0.0}) {
+    Scenario sc;
+    sc.dig_start = 0.0525;
+    sc.dig_end = dig_end;
+    EffectSet set;
+    auto probe = std::make_unique<PhaseProbe>();
+    PhaseProbe& p = *probe;
+    set.add(std::move(probe));
+    auto w = settled();
+    SensorLog log(100.0);
+    start_with_effects(*w, set, log, sc);
+    for (int k = 0; k < 40; ++k) step_with_effects(*w, set, k * kH, kH, {});
+    ASSERT_EQ(p.commands.size(), 40u);
+    ASSERT_EQ(p.sensors.size(), 41u);  // the first sample at t = 0 too
+    for (const auto& samples : {p.commands, p.sensors})
+      for (const auto& [t, digging] : samples)
+        EXPECT_EQ(digging, t >= sc.dig_start && t < dig_end) << "t " << t;
+  }
+  EffectSet set;
+  EXPECT_THROW(set.set_dig_phase(0.0, std::nan("")), Error);
+}
+
 // --- plug-ins --------------------------------------------------------------------------------
 
 TEST(EffectPluginTest, ExamplePluginLoadsAndActs) {

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <iostream>
 #include <random>
 #include <set>
 
@@ -29,13 +30,14 @@ std::unique_ptr<WheelLoader> machine() {
 TEST(LearnedCorrection, DictionariesHaveUniqueParameterNamesAndFiniteValues) {
   std::mt19937_64 rng(std::random_device{}());
   std::uniform_real_distribution<double> u(-1e5, 1e5);
-  for (CorrectionKind kind : {CorrectionKind::actuator, CorrectionKind::sensor}) {
+  for (CorrectionKind kind :
+       {CorrectionKind::actuator, CorrectionKind::sensor, CorrectionKind::traction}) {
     std::set<std::string> names;
     for (const auto& f : correction_features(kind)) {
       EXPECT_TRUE(names.insert(f.name).second) << f.name;
       for (const char* c = f.name; *c; ++c)
         EXPECT_TRUE(std::islower(*c) || std::isdigit(*c) || *c == '_') << f.name;
-      CorrectionInputs x{u(rng), u(rng), u(rng), u(rng), {u(rng), u(rng), u(rng)}};
+      CorrectionInputs x{u(rng), u(rng), u(rng), u(rng), u(rng), 1.0, {u(rng), u(rng), u(rng)}};
       EXPECT_TRUE(std::isfinite(f.value(x))) << f.name;
     }
   }
@@ -127,6 +129,103 @@ TEST(LearnedCorrection, ActuatorCorrectionReadsTheForceThroughThePressureLag) {
     const double lagged = f1 + (f0 - f1) * std::exp(-n * kH / kForceLag);
     EXPECT_NEAR(u.lift, 1e-7 * lagged, 1e-12) << n;
   }
+}
+
+TEST(LearnedCorrection, StrokeAndDiggingFeaturesReadTheCylindersStrokeAndTheContextsPhase) {
+  // Δu_tilt = 0.3 d_tilt u_tilt + 0.02 [dig] − 0.1 [dig] u_tilt, with random strokes and commands,
+  // inside and outside the digging phase; the lift's stroke must not enter the tilt's features
+  std::mt19937_64 rng(std::random_device{}());
+  std::uniform_real_distribution<double> stroke(0.0, 1.2), command(-0.2, 0.2);
+  auto e = make_effect(
+      "learned_actuator_correction:actuator=tilt,stroke_times=0.3,digging=0.02,"
+      "digging_times=-0.1");
+  auto w = machine();
+  e->reset(*w);
+  SensorSample s = read_sensors(*w, 0.0);
+  for (int k = 0; k < 40; ++k) {
+    s.d_tilt = stroke(rng);
+    s.d_lift = stroke(rng);
+    const bool digging = k % 3 == 0;
+    const double u0 = command(rng);
+    ActuatorCommands u{0.0, 0.0, u0};
+    e->on_commands(EffectContext{k * kH, kH, s, *w, digging}, u);
+    const double dig = digging ? 1.0 : 0.0;
+    EXPECT_NEAR(u.tilt, u0 + 0.3 * s.d_tilt * u0 + 0.02 * dig - 0.1 * dig * u0, 1e-14) << k;
+  }
+  // the expressions name the tilt's stroke and the phase
+  const auto symbols = correction_symbols(CorrectionKind::actuator, "tilt");
+  for (const auto& f : correction_features(CorrectionKind::actuator)) {
+    if (std::string(f.name) == "stroke_times") {
+      EXPECT_EQ(correction_expression(f, symbols), "d_tilt·u_tilt");
+    }
+    if (std::string(f.name) == "digging_times") {
+      EXPECT_EQ(correction_expression(f, symbols), "[dig]·u_tilt");
+    }
+  }
+  // the drive's stroke is the boom's
+  EXPECT_EQ(correction_symbols(CorrectionKind::actuator, "drive").stroke, "d_lift");
+}
+
+TEST(LearnedCorrection, SensorCorrectionReadsTheLiftStrokeAndThePhase) {
+  // Δf_tilt = 1e-2 d_lift f_tilt + 500 [dig]
+  auto e = make_effect("learned_sensor_correction:channel=f_tilt,stroke_times=1e-2,digging=500");
+  auto w = machine();
+  e->reset(*w);
+  for (const bool digging : {false, true}) {
+    SensorSample s = read_sensors(*w, 0.1);
+    s.d_lift = 0.7;
+    s.d_tilt = 0.2;
+    s.f_tilt = 3e4;
+    const SensorSample before = s;
+    e->on_sensors(EffectContext{0.1, kH, before, *w, digging}, s);
+    EXPECT_DOUBLE_EQ(s.f_tilt, 3e4 + 1e-2 * 0.7 * 3e4 + (digging ? 500.0 : 0.0));
+  }
+}
+
+TEST(LearnedCorrection, TractionCorrectionIsAForceTheDriveMustOvercome) {
+  // Δf = 3 kN sign(v) + 0.01 |f_lift| sign(v): at a steady speed, forward and backward, the
+  // tractive force reading moves by Δf (the drive holds its speed against it), and the lift force
+  // the machine reads is the load the second term scales with
+  auto steady = [](const std::string& spec, double speed) {
+    auto w = machine();
+    // the bucket raised clear of the ground (settled, it rests on its heel and would drag)
+    w->set_lift_speed(0.15);
+    for (int k = 0; k < 100; ++k) w->step(kH);
+    EffectSet set;
+    if (!spec.empty()) set.add(make_effect(spec));
+    set.reset(*w, 0.0);
+    // 3 s to the speed, then the mean over 1 s
+    double f_traction = 0.0, f_lift = 0.0;
+    for (int k = 0; k < 800; ++k) {
+      const SensorSample s = step_with_effects(*w, set, k * kH, kH, {speed, 0.0, 0.0});
+      if (k >= 600) {
+        f_traction += s.f_traction / 200.0;
+        f_lift += s.f_lift / 200.0;
+      }
+    }
+    return std::make_pair(f_traction, f_lift);
+  };
+  for (const double speed : {1.5, -1.5}) {
+    const auto [with, load] =
+        steady("learned_traction_correction:sign_speed=3000,abs_force_sign_speed=0.01", speed);
+    const auto [without, load0] = steady("", speed);
+    const double expected = (3000.0 + 0.01 * std::abs(load0)) * (speed > 0 ? 1.0 : -1.0);
+    std::cout << "[ measured ] v " << speed << " m/s: f_traction " << without << " -> " << with
+              << " N, moved " << with - without << " N, expected " << expected << " N\n";
+    EXPECT_NEAR(with - without, expected, 0.01 * std::abs(expected)) << speed;
+    EXPECT_NEAR(load, load0, 1e-3 * std::abs(load0));
+  }
+  // its coefficients are forces per feature unit
+  auto e = make_effect("learned_traction_correction:speed=100");
+  for (const auto& p : e->parameters()) {
+    if (p.name == "speed") {
+      EXPECT_EQ(p.unit, "(N)/(m/s)");
+    }
+    if (p.name == "one") {
+      EXPECT_EQ(p.unit, "N");
+    }
+  }
+  EXPECT_THROW(correction_symbols(CorrectionKind::traction, "drive"), Error);
 }
 
 TEST(LearnedCorrection, SensorCorrectionChangesOnlyItsChannel) {
