@@ -23,7 +23,7 @@
 extern "C" {
 #endif
 
-#define TALUS_EFFECT_ABI_VERSION 2u
+#define TALUS_EFFECT_ABI_VERSION 3u
 /* the name of the exported entry point */
 #define TALUS_EFFECT_ENTRY "talus_effect_plugin_entry"
 
@@ -43,11 +43,14 @@ typedef struct talus_sensor_sample {
 } talus_sensor_sample;
 
 /* the step a hook belongs to: time at its start (on_sensors: the sample's time) [s], timestep [s],
- * and the true sensor sample before it (not what earlier effects made the sensors report) */
+ * the true sensor sample before it (not what earlier effects made the sensors report), and
+ * whether t lies in the run's digging phase [dig_start, dig_end) (1, else 0; 0 throughout a run
+ * without one; since version 3) */
 typedef struct talus_effect_context {
   double t;
   double h;
   const talus_sensor_sample* previous;
+  int digging;
 } talus_effect_context;
 
 /* target speeds [m/s]: drive (forward positive), lift and tilt cylinders (extension positive) */

@@ -129,7 +129,7 @@ class PluginEffect : public Effect {
   void on_commands(const EffectContext& c, ActuatorCommands& u) override {
     if (!type_.on_commands) return;
     const talus_sensor_sample previous = to_c(c.previous);
-    const talus_effect_context context{c.t, c.h, &previous};
+    const talus_effect_context context{c.t, c.h, &previous, c.digging ? 1 : 0};
     talus_commands commands{u.drive, u.lift, u.tilt};
     type_.on_commands(self_, &context, &commands);
     if (!std::isfinite(commands.drive) || !std::isfinite(commands.lift) || !std::isfinite(commands.tilt))
@@ -139,7 +139,7 @@ class PluginEffect : public Effect {
   void on_step(const EffectContext& c, StepControls& controls) override {
     if (!type_.on_step) return;
     const talus_sensor_sample previous = to_c(c.previous);
-    const talus_effect_context context{c.t, c.h, &previous};
+    const talus_effect_context context{c.t, c.h, &previous, c.digging ? 1 : 0};
     WrenchHost host{&controls, &c.loader};
     talus_step_controls s{controls.lift_force_min(),    controls.lift_force_max(), controls.tilt_force_min(),
                           controls.tilt_force_max(),    controls.drive_power_limit(), &host,
@@ -170,7 +170,7 @@ class PluginEffect : public Effect {
   void on_sensors(const EffectContext& c, SensorSample& sample) override {
     if (!type_.on_sensors) return;
     const talus_sensor_sample previous = to_c(c.previous);
-    const talus_effect_context context{c.t, c.h, &previous};
+    const talus_effect_context context{c.t, c.h, &previous, c.digging ? 1 : 0};
     talus_sensor_sample s = to_c(sample);
     type_.on_sensors(self_, &context, &s);
     sample = from_c(s);

@@ -9,8 +9,8 @@
  * speed, u → u − k u |u| on the drive's target speed. load_gain: a load cell whose gain depends on
  * the load, x → x (1 + k |f_lift|) on f_tilt or f_traction. inertia: a mass k the model lacks,
  * a force −k dv/dt on the frames (since 2026-12-01, for the tractive-force target). dig_loss: the
- * lift gets (1 − k) of its command inside a digging phase given by its parameters (pile runs only,
- * the phase features' test). "cylinder" 0 is lift and 1
+ * lift gets (1 − k) of its command inside the run's digging phase (pile runs only, the phase
+ * features' test). "cylinder" 0 is lift and 1
  * tilt; "channel" 0 is f_tilt and 1 f_traction. */
 #include <math.h>
 #include <stdlib.h>
@@ -25,7 +25,6 @@ typedef struct hidden {
   double which;    /* cylinder or channel, 0 or 1 */
   int started;     /* the pressure below has a value */
   double pressure; /* the cylinder's force through the oil's compliance [N] */
-  double start, end; /* dig_loss: the digging phase it acts in [s] */
   int count;       /* load_delay: samples in the history */
   double t[HISTORY], u[HISTORY];
 } hidden;
@@ -144,20 +143,12 @@ static void inertia(void* self, const talus_effect_context* c, talus_step_contro
   controls->add_wrench(controls->host, "front_frame", force, torque);
 }
 
-/* dig_loss's parameters: the share lost, then the phase's start and end */
-static void set_window(void* self, int index, double value) {
-  hidden* e = (hidden*)self;
-  if (index == 0) e->k = value;
-  if (index == 1) e->start = value;
-  if (index == 2) e->end = value;
-}
-
 /* flow the dig takes from the lift (a priority valve feeding the tilt while the bucket is in the
- * pile): the lift gets (1 − k) of its command inside [start, end), the digging phase as the
- * scenario marks it */
+ * pile): the lift gets (1 − k) of its command inside the run's digging phase, as the context
+ * reports it (the scenario's marks, moved with the operator's inputs) */
 static void dig_loss(void* self, const talus_effect_context* c, talus_commands* u) {
   const hidden* e = (const hidden*)self;
-  if (c->t >= e->start && c->t < e->end) u->lift *= 1.0 - e->k;
+  if (c->digging) u->lift *= 1.0 - e->k;
 }
 
 static void load_gain(void* self, const talus_effect_context* c, talus_sensor_sample* s) {
@@ -184,9 +175,7 @@ static const talus_effect_parameter kSpeedLoss[] = {
 static const talus_effect_parameter kInertia[] = {
     {"k", 2000.0, 0.0, 2e4, "kg", "the mass the model lacks"}};
 static const talus_effect_parameter kDigLoss[] = {
-    {"k", 0.3, 0.0, 0.9, "1", "share of the lift command lost in the dig"},
-    {"start", 0.0, 0.0, 100.0, "s", "the digging phase's start"},
-    {"end", 0.0, 0.0, 100.0, "s", "the digging phase's end"}};
+    {"k", 0.3, 0.0, 0.9, "1", "share of the lift command lost in the dig"}};
 static const talus_effect_parameter kLoadGain[] = {
     {"k", 1e-6, 0.0, 1e-5, "1/N", "gain per newton of lift force"},
     {"channel", 0.0, 0.0, 1.0, "1", "0: f_tilt, 1: f_traction"}};
@@ -204,7 +193,7 @@ static const talus_effect_type kEffects[] = {
      reset, NULL, NULL, load_gain, NULL},
     {"inertia", "a mass the model lacks", 1, kInertia, create, destroy, set_parameter, reset, NULL,
      inertia, NULL, NULL},
-    {"dig_loss", "lift flow lost in the dig", 3, kDigLoss, create, destroy, set_window, reset,
+    {"dig_loss", "lift flow lost in the dig", 1, kDigLoss, create, destroy, set_parameter, reset,
      dig_loss, NULL, NULL, NULL},
 };
 

@@ -447,7 +447,7 @@ TEST(EffectPluginTest, ExamplePluginLoadsAndActs) {
   EXPECT_THROW(load_effect_plugins({TALUS_EXAMPLE_EFFECT_PLUGIN, TALUS_EXAMPLE_EFFECT_PLUGIN}), InputError);
 }
 
-// a plug-in effect that reaches the soil (ABI version 2): cohesion = its parameter
+// a plug-in effect that reaches the soil (since ABI version 2): cohesion = its parameter
 struct SoilPluginEffect {
   double cohesion = 0.0;
 };
@@ -465,6 +465,33 @@ const talus_effect_type kMoistureType[] = {
 const talus_effect_plugin_info kMoistureInfo = {TALUS_EFFECT_ABI_VERSION, "soil test", 1,
                                                 kMoistureType};
 
+// a plug-in effect that commands the lift at 1 m/s inside the digging phase and 0 outside (ABI
+// version 3: the context's digging)
+const talus_effect_type kPhaseGateType[] = {
+    {"phase_gate", "the lift moves in the dig only", 0, nullptr,
+     [] { return static_cast<void*>(new int); }, [](void* self) { delete static_cast<int*>(self); },
+     nullptr, nullptr,
+     [](void*, const talus_effect_context* c, talus_commands* u) {
+       u->lift = c->digging ? 1.0 : 0.0;
+     },
+     nullptr, nullptr, nullptr}};
+const talus_effect_plugin_info kPhaseGateInfo = {TALUS_EFFECT_ABI_VERSION, "phase test", 1,
+                                                 kPhaseGateType};
+
+TEST(EffectPluginTest, PluginsReadTheDiggingPhaseFromTheirContext) {
+  const EffectPlugins plugins = {EffectPlugin::from_info(&kPhaseGateInfo, "in-memory")};
+  EffectSet set;
+  set.add(make_effect("phase_gate", plugins));
+  auto w = settled();
+  set.reset(*w, 0.0);
+  set.set_dig_phase(0.0525, 0.1025);
+  for (int k = 0; k < 40; ++k) {
+    const double t = k * kH;
+    const ActuatorCommands u = set.commands(t, kH, {0.0, 0.5, 0.0});
+    EXPECT_EQ(u.lift, t >= 0.0525 && t < 0.1025 ? 1.0 : 0.0) << "t " << t;
+  }
+}
+
 TEST(EffectPluginTest, PluginsReachTheSoilThroughOnSoil) {
   const EffectPlugins plugins = {EffectPlugin::from_info(&kMoistureInfo, "in-memory")};
   EffectSet set;
@@ -477,12 +504,11 @@ TEST(EffectPluginTest, PluginsReachTheSoilThroughOnSoil) {
 }
 
 TEST(EffectPluginTest, WrongAbiVersionAndMissingFilesAreRejectedNamingTheFile) {
-  static const talus_effect_plugin_info stale = {TALUS_EFFECT_ABI_VERSION + 997, "stale", 0,
-                                                 nullptr};
+  static const talus_effect_plugin_info stale = {999u, "stale", 0, nullptr};
   const std::string version = message_of<InputError>([] { EffectPlugin::from_info(&stale, "stale.so"); });
   EXPECT_NE(version.find("stale.so"), std::string::npos) << version;
   EXPECT_NE(version.find("ABI version 999"), std::string::npos) << version;
-  EXPECT_NE(version.find("version 2"), std::string::npos) << version;
+  EXPECT_NE(version.find("version 3"), std::string::npos) << version;
   const std::string missing = message_of<InputError>([] { EffectPlugin::load("/nonexistent/libnothing.so"); });
   EXPECT_NE(missing.find("/nonexistent/libnothing.so"), std::string::npos) << missing;
   // a plug-in whose effect's default lies outside its own range
