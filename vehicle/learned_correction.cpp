@@ -187,6 +187,34 @@ class DelayLine {
   std::deque<std::pair<double, double>> past_;
 };
 
+// a force and the power through the pressure lag kForceLag (the first update starts it at the
+// readings): what the actuator and traction corrections read, and their memory between steps
+class LaggedReadings {
+ public:
+  void clear() { started_ = false; }
+  void update(double force, double power, double h) {
+    force_ = started_ ? lag_step(force_, force, h) : force;
+    power_ = started_ ? lag_step(power_, power, h) : power;
+    started_ = true;
+  }
+  double force() const { return force_; }
+  double power() const { return power_; }
+  void save_state(ByteWriter& w) const {
+    w.u8(started_ ? 1 : 0);
+    w.f64(force_);
+    w.f64(power_);
+  }
+  void restore_state(ByteReader& r, const char* what) {
+    started_ = r.u8(what) != 0;
+    force_ = r.f64(what);
+    power_ = r.f64(what);
+  }
+
+ private:
+  bool started_ = false;
+  double force_ = 0.0, power_ = 0.0;  // N, W
+};
+
 // Σ c_k φ_k over the nonzero coefficients
 double correction_of(const std::vector<CorrectionFeature>& features, const std::vector<double>& c,
                      const CorrectionInputs& x) {
@@ -271,7 +299,7 @@ class LearnedActuatorCorrection : public LearnedCorrection {
   void reset(const WheelLoader& loader) override {
     (void)loader;
     clear_history();
-    lagged_ = false;
+    lagged_.clear();
   }
   void on_commands(const EffectContext& c, ActuatorCommands& u) override {
     const std::string& which = option_value(actuator_);
@@ -280,13 +308,11 @@ class LearnedActuatorCorrection : public LearnedCorrection {
     const double force = which == "drive"  ? c.previous.f_traction
                          : which == "lift" ? c.previous.f_lift
                                            : c.previous.f_tilt;
-    force_ = lagged_ ? lag_step(force_, force, c.h) : force;
-    power_ = lagged_ ? lag_step(power_, c.previous.power, c.h) : c.previous.power;
-    lagged_ = true;
+    lagged_.update(force, c.previous.power, c.h);
     CorrectionInputs x;
     x.a = target;
-    x.force = force_;
-    x.power = power_;
+    x.force = lagged_.force();
+    x.power = lagged_.power();
     x.stroke = which == "tilt" ? c.previous.d_tilt : c.previous.d_lift;
     x.digging = c.digging ? 1.0 : 0.0;
     delay(c.t, x);
@@ -295,21 +321,16 @@ class LearnedActuatorCorrection : public LearnedCorrection {
   // the delay line, then the lagged force and power
   void save_state(ByteWriter& w) const override {
     LearnedCorrection::save_state(w);
-    w.u8(lagged_ ? 1 : 0);
-    w.f64(force_);
-    w.f64(power_);
+    lagged_.save_state(w);
   }
   void restore_state(ByteReader& r) override {
     LearnedCorrection::restore_state(r);
-    lagged_ = r.u8("actuator correction") != 0;
-    force_ = r.f64("actuator correction");
-    power_ = r.f64("actuator correction");
+    lagged_.restore_state(r, "actuator correction");
   }
 
  private:
   int actuator_ = 0;
-  bool lagged_ = false;
-  double force_ = 0.0, power_ = 0.0;  // N, W: through the lag
+  LaggedReadings lagged_;  // the actuator's force and the power
 };
 
 // --- learned_traction_correction ------------------------------------------------------------
@@ -325,17 +346,15 @@ class LearnedTractionCorrection : public LearnedCorrection {
   void reset(const WheelLoader& loader) override {
     (void)loader;
     clear_history();
-    lagged_ = false;
+    lagged_.clear();
   }
   void on_step(const EffectContext& c, StepControls& controls) override {
-    // the load and the power through the pressure lag (the first step starts it at the reading)
-    force_ = lagged_ ? lag_step(force_, c.previous.f_lift, c.h) : c.previous.f_lift;
-    power_ = lagged_ ? lag_step(power_, c.previous.power, c.h) : c.previous.power;
-    lagged_ = true;
+    // the load and the power through the pressure lag
+    lagged_.update(c.previous.f_lift, c.previous.power, c.h);
     CorrectionInputs x;
     x.a = c.previous.v_drive;
-    x.force = force_;
-    x.power = power_;
+    x.force = lagged_.force();
+    x.power = lagged_.power();
     x.stroke = c.previous.d_lift;
     x.digging = c.digging ? 1.0 : 0.0;
     delay(c.t, x);
@@ -354,20 +373,15 @@ class LearnedTractionCorrection : public LearnedCorrection {
   // the delay line, then the lagged load and power
   void save_state(ByteWriter& w) const override {
     LearnedCorrection::save_state(w);
-    w.u8(lagged_ ? 1 : 0);
-    w.f64(force_);
-    w.f64(power_);
+    lagged_.save_state(w);
   }
   void restore_state(ByteReader& r) override {
     LearnedCorrection::restore_state(r);
-    lagged_ = r.u8("traction correction") != 0;
-    force_ = r.f64("traction correction");
-    power_ = r.f64("traction correction");
+    lagged_.restore_state(r, "traction correction");
   }
 
  private:
-  bool lagged_ = false;
-  double force_ = 0.0, power_ = 0.0;  // N, W: through the lag
+  LaggedReadings lagged_;  // the load (f_lift) and the power
 };
 
 // --- learned_sensor_correction ----------------------------------------------------------------
