@@ -61,18 +61,20 @@ inline constexpr double kMinRegressionGain = 0.05;
 // a quantity a learned correction may act on
 struct DiscoveryTarget {
   vehicle::CorrectionKind kind = vehicle::CorrectionKind::actuator;
-  std::string target;               // "drive", "lift", "tilt", or a sensor channel's name
-  std::string label() const;        // "lift speed", "f_traction reading"
-  std::string effect_name() const;  // learned_actuator_correction or learned_sensor_correction
-  std::string option() const;       // "actuator=lift" or "channel=f_traction"
+  std::string target;         // "drive", "lift", "tilt", "traction", or a sensor channel's name
+  std::string label() const;  // "lift speed", "tractive force", "f_traction reading"
+  // learned_actuator_correction, learned_traction_correction or learned_sensor_correction
+  std::string effect_name() const;
+  std::string option() const;  // "actuator=lift", "" (the traction's) or "channel=f_traction"
 };
 
-// the actuator targets, then the sensor channels given (those with an excess of their own)
+// the actuator targets, the tractive force, then the sensor channels given (those with an excess
+// of their own)
 std::vector<DiscoveryTarget> discovery_targets(const std::vector<std::string>& sensor_channels);
 
 // the largest target speed the machine's actuator follows [m/s] (a cylinder's max_speed, the
 // driveline's top speed): commands beyond it are clipped, so a correction that brings the
-// command back within it does less than its size. Infinity for a sensor target
+// command back within it does less than its size. Infinity for the traction and a sensor target
 double command_limit(const DiscoveryTarget& target, const vehicle::MachineDescription& machine);
 
 // the regression problem of one target over some runs (measured[i] against simulated[i]); for an

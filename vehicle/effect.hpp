@@ -8,7 +8,8 @@
 //   on_sensors   what the sensors report (a vehicle::SensorSample, changed in place)
 // and, once before a run with particles, on_soil: the soil's properties (cohesion)
 // Each hook gets an EffectContext: the step's start time t (for on_sensors, the sample's time),
-// the timestep h, the true sensor sample before the step and the machine (read only).
+// the timestep h, the true sensor sample before the step, the machine (read only) and whether t
+// lies in the run's digging phase.
 // An EffectSet applies several effects in order, restores the machine's own limits before each
 // step's on_step (so effects never accumulate), and keeps the true previous sample.
 // Built-in effects: make_builtin_effect(name) (vehicle/effects_builtin.cpp); effects from shared

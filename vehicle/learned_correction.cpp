@@ -1,4 +1,4 @@
-// The learned corrections' dictionaries and the two effects that run them (docs/discovery.md).
+// The learned corrections' dictionaries and the three effects that run them (docs/discovery.md).
 #include "vehicle/learned_correction.hpp"
 
 #include <algorithm>
@@ -30,7 +30,7 @@ double dead_band(const CorrectionInputs& x) {
   return std::clamp(x.a, -width, width);
 }
 
-// the entries both dictionaries share, written once: the offset and the delayed differences
+// the entries the dictionaries share, written once: the offset and the delayed differences
 const CorrectionFeature kOne{"one", "1", "1", [](const CorrectionInputs&) { return 1.0; }};
 const CorrectionFeature kDelay01{"delay_01", "{a}(t−0.1 s) − {a}", "{a}",
                                  [](const CorrectionInputs& x) { return x.a_delayed[0] - x.a; }};
@@ -224,7 +224,8 @@ double correction_of(const std::vector<CorrectionFeature>& features, const std::
   return sum;
 }
 
-// the common part of both effects: one parameter per dictionary feature, reported when nonzero
+// the common part of the three effects: one parameter per dictionary feature, reported when
+// nonzero
 class LearnedCorrection : public Effect {
  public:
   LearnedCorrection(const char* name, const char* summary, CorrectionKind kind)
@@ -267,7 +268,7 @@ class LearnedCorrection : public Effect {
       x.a_delayed[i] = line_.at(t - kCorrectionDelays[i]);
   }
   void clear_history() { line_.clear(); }
-  // the delay line is the memory both kinds carry between steps
+  // the delay line is the memory every kind carries between steps
   void save_state(ByteWriter& w) const override { line_.save_state(w); }
   void restore_state(ByteReader& r) override { line_.restore_state(r); }
   // the pushed quantity at an earlier time (the delay line's interpolation)

@@ -397,11 +397,13 @@ class PhaseProbe : public Effect {
 };
 
 TEST(EffectTest, TheContextSaysWhetherTheRunIsInTheScenariosDiggingPhase) {
-  // a scenario with a digging phase [0.0525, 0.1025) s (marks between steps): every hook inside
-  // it reads digging, none outside; without marks (dig_end <= dig_start) nothing is digging
-  for (const double dig_end : {0.1025, 0.0}) {
+  // a scenario with a digging phase between steps [0.0525, 0.1025) s and one on steps [10 h, 20 h)
+  // (the start in, the end out): every hook inside it reads digging, none outside; without marks
+  // (dig_end <= dig_start) nothing is digging
+  for (const auto& [dig_start, dig_end] : std::vector<std::pair<double, double>>{
+           {0.0525, 0.1025}, {10 * kH, 20 * kH}, {0.0525, 0.0}}) {
     Scenario sc;
-    sc.dig_start = 0.0525;
+    sc.dig_start = dig_start;
     sc.dig_end = dig_end;
     EffectSet set;
     auto probe = std::make_unique<PhaseProbe>();

@@ -8,6 +8,7 @@
 #include <cctype>
 #include <cmath>
 #include <iostream>
+#include <map>
 #include <random>
 #include <set>
 
@@ -154,13 +155,18 @@ TEST(LearnedCorrection, StrokeAndDiggingFeaturesReadTheCylindersStrokeAndTheCont
   }
   // the expressions name the tilt's stroke and the phase
   const auto symbols = correction_symbols(CorrectionKind::actuator, "tilt");
-  for (const auto& f : correction_features(CorrectionKind::actuator)) {
-    if (std::string(f.name) == "stroke_times") {
-      EXPECT_EQ(correction_expression(f, symbols), "d_tilt·u_tilt");
-    }
-    if (std::string(f.name) == "digging_times") {
-      EXPECT_EQ(correction_expression(f, symbols), "[dig]·u_tilt");
-    }
+  const auto& features = correction_features(CorrectionKind::actuator);
+  auto find = [&](const std::string& name) {
+    const auto f = std::find_if(features.begin(), features.end(),
+                                [&](const auto& g) { return name == g.name; });
+    EXPECT_NE(f, features.end()) << name;
+    return f;
+  };
+  if (const auto f = find("stroke_times"); f != features.end()) {
+    EXPECT_EQ(correction_expression(*f, symbols), "d_tilt·u_tilt");
+  }
+  if (const auto f = find("digging_times"); f != features.end()) {
+    EXPECT_EQ(correction_expression(*f, symbols), "[dig]·u_tilt");
   }
   // the drive's stroke is the boom's
   EXPECT_EQ(correction_symbols(CorrectionKind::actuator, "drive").stroke, "d_lift");
@@ -217,14 +223,11 @@ TEST(LearnedCorrection, TractionCorrectionIsAForceTheDriveMustOvercome) {
   }
   // its coefficients are forces per feature unit
   auto e = make_effect("learned_traction_correction:speed=100");
-  for (const auto& p : e->parameters()) {
-    if (p.name == "speed") {
-      EXPECT_EQ(p.unit, "(N)/(m/s)");
-    }
-    if (p.name == "one") {
-      EXPECT_EQ(p.unit, "N");
-    }
-  }
+  std::map<std::string, std::string> units;
+  for (const auto& p : e->parameters()) units[p.name] = p.unit;
+  EXPECT_EQ(units["speed"], "(N)/(m/s)");
+  EXPECT_EQ(units["one"], "N");
+  EXPECT_EQ(units["delay_01"], "(N)/(m/s)");
   EXPECT_THROW(correction_symbols(CorrectionKind::traction, "drive"), Error);
 }
 
