@@ -555,7 +555,7 @@ TEST(DiagnoseTest, FitsOfTwoAndThreeParametersRunToConvergence) {
   // every parameter must come back within kConvergedRecovery. BOBYQA alone stopped at its first
   // short step, far from the optimum; restarted until a restart gains nothing, and each parameter
   // then probed alone across steps of the objective (sim2real/diagnose minimise), every
-  // parameter of 28 draws came back within 1.41 % and 17 seeds of this test passed
+  // parameter of 28 draws came back within 1.41 % and 27 seeds of this test passed
   // (docs/sim2real.md section 3 has the draws)
   constexpr double kConvergedRecovery = 0.05;
   const unsigned seed = test_seed();
