@@ -18,9 +18,12 @@
 #include <string>
 #include <vector>
 
+#include "tests/host/temp_dir.hpp"
+
 namespace {
 
 namespace fs = std::filesystem;
+using talus::test::TempDir;
 const std::string kTalus = std::string(TALUS_BINARY_DIR) + "/talus";
 const std::string kPlugin = std::string(TALUS_BINARY_DIR) + "/libtalus_example_effect.so";
 
@@ -122,8 +125,8 @@ TEST(DiagnoseTest, NamesARandomBuiltInEffectAndCutsTheMeanErrorByAThird) {
   RecordProperty("seed", std::to_string(seed));
   const std::string context = "TALUS_TEST_SEED=" + std::to_string(seed) + ", effect " + d.spec;
   std::cerr << "diagnose test: " << context << "\n";
-  const fs::path base = fs::temp_directory_path() / ("talus_diagnose_blind_" + std::to_string(seed));
-  fs::remove_all(base);
+  const TempDir scratch("talus_diagnose_blind_" + std::to_string(seed));
+  const fs::path& base = scratch.path();
   synthesise(base, " --effect " + d.spec, seed);
   const auto j = diagnose(base);
 
@@ -143,13 +146,12 @@ TEST(DiagnoseTest, NamesARandomBuiltInEffectAndCutsTheMeanErrorByAThird) {
     EXPECT_EQ(f["window_local_minima"], 1) << context;
     EXPECT_FALSE(f["trend_estimate"].get<bool>()) << context;
   }
-  fs::remove_all(base);
 }
 
 TEST(DiagnoseTest, AddsNothingToEffectFreeDataWithNoise) {
   const unsigned seed = test_seed();
-  const fs::path base = fs::temp_directory_path() / ("talus_diagnose_noise_" + std::to_string(seed));
-  fs::remove_all(base);
+  const TempDir scratch("talus_diagnose_noise_" + std::to_string(seed));
+  const fs::path& base = scratch.path();
   synthesise(base, "", seed);
   const auto j = diagnose(base, " --out " + (base / "out").string());
   EXPECT_TRUE(j["effects_found"].empty()) << "TALUS_TEST_SEED=" << seed << ": " << j["effects_found"].dump();
@@ -176,7 +178,6 @@ TEST(DiagnoseTest, AddsNothingToEffectFreeDataWithNoise) {
   const auto some = diagnose(base, " --candidates 'hydraulic_lag,sensor_bias[f_lift]'");
   EXPECT_EQ(some["candidates"], nlohmann::json({"hydraulic_lag", "sensor_bias[f_lift]"}));
   EXPECT_TRUE(some["effects_found"].empty());
-  fs::remove_all(base);
 }
 
 TEST(DiagnoseTest, AnEffectOutsideTheCandidatesIsUnexplainedOrAClearlyWorseFit) {
@@ -188,8 +189,8 @@ TEST(DiagnoseTest, AnEffectOutsideTheCandidatesIsUnexplainedOrAClearlyWorseFit) 
   const double droop = std::uniform_real_distribution<double>(4.0, 8.0)(rng);
   const std::string spec = "flow_relief:speed=" + std::to_string(speed) + ",droop=" + std::to_string(droop);
   const std::string context = "TALUS_TEST_SEED=" + std::to_string(seed) + ", effect " + spec;
-  const fs::path base = fs::temp_directory_path() / ("talus_diagnose_plugin_" + std::to_string(seed));
-  fs::remove_all(base);
+  const TempDir scratch("talus_diagnose_plugin_" + std::to_string(seed));
+  const fs::path& base = scratch.path();
   synthesise(base, " --effect-plugin " + kPlugin + " --effect " + spec, seed);
   const auto j = diagnose(base);
   // the effect shows (else the test would test nothing)
@@ -213,7 +214,6 @@ TEST(DiagnoseTest, AnEffectOutsideTheCandidatesIsUnexplainedOrAClearlyWorseFit) 
         << context << ": " << j["discovered"].dump();
     EXPECT_GE(j["discovered"]["held_out_error_cut"].get<double>(), 0.5) << context;
   }
-  fs::remove_all(base);
 }
 
 TEST(DiagnoseTest, TwoEffectsOfSimilarSizeAreFoundTogether) {
@@ -226,8 +226,8 @@ TEST(DiagnoseTest, TwoEffectsOfSimilarSizeAreFoundTogether) {
   const double bias = std::uniform_real_distribution<double>(5e3, 7e3)(rng);
   const std::string context = "TALUS_TEST_SEED=" + std::to_string(seed) + ", friction " +
                               std::to_string(force) + " N, bias " + std::to_string(bias) + " N";
-  const fs::path base = fs::temp_directory_path() / ("talus_diagnose_pair_" + std::to_string(seed));
-  fs::remove_all(base);
+  const TempDir scratch("talus_diagnose_pair_" + std::to_string(seed));
+  const fs::path& base = scratch.path();
   synthesise(base,
              " --effect cylinder_friction:force=" + std::to_string(force) +
                  " --effect sensor_bias:channel=f_traction,bias=" + std::to_string(bias),
@@ -239,7 +239,6 @@ TEST(DiagnoseTest, TwoEffectsOfSimilarSizeAreFoundTogether) {
   EXPECT_TRUE(names.count("sensor_bias")) << context << ": " << j["effects_found"].dump();
   const double before = j["error_before"]["mean"], after = j["error_after"]["mean"];
   EXPECT_LE(after, 0.7 * before) << context;
-  fs::remove_all(base);
 }
 
 TEST(DiagnoseTest, EffectsFoundInTwoRoundsAreRefittedTogether) {
@@ -256,9 +255,8 @@ TEST(DiagnoseTest, EffectsFoundInTwoRoundsAreRefittedTogether) {
   const std::string context = "TALUS_TEST_SEED=" + std::to_string(seed) + ", friction " +
                               std::to_string(force) + " N, f_lift bias " + std::to_string(bias) +
                               " N";
-  const fs::path base =
-      fs::temp_directory_path() / ("talus_diagnose_refit_" + std::to_string(seed));
-  fs::remove_all(base);
+  const TempDir scratch("talus_diagnose_refit_" + std::to_string(seed));
+  const fs::path& base = scratch.path();
   synthesise(base,
              " --effect cylinder_friction:force=" + std::to_string(force) +
                  " --effect sensor_bias:channel=f_lift,bias=" + std::to_string(bias),
@@ -288,7 +286,6 @@ TEST(DiagnoseTest, EffectsFoundInTwoRoundsAreRefittedTogether) {
   }
   EXPECT_NEAR(found_force, force, 0.05 * force) << context << ": " << j["effects_found"].dump();
   EXPECT_NEAR(found_bias, bias, 0.05 * bias) << context << ": " << j["effects_found"].dump();
-  fs::remove_all(base);
 }
 
 // the judgement of the sensitivity spread after round `round` (nullptr when there was none)
@@ -315,9 +312,8 @@ TEST(DiagnoseTest, WhatTheSimulationsSensitivityToAFittedParameterLeavesIsNotUne
   std::mt19937_64 rng(seed);
   const std::string spec = chaotic_draw(rng);
   const std::string context = "TALUS_TEST_SEED=" + std::to_string(seed) + ", effect " + spec;
-  const fs::path base =
-      fs::temp_directory_path() / ("talus_diagnose_chaotic_" + std::to_string(seed));
-  fs::remove_all(base);
+  const TempDir scratch("talus_diagnose_chaotic_" + std::to_string(seed));
+  const fs::path& base = scratch.path();
   const std::string plugin = std::string(" --effect-plugin ") + TALUS_SENSITIVE_EFFECT;
   synthesise(base, plugin + " --effect " + spec, seed);
   const auto j = diagnose(base, " --max-effects 1" + plugin);
@@ -341,7 +337,6 @@ TEST(DiagnoseTest, WhatTheSimulationsSensitivityToAFittedParameterLeavesIsNotUne
   // design's points) per run judged
   EXPECT_EQ((*judged)["curvature_simulations"].get<int>(), 2) << context;
   EXPECT_EQ((*judged)["design_points"].get<int>(), 2) << context;
-  fs::remove_all(base);
 }
 
 TEST(DiagnoseTest, AMissingEffectBesideTheSimulationsSensitivityIsStillUnexplained) {
@@ -359,9 +354,8 @@ TEST(DiagnoseTest, AMissingEffectBesideTheSimulationsSensitivityIsStillUnexplain
       ",cylinder=0";
   const std::string context =
       "TALUS_TEST_SEED=" + std::to_string(seed) + ", effects " + spec + " and " + missing;
-  const fs::path base =
-      fs::temp_directory_path() / ("talus_diagnose_chaotic_missing_" + std::to_string(seed));
-  fs::remove_all(base);
+  const TempDir scratch("talus_diagnose_chaotic_missing_" + std::to_string(seed));
+  const fs::path& base = scratch.path();
   const std::string plugin = std::string(" --effect-plugin ") + TALUS_SENSITIVE_EFFECT;
   synthesise(base,
              plugin + " --effect " + spec + " --effect-plugin " + TALUS_HIDDEN_EFFECTS +
@@ -380,7 +374,6 @@ TEST(DiagnoseTest, AMissingEffectBesideTheSimulationsSensitivityIsStillUnexplain
   EXPECT_GE(worst_with, 0.5) << context << ": " << judged->dump();
   EXPECT_TRUE(j["discovery"]["ran"].get<bool>()) << context;
   EXPECT_TRUE(j["unexplained"].get<bool>() || !j["discovered"].is_null()) << context;
-  fs::remove_all(base);
 }
 
 // the chaos check (docs/sim2real.md section 4, item 5) end to end: the calibration run is dug on
@@ -413,10 +406,9 @@ TEST(DiagnoseTest, AFitOfThePileTheDataWereDugOnIsRefusedByTheChaosCheck) {
     const std::string context = "TALUS_TEST_SEED=" + std::to_string(seed) + ", draw " +
                                 std::to_string(draw) + ", cohesion " + std::to_string(cohesion) +
                                 " Pa";
-    const fs::path base =
-        fs::temp_directory_path() /
-        ("talus_diagnose_chaos_" + std::to_string(seed) + "_" + std::to_string(draw));
-    fs::remove_all(base);
+    const TempDir scratch("talus_diagnose_chaos_" + std::to_string(seed) + "_" +
+                          std::to_string(draw));
+    const fs::path& base = scratch.path();
     const std::string synth = kTalus + " synth --noise default --quiet --seed ";
     const unsigned data_seed = seed + 2 * static_cast<unsigned>(draw);
     const std::string dig = synth + std::to_string(data_seed) +
@@ -436,7 +428,6 @@ TEST(DiagnoseTest, AFitOfThePileTheDataWereDugOnIsRefusedByTheChaosCheck) {
     if (j.at("rounds").empty()) {
       EXPECT_EQ(j.at("excess_before").get<double>(), 0.0) << context;
       std::cout << context << ": the data are within noise of the model, no round; drawing again\n";
-      fs::remove_all(base);
       continue;
     }
     const auto& round = j["rounds"][0];
@@ -446,7 +437,6 @@ TEST(DiagnoseTest, AFitOfThePileTheDataWereDugOnIsRefusedByTheChaosCheck) {
       EXPECT_TRUE(round["chaos_checks"].empty()) << context << ": " << round.dump();
       std::cout << context
                 << ": no scanned cohesion beat the model without it, no fit; drawing again\n";
-      fs::remove_all(base);
       continue;
     }
     EXPECT_EQ(round["fitted"][0]["explained_on"], "calibration") << context;
@@ -455,7 +445,6 @@ TEST(DiagnoseTest, AFitOfThePileTheDataWereDugOnIsRefusedByTheChaosCheck) {
       EXPECT_TRUE(round["chaos_checks"].empty()) << context << ": " << round.dump();
       std::cout << context << ": the fit explained "
                 << round["fitted"][0]["explained"].get<double>() << ", no check; drawing again\n";
-      fs::remove_all(base);
       continue;
     }
     // the check digs the calibration run on the reference pile without and with it: refused
@@ -465,7 +454,6 @@ TEST(DiagnoseTest, AFitOfThePileTheDataWereDugOnIsRefusedByTheChaosCheck) {
     EXPECT_LT(check["explained"].get<double>(), 0.5) << context;
     EXPECT_EQ(check["simulations"], 2) << context;
     checked = true;
-    fs::remove_all(base);
   }
   EXPECT_TRUE(checked) << "TALUS_TEST_SEED=" << seed << ": no draw of " << kChaosDraws
                        << " gave a fit that explains half of its own pile's dig";
@@ -488,8 +476,8 @@ TEST(DiagnoseTest, CylinderFrictionIsRecoveredFromFourDigsOnFreshPiles) {
   const std::string context =
       "TALUS_TEST_SEED=" + std::to_string(seed) + ", friction " + std::to_string(force) + " N";
   std::cerr << "diagnose pile test: " << context << "\n";
-  const fs::path base = fs::temp_directory_path() / ("talus_diagnose_pile_" + std::to_string(seed));
-  fs::remove_all(base);
+  const TempDir scratch("talus_diagnose_pile_" + std::to_string(seed));
+  const fs::path& base = scratch.path();
   // the data's piles: kDigs consecutive seeds from one of a million blocks above 9, so never the
   // model's 2-9 (a type-G pile is its voxels and this seed's grains: nothing is cached)
   const unsigned first_pile = 10 + static_cast<unsigned>(rng() % 1000000) * kDigs;
@@ -519,7 +507,6 @@ TEST(DiagnoseTest, CylinderFrictionIsRecoveredFromFourDigsOnFreshPiles) {
       << context << ": fitted " << fitted << " N (" << 100.0 * (fitted - force) / force << " %)";
   const double before = j["error_before"]["mean"], after = j["error_after"]["mean"];
   EXPECT_LT(after, before) << context << ": mean error " << before << " -> " << after;
-  fs::remove_all(base);
 }
 
 TEST(DiagnoseTest, AValueBelowTheScansFirstCentreIsFitted) {
@@ -536,9 +523,8 @@ TEST(DiagnoseTest, AValueBelowTheScansFirstCentreIsFitted) {
   const double k = std::uniform_real_distribution<double>(0.0025, 0.005)(rng);
   const std::string context =
       "TALUS_TEST_SEED=" + std::to_string(seed) + ", k " + std::to_string(k);
-  const fs::path base =
-      fs::temp_directory_path() / ("talus_diagnose_near_zero_" + std::to_string(seed));
-  fs::remove_all(base);
+  const TempDir scratch("talus_diagnose_near_zero_" + std::to_string(seed));
+  const fs::path& base = scratch.path();
   const std::string plugin = std::string(" --effect-plugin ") + TALUS_FIT_EFFECTS;
   synthesise(base, plugin + " --effect drive_drag:k=" + std::to_string(k), seed);
   const auto j = diagnose(base, plugin + " --candidates drive_drag");
@@ -546,7 +532,6 @@ TEST(DiagnoseTest, AValueBelowTheScansFirstCentreIsFitted) {
   ASSERT_EQ(j["effects_found"][0]["name"], "drive_drag") << context;
   EXPECT_NEAR(j["effects_found"][0]["params"]["k"].get<double>(), k, kNearZeroRecovery * k)
       << context << ": fitted " << j["effects_found"][0].dump();
-  fs::remove_all(base);
 }
 
 TEST(DiagnoseTest, FitsOfTwoAndThreeParametersRunToConvergence) {
@@ -576,9 +561,8 @@ TEST(DiagnoseTest, FitsOfTwoAndThreeParametersRunToConvergence) {
       spec += (truth.size() > 1 ? "," : "") + p + "=" + std::to_string(truth.back());
     }
     const std::string context = "TALUS_TEST_SEED=" + std::to_string(seed) + ", " + spec;
-    const fs::path base =
-        fs::temp_directory_path() / ("talus_diagnose_" + c.effect + "_" + std::to_string(seed));
-    fs::remove_all(base);
+    const TempDir scratch("talus_diagnose_" + c.effect + "_" + std::to_string(seed));
+    const fs::path& base = scratch.path();
     synthesise(base, plugin + " --effect " + spec, seed);
     const auto j = diagnose(base, plugin + " --max-effects 1 --candidates " + c.effect);
     ASSERT_GE(j["effects_found"].size(), 1u) << context;
@@ -587,7 +571,6 @@ TEST(DiagnoseTest, FitsOfTwoAndThreeParametersRunToConvergence) {
       EXPECT_NEAR(j["effects_found"][0]["params"][c.parameters[i]].get<double>(), truth[i],
                   kConvergedRecovery * truth[i])
           << context << ": " << c.parameters[i] << " fitted " << j["effects_found"][0].dump();
-    fs::remove_all(base);
   }
 }
 
@@ -602,9 +585,8 @@ TEST(DiagnoseTest, TheThreadCountDoesNotChangeTheDiagnosis) {
   std::mt19937_64 rng(seed);
   const double force = std::uniform_real_distribution<double>(15e3, 25e3)(rng);
   const std::string context = "TALUS_TEST_SEED=" + std::to_string(seed);
-  const fs::path base =
-      fs::temp_directory_path() / ("talus_diagnose_broken_" + std::to_string(seed));
-  fs::remove_all(base);
+  const TempDir scratch("talus_diagnose_broken_" + std::to_string(seed));
+  const fs::path& base = scratch.path();
   synthesise(base, " --effect cylinder_friction:force=" + std::to_string(force), seed);
   const std::string args =
       std::string(" --max-effects 1 --effect-plugin ") + TALUS_BROKEN_EFFECT + " --threads ";
@@ -620,7 +602,6 @@ TEST(DiagnoseTest, TheThreadCountDoesNotChangeTheDiagnosis) {
   j.erase("wall_s");
   k.erase("wall_s");
   EXPECT_EQ(j.dump(), k.dump()) << context;
-  fs::remove_all(base);
 }
 
 }  // namespace

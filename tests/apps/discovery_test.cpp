@@ -20,9 +20,12 @@
 #include <set>
 #include <string>
 
+#include "tests/host/temp_dir.hpp"
+
 namespace {
 
 namespace fs = std::filesystem;
+using talus::test::TempDir;
 const std::string kTalus = std::string(TALUS_BINARY_DIR) + "/talus";
 const std::string kHidden = TALUS_HIDDEN_EFFECTS;
 
@@ -160,9 +163,8 @@ TEST(DiscoveryTest, FindsTheRightTermForEffectsOutsideTheCandidates) {
   for (int draw = 0; draw < draws; ++draw) {
     const Hidden h = draw_hidden(rng);
     const unsigned run_seed = static_cast<unsigned>(rng());
-    const fs::path base =
-        fs::temp_directory_path() / ("talus_discovery_" + std::to_string(run_seed));
-    fs::remove_all(base);
+    const TempDir scratch("talus_discovery_" + std::to_string(run_seed));
+    const fs::path& base = scratch.path();
     const auto j = synthesise_and_diagnose(
         base, " --effect-plugin " + kHidden + " --effect " + h.spec, run_seed);
     std::string what;
@@ -171,7 +173,6 @@ TEST(DiscoveryTest, FindsTheRightTermForEffectsOutsideTheCandidates) {
     // one line per draw: the documentation run's table is made of these
     std::cerr << "discovery draw " << draw << " (seed " << run_seed << "): " << h.spec << " -> "
               << (ok ? "FOUND " : "MISSED ") << what << "\n";
-    fs::remove_all(base);
   }
   RecordProperty("found", found);
   // the bar: 80 % of the draws, held by the documentation run's 20 (docs/discovery.md:
@@ -198,9 +199,8 @@ TEST(DiscoveryTest, ALiftLossOfTheDiggingPhaseIsFoundOnPileData) {
   const double k = std::uniform_real_distribution<double>(0.15, 0.4)(rng);
   const std::string context =
       "TALUS_TEST_SEED=" + std::to_string(seed) + ", k " + std::to_string(k);
-  const fs::path base =
-      fs::temp_directory_path() / ("talus_discovery_phase_" + std::to_string(seed));
-  fs::remove_all(base);
+  const TempDir scratch("talus_discovery_phase_" + std::to_string(seed));
+  const fs::path& base = scratch.path();
   // the data's piles from one of a million blocks above 9, never the model's 2-3
   const unsigned first_pile = 10 + static_cast<unsigned>(rng() % 1000000) * 2;
   std::string data;
@@ -235,7 +235,6 @@ TEST(DiscoveryTest, ALiftLossOfTheDiggingPhaseIsFoundOnPileData) {
   }
   EXPECT_TRUE(phase) << context << ": " << d["expression"];
   EXPECT_GE(d["held_out_error_cut"].get<double>(), 0.5) << context;
-  fs::remove_all(base);
 }
 
 TEST(DiscoveryTest, DiscoversNothingInEffectFreeData) {
@@ -245,9 +244,8 @@ TEST(DiscoveryTest, DiscoversNothingInEffectFreeData) {
   const int draws = env_count("TALUS_DISCOVERY_FREE_DRAWS", 2);
   for (int draw = 0; draw < draws; ++draw) {
     const unsigned run_seed = static_cast<unsigned>(rng());
-    const fs::path base =
-        fs::temp_directory_path() / ("talus_discovery_free_" + std::to_string(run_seed));
-    fs::remove_all(base);
+    const TempDir scratch("talus_discovery_free_" + std::to_string(run_seed));
+    const fs::path& base = scratch.path();
     const auto j = synthesise_and_diagnose(base, "", run_seed, " --discover");
     EXPECT_TRUE(j["discovery"]["ran"].get<bool>());
     EXPECT_TRUE(j["discovered"].is_null())
@@ -257,15 +255,13 @@ TEST(DiscoveryTest, DiscoversNothingInEffectFreeData) {
               << (j["discovered"].is_null() ? "nothing discovered"
                                             : j["discovered"]["expression"].dump())
               << "\n";
-    fs::remove_all(base);
   }
 }
 
 TEST(DiscoveryTest, TheDiscoveredCorrectionRunsAsAnEffect) {
   // what diagnose reports as the effect reads back into `talus run --effect`, and changes the run
-  const fs::path base =
-      fs::temp_directory_path() / ("talus_discovery_run_" + std::to_string(::getpid()));
-  fs::remove_all(base);
+  const TempDir scratch("talus_discovery_run_" + std::to_string(::getpid()));
+  const fs::path& base = scratch.path();
   const std::string spec = "learned_actuator_correction:actuator=lift,force_sign_command=-2e-7";
   ASSERT_EQ(exit_code(kTalus + " run --scenario load-carry --quiet --effect " + spec + " --out " +
                       (base / "with").string() + " > /dev/null 2>&1"),
@@ -277,7 +273,6 @@ TEST(DiscoveryTest, TheDiscoveredCorrectionRunsAsAnEffect) {
   const auto without = nlohmann::json::parse(std::ifstream(base / "without" / "summary.json"));
   EXPECT_EQ(with["effects"][0]["name"], "learned_actuator_correction") << with["effects"].dump();
   EXPECT_NE(with["work_J"].get<double>(), without["work_J"].get<double>());
-  fs::remove_all(base);
 }
 
 }  // namespace

@@ -18,6 +18,7 @@
 
 #include "host/error.hpp"
 #include "tests/host/scoped_env.hpp"
+#include "tests/host/temp_dir.hpp"
 #include "tests/solvers/dem_test_util.hpp"
 
 namespace talus {
@@ -25,27 +26,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// a fresh folder under the system's temporary one, removed at the end
-class TempDir {
- public:
-  explicit TempDir(const std::string& name)
-      : path_(fs::temp_directory_path() / (name + "-" + std::to_string(::getpid()))) {
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
-
 using test::ScopedEnv;
+using test::TempDir;
 
 // a double's 64 bits (NaN payloads and the sign of zero included)
 std::uint64_t bits_of(double v) {
