@@ -280,11 +280,35 @@ class LearnedCorrection : public Effect {
   DelayLine line_;
 };
 
+// the part the actuator and traction corrections share: a force and the power read through the
+// pressure lag, which they carry between steps beside the delay line
+class LaggedCorrection : public LearnedCorrection {
+ public:
+  using LearnedCorrection::LearnedCorrection;
+  void reset(const WheelLoader& loader) override {
+    (void)loader;
+    clear_history();
+    lagged_.clear();
+  }
+  // the delay line, then the lagged force and power
+  void save_state(ByteWriter& w) const override {
+    LearnedCorrection::save_state(w);
+    lagged_.save_state(w);
+  }
+  void restore_state(ByteReader& r) override {
+    LearnedCorrection::restore_state(r);
+    lagged_.restore_state(r, name().c_str());
+  }
+
+ protected:
+  LaggedReadings lagged_;
+};
+
 // --- learned_actuator_correction --------------------------------------------------------------
-class LearnedActuatorCorrection : public LearnedCorrection {
+class LearnedActuatorCorrection : public LaggedCorrection {
  public:
   LearnedActuatorCorrection()
-      : LearnedCorrection(
+      : LaggedCorrection(
             "learned_actuator_correction",
             "a discovered correction of one actuator's speed: Σ c_k φ_k added to its target",
             CorrectionKind::actuator) {
@@ -296,11 +320,6 @@ class LearnedActuatorCorrection : public LearnedCorrection {
   }
   void changed() override {
     redefine_units(correction_symbols(CorrectionKind::actuator, option_value(actuator_)));
-  }
-  void reset(const WheelLoader& loader) override {
-    (void)loader;
-    clear_history();
-    lagged_.clear();
   }
   void on_commands(const EffectContext& c, ActuatorCommands& u) override {
     const std::string& which = option_value(actuator_);
@@ -319,35 +338,20 @@ class LearnedActuatorCorrection : public LearnedCorrection {
     delay(c.t, x);
     target += correction(x);
   }
-  // the delay line, then the lagged force and power
-  void save_state(ByteWriter& w) const override {
-    LearnedCorrection::save_state(w);
-    lagged_.save_state(w);
-  }
-  void restore_state(ByteReader& r) override {
-    LearnedCorrection::restore_state(r);
-    lagged_.restore_state(r, "actuator correction");
-  }
 
  private:
-  int actuator_ = 0;
-  LaggedReadings lagged_;  // the actuator's force and the power
+  int actuator_ = 0;  // the option's index
 };
 
 // --- learned_traction_correction ------------------------------------------------------------
-class LearnedTractionCorrection : public LearnedCorrection {
+class LearnedTractionCorrection : public LaggedCorrection {
  public:
   LearnedTractionCorrection()
-      : LearnedCorrection("learned_traction_correction",
-                          "a discovered force against the machine's motion: Σ c_k φ_k [N] the "
-                          "drive must overcome",
-                          CorrectionKind::traction) {
+      : LaggedCorrection("learned_traction_correction",
+                         "a discovered force against the machine's motion: Σ c_k φ_k [N] the "
+                         "drive must overcome",
+                         CorrectionKind::traction) {
     declare_coefficients(correction_symbols(CorrectionKind::traction, "traction"));
-  }
-  void reset(const WheelLoader& loader) override {
-    (void)loader;
-    clear_history();
-    lagged_.clear();
   }
   void on_step(const EffectContext& c, StepControls& controls) override {
     // the load and the power through the pressure lag
@@ -371,18 +375,6 @@ class LearnedTractionCorrection : public LearnedCorrection {
       controls.add_wrench(tyre->wheel(), w);
     }
   }
-  // the delay line, then the lagged load and power
-  void save_state(ByteWriter& w) const override {
-    LearnedCorrection::save_state(w);
-    lagged_.save_state(w);
-  }
-  void restore_state(ByteReader& r) override {
-    LearnedCorrection::restore_state(r);
-    lagged_.restore_state(r, "traction correction");
-  }
-
- private:
-  LaggedReadings lagged_;  // the load (f_lift) and the power
 };
 
 // --- learned_sensor_correction ----------------------------------------------------------------
