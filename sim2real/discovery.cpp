@@ -7,6 +7,7 @@
 
 #include "host/error.hpp"
 #include "sim2real/residuals.hpp"
+#include "vehicle/effect.hpp"
 #include "vehicle/scenario.hpp"
 
 namespace talus::sim2real {
@@ -219,8 +220,8 @@ RegressionData regression_data(const DiscoveryTarget& target,
                                                                               : m[Channel::d_lift];
     const RunSummary& marks = simulated[i]->summary;
     const auto digging = [&](double when) {
-      return marks.dig_start_s && marks.dig_end_s && when >= *marks.dig_start_s &&
-                     when < *marks.dig_end_s
+      return marks.dig_start_s && marks.dig_end_s &&
+                     vehicle::in_dig_phase(when, *marks.dig_start_s, *marks.dig_end_s)
                  ? 1.0
                  : 0.0;
     };

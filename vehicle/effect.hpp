@@ -28,6 +28,12 @@
 
 namespace talus::vehicle {
 
+// whether t lies in the digging phase [start, end) [s] (none when end <= start): the one rule the
+// effects' context and the discovery's data path both read
+inline bool in_dig_phase(double t, double start, double end) {
+  return end > start && t >= start && t < end;
+}
+
 // a named number with its range (inclusive), unit and meaning
 struct EffectParameter {
   std::string name;
@@ -205,7 +211,7 @@ class EffectSet {
   double power_limit_ = 0.0;
   bool reset_done_ = false;
   double dig_start_ = 0.0, dig_end_ = 0.0;  // s: the digging phase, none while equal
-  bool digging(double t) const { return dig_end_ > dig_start_ && t >= dig_start_ && t < dig_end_; }
+  bool digging(double t) const { return in_dig_phase(t, dig_start_, dig_end_); }
 };
 
 // the built-in effects' names, in the order docs/effects.md lists them
