@@ -182,6 +182,7 @@ DiggingOptions digging_options(const RunOptions& o) {
   options.edge_resistance = o.edge_resistance;
   options.excavation_reach = o.excavation_reach;
   options.merge_speed = o.merge_speed;
+  options.rest_in_bucket = o.rest_in_bucket;
   options.interface_damping_time = o.interface_damping_time;
   options.content_inertia = o.content_inertia;
   options.bucket_support = o.bucket_support;
@@ -249,13 +250,16 @@ class Snapshots {
 struct ParticleTally {
   size_t most = 0;
   double sum = 0.0;
+  double resting_sum = 0.0;  // of those riding with the bucket (type G, --rest-in-bucket)
   long steps = 0;
-  void add(size_t n) {
+  void add(size_t n, int resting) {
     most = std::max(most, n);
     sum += static_cast<double>(n);
+    resting_sum += resting;
     ++steps;
   }
   double mean() const { return steps > 0 ? sum / static_cast<double>(steps) : 0.0; }
+  double resting_mean() const { return steps > 0 ? resting_sum / static_cast<double>(steps) : 0.0; }
 };
 
 // what summary.json tells beyond the contract: the level and its study settings, timing, the
@@ -277,6 +281,9 @@ nlohmann::json dig_details(const RunOptions& o, const vehicle::Scenario& sc,
       // the most particles at the end of any step, and their mean over the steps
       {"particles_most", static_cast<long>(tally.most)},
       {"particles_mean", tally.mean()},
+      // of them, those riding with the bucket at rest, out of the DEM's rows (their mean over the
+      // steps; type G with --rest-in-bucket, else 0)
+      {"particles_resting_mean", tally.resting_mean()},
       {"model", sim.multiscale() ? "multiscale (type G)" : "particles (type D)"},
       {"dt_s", preset.dt},
       {"iterations", preset.iterations},
@@ -316,6 +323,8 @@ nlohmann::json dig_details(const RunOptions& o, const vehicle::Scenario& sc,
         // a zone particle slower than this may merge back into the voxels [m/s] (type G; the
         // default at type D, which has no voxels)
         {"merge_speed_m_s", options.merge_speed},
+        // the bucket's resting load rides with it as fixed particles (type G, a study)
+        {"rest_in_bucket", options.rest_in_bucket},
         // the zone's particles on its failure plane (true) or its columns' staircase (type G)
         {"failure_plane_floor", options.failure_plane_floor},
         // the voxel surface's avalanche (type G; the defaults at type D, which has none)
@@ -496,7 +505,7 @@ void run_digging(const RunOptions& o, const vehicle::Scenario& sc, vehicle::Effe
       throw_if_interrupted(where.str());
     }
     snapshots.after_step(k, sim.time(), sim);
-    tally.add(sim.particle_count());
+    tally.add(sim.particle_count(), sim.multiscale() ? sim.terrain().last_step().resting : 0);
     // the load, measured once for the sample and the note alike (each measure downloads the
     // particles)
     const bool sample = k % load_every == 0 || sim.done();
@@ -584,6 +593,7 @@ void run_scenario(const RunOptions& o) {
               "type-G zone to excavate");
   type_g_only(o.merge_speed != kMergeSpeed, "--merge-speed " + std::to_string(o.merge_speed),
               "type-G particles to merge back into voxels");
+  type_g_only(o.rest_in_bucket, "--rest-in-bucket", "type-G bucket to carry its resting load");
   type_g_only(!o.failure_plane_floor, "--no-failure-plane-floor",
               "type-G zone whose floor to make of voxel columns");
   type_g_only(o.repose_angle != AvalancheOptions{}.repose_deg,
@@ -691,6 +701,11 @@ void add_run_command(CLI::App& app, const std::string& command_line) {
                   "particles\")")
       ->check(positive_number())
       ->capture_default_str();
+  cmd->add_flag("--rest-in-bucket", opts->rest_in_bucket,
+                "study, type G: while the bucket digs nothing, a particle at rest in it for 0.2 s "
+                "rides with it as a fixed particle, out of the DEM's rows, until the gravity it "
+                "feels in the bucket's frame changes by 0.1 g or the bucket digs again "
+                "(docs/multiscale.md \"The bucket's resting load\")");
   cmd->add_option("--repose-angle", opts->repose_angle,
                   "study, type G: the voxel surface's angle of repose, to which it avalanches "
                   "[deg], in [5, 60] (docs/validation.md \"D100's face creeps from t = 0\")")

@@ -129,6 +129,10 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
                      ": only the type-G levels merge particles back into voxels; use a G level "
                      "or leave it at " +
                      message_number(kMergeSpeed) + " m/s");
+  if (!is_multiscale(preset) && options.rest_in_bucket)
+    throw InputError("rest_in_bucket at " + preset.name +
+                     ": only the type-G levels' kinematic bucket can carry its resting load as "
+                     "fixed particles; use a G level or leave it off");
   if (!is_multiscale(preset) && !options.failure_plane_floor)
     throw InputError("failure_plane_floor off at " + preset.name +
                      ": only the type-G levels have a zone of excavated voxel columns to stand "
@@ -178,6 +182,7 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
     terrain.seed_diameter = options.seed_diameter;
     terrain.excavation_reach = options.excavation_reach;
     terrain.merge_speed = options.merge_speed;
+    terrain.rest_in_bucket = options.rest_in_bucket;
     terrain.failure_plane_floor = options.failure_plane_floor;
     terrain.avalanche = options.avalanche;
     terrain.seed = options.pile.seed;

@@ -52,9 +52,10 @@ class DemWorld {
   // and spawn leave them. Last step's contacts between survivors keep their impulses and colours
   // for the next step's warm start and colouring; Error if the numbering is not such a one
   void renumber_particles(const Particles& particles, const std::vector<int>& new_index_of_old);
-  // the same particles in the same order with new sizes (radius, inverse mass and inertia; the
-  // type-G terrain's growing seeds): everything else, contacts, impulses and colours included,
-  // stays as it is. Error if the count differs
+  // the same particles in the same order with a new state (their sizes, radius, inverse mass and
+  // inertia: the type-G terrain's growing seeds; their places and motion, and inverse masses of
+  // zero: the type-G bucket's riding load): last step's contacts, impulses and colours stay as
+  // they are. Error if the count differs
   void resize_particles(const Particles& particles);
   // the state between two steps, for a saved state (digging/saved_state): the particles as the
   // device holds them (float bit for bit), last step's contacts with their impulses (the next

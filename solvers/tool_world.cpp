@@ -175,8 +175,14 @@ void ToolWorld::step() {
       DemBuffers& b = dem_.buffers();
       side->candidates = side->selection.select(b.position, dem_.size(), box);
       near = side->block.gather(side->candidates, b.position, b.velocity, b.omega);
-      std::vector<int> local(side->candidates.size());
-      for (size_t k = 0; k < local.size(); ++k) local[k] = static_cast<int>(k);
+      // fixed particles (zero inverse mass: the type-G bucket's resting load, which rides with
+      // it) get no rows with a kinematic tool: two bodies that cannot move against each other (a
+      // loaded tool still meets them, as it meets any fixed particle)
+      const bool fixed_tool = t.mobility.isZero(0.0);
+      std::vector<int> local;
+      local.reserve(side->candidates.size());
+      for (size_t k = 0; k < side->candidates.size(); ++k)
+        if (!fixed_tool || near.inv_mass[k] > 0.0) local.push_back(static_cast<int>(k));
       double r_min = r_max;
       for (double r : near.radius) r_min = std::min(r_min, r);
       const double margin = dem_.settings().margin_rel + reach / std::max(r_min, 1e-12);

@@ -218,14 +218,17 @@ void MultiscaleTerrain::step(const KinematicBucket& bucket) {
   last_.merged = merge(particles, bucket, &new_index_of_old);
   last_.grown = grow(particles);
   last_.spawned = spawn(particles, columns, pose);
+  // the bucket's resting load rides with it (a study; off, nothing changes)
+  const bool rode = options_.rest_in_bucket && ride_with_bucket(particles, bucket);
   if (last_.merged > 0 || last_.spawned > 0) {
     // the pairs of the particles that stay, and their contacts with the bucket, keep their warm
     // start (and colours) (until 2026-11-27 every contact started from zero at a step that merged
     // or spawned any particle); the grown ones' sizes go with them
     dem_->renumber_particles(particles, new_index_of_old);
     tools_->renumber_particles(new_index_of_old);
-  } else if (last_.grown > 0) {
-    // the same particles, some larger: only their sizes change on the device
+  } else if (last_.grown > 0 || rode) {
+    // the same particles, some larger or riding with the bucket: their contacts, impulses and
+    // colours stay
     dem_->resize_particles(particles);
   }
 
@@ -252,6 +255,17 @@ void MultiscaleTerrain::step(const KinematicBucket& bucket) {
   // the particles as the step left them, downloaded once for everyone who reads them
   stage.emplace(dev, "transfers");
   download_particles();
+  // the DEM leaves fixed particles where the step began: the riding ones are where the bucket
+  // took them by the step's end, with their own masses, as every reader (the loaded mass, the held
+  // load's body, the zone, the output) expects the step's particles; the next step places them
+  // from the bucket's pose again and fixes them on the device
+  if (options_.rest_in_bucket)
+    for (size_t k = 0; k < rest_.size(); ++k) {
+      if (!rest_[k].resting) continue;
+      state_.position[k] += level_.dt * state_.velocity[k];
+      state_.inv_mass[k] = rest_[k].inv_mass;
+      state_.inv_inertia[k] = rest_[k].inv_inertia;
+    }
 
   // 5. the surface relaxes, but not into the columns the bucket stands on: the slopes into the
   // pit under the bucket would refill it every step, and the bucket would move the same soil
@@ -263,6 +277,76 @@ void MultiscaleTerrain::step(const KinematicBucket& bucket) {
   time_ += level_.dt;
 }
 
+bool MultiscaleTerrain::ride_with_bucket(Particles& particles, const KinematicBucket& bucket) {
+  const BucketPose pose = pose_of(bucket);
+  const double h = level_.dt;
+  const double rho = options_.particle_material.density;
+  const Vec3 g = dem_->settings().gravity;
+  // the bucket's angular and linear acceleration over the last step (zero at the first), so that
+  // a particle's gravity in the bucket's frame is the gravity less its point's acceleration
+  const bool accelerated = last_bucket_.has_value();
+  const Vec3 alpha = accelerated ? Vec3((bucket.omega - last_bucket_->omega) / h) : Vec3::Zero();
+  const Vec3 a_origin =
+      accelerated ? Vec3((bucket.velocity - last_bucket_->velocity) / h) : Vec3::Zero();
+  last_bucket_ = bucket;
+  const auto carried = [&](const Vec3& x) {
+    return Vec3(bucket.velocity + bucket.omega.cross(x - bucket.position));
+  };
+  const auto felt_gravity = [&](const Vec3& x) {
+    const Vec3 r = x - bucket.position;
+    const Vec3 a = a_origin + alpha.cross(r) + bucket.omega.cross(bucket.omega.cross(r));
+    return Vec3(pose.orientation.conjugate() * (g - a));
+  };
+  // the load rests only while the bucket digs nothing: a zone pushes soil into it
+  const bool digging = last_.zone.depth > 0.0;
+  std::vector<char> held(particles.size(), 0);
+  if (!digging)
+    for (int k : particles_in_bucket(particles, bucket_mesh_, pose)) held[k] = 1;
+  bool changed = false;
+  int resting = 0;
+  for (size_t k = 0; k < particles.size(); ++k) {
+    Rest& r = rest_[k];
+    if (r.resting) {
+      // where the bucket carries it, with the bucket's motion
+      const Vec3 x = pose.to_world(r.local);
+      particles.position[k] = x;
+      particles.velocity[k] = carried(x);
+      particles.omega[k] = bucket.omega;
+      changed = true;
+      // released there with its own mass (the host copy's) once the bucket digs again or the
+      // gravity it feels has changed; else it rides on, fixed
+      if (digging || (felt_gravity(x) - r.gravity).norm() > kRestRelease * g.norm()) {
+        r = Rest{};
+        ++last_.released;
+        continue;
+      }
+      particles.inv_mass[k] = 0.0;
+      particles.inv_inertia[k] = 0.0;
+      ++resting;
+      continue;
+    }
+    // a held, full-grown particle, slow relative to the bucket for kRestTime
+    const Vec3& x = particles.position[k];
+    const bool slow = held[k] && ledger_[k] >= sphere_mass(full_[k], rho) &&
+                      (particles.velocity[k] - carried(x)).norm() < kRestSpeed;
+    r.still = slow ? r.still + h : 0.0;
+    if (r.still < kRestTime) continue;
+    r.resting = true;
+    r.local = pose.to_local(x);
+    r.gravity = felt_gravity(x);
+    r.inv_mass = particles.inv_mass[k];
+    r.inv_inertia = particles.inv_inertia[k];
+    particles.inv_mass[k] = 0.0;
+    particles.inv_inertia[k] = 0.0;
+    particles.velocity[k] = carried(x);
+    particles.omega[k] = bucket.omega;
+    changed = true;
+    ++resting;
+  }
+  last_.resting = resting;
+  return changed;
+}
+
 int MultiscaleTerrain::merge(Particles& particles, const KinematicBucket& bucket,
                              std::vector<int>* new_index_of_old) {
   new_index_of_old->assign(particles.size(), -1);
@@ -272,6 +356,7 @@ int MultiscaleTerrain::merge(Particles& particles, const KinematicBucket& bucket
   keep.hi += Vec3::Constant(options_.no_merge_margin);
   std::vector<size_t> kept;  // the particles that stay, in order
   std::vector<double> kept_mass, kept_full;
+  std::vector<Rest> kept_rest;
   int merged = 0;
   for (size_t k = 0; k < particles.size(); ++k) {
     const Vec3& x = particles.position[k];
@@ -299,11 +384,13 @@ int MultiscaleTerrain::merge(Particles& particles, const KinematicBucket& bucket
     kept.push_back(k);
     kept_mass.push_back(ledger_[k]);
     kept_full.push_back(full_[k]);
+    kept_rest.push_back(rest_[k]);
   }
   if (merged > 0) {
     particles = particles.permuted(kept);
     ledger_ = std::move(kept_mass);
     full_ = std::move(kept_full);
+    rest_ = std::move(kept_rest);
   }
   return merged;
 }
@@ -399,6 +486,7 @@ int MultiscaleTerrain::spawn(Particles& particles, const std::vector<ExcavatedCo
       particles.add(x, 0.5 * seed_d, rho);
       ledger_.push_back(mass);
       full_.push_back(next_d);
+      rest_.emplace_back();
       pool_ -= mass;
       grid.add(x, 0.5 * next_d);
       ++made;
@@ -500,6 +588,11 @@ ActiveZone read_zone(ByteReader& r) {
 }  // namespace
 
 void MultiscaleTerrain::save_state(ByteWriter& w) const {
+  if (options_.rest_in_bucket)
+    throw InputError(
+        "a saved state of a type-G terrain whose bucket's resting load rides with it "
+        "(rest_in_bucket, --rest-in-bucket): not yet (the riding particles' places in the bucket "
+        "are not saved); save without the study option");
   w.tag("voxels");
   voxels_.save_state(w);
   w.tag("zone particles");
@@ -599,6 +692,8 @@ void MultiscaleTerrain::restore_state(ByteReader& r) {
   read_matrix(r, last.bucket_wrench, "last step");
   ledger_ = std::move(ledger);
   full_ = std::move(full);
+  rest_.assign(ledger_.size(), Rest{});
+  last_bucket_.reset();
   pool_ = pool;
   sites_ = std::move(columns);
   sizes_ = sizes;

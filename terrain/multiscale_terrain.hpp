@@ -34,6 +34,7 @@
 // reference engine's default margin).
 #pragma once
 #include <memory>
+#include <optional>
 #include <random>
 #include <vector>
 
@@ -70,6 +71,19 @@ inline constexpr double kGrowthSpeed = 1.0;
 // 9 per second (SPEC §2.5); a study option (MultiscaleOptions::merge_speed, `--merge-speed`)
 // measures what the faster merge does (docs/multiscale.md "How many particles")
 inline constexpr double kMergeSpeed = BulkSoil{}.activation_speed;
+// the bucket's resting load (MultiscaleOptions::rest_in_bucket, a study): [m/s] a held particle
+// slower than this relative to the bucket is at rest in it: the zone's activation speed, as for
+// the merge's default (soil slower than the tool that mobilises it counts as at rest), whatever
+// merge speed a study sets
+inline constexpr double kRestSpeed = kMergeSpeed;
+// [s] how long it must stay so before it rides with the bucket: ten G200 steps (a judgement: long
+// enough that a grain bouncing in does not count as at rest)
+inline constexpr double kRestTime = 0.2;
+// how much the gravity a riding particle feels in the bucket's frame (the gravity less its point's
+// acceleration) may change, as a fraction of |g|, before it is released to the DEM again: 0.1,
+// about a 6 degree turn of the bucket or a tenth of g of acceleration, a judgement (a heap at
+// rest holds a small turn; a larger one, or a jolt, lets it settle as its particles would)
+inline constexpr double kRestRelease = 0.1;
 
 struct MultiscaleOptions {
   BulkSoil soil;
@@ -104,6 +118,17 @@ struct MultiscaleOptions {
   // docs/multiscale.md "The zone's floor is its failure plane", measured); false: the columns'
   // boxes alone (a study)
   bool failure_plane_floor = true;
+  // a study (docs/multiscale.md "The bucket's resting load"): while the bucket digs nothing (no
+  // zone), a particle held in it (inside its heaped volume) that has moved slower than
+  // kRestSpeed relative to the bucket for kRestTime rides with the bucket as a fixed particle
+  // (zero inverse mass, the bucket's motion): no rows with the bucket, its neighbours at rest or
+  // the ground, while the particles that still move meet it as a moving wall. It is released,
+  // where the bucket carries it, with its own mass and the bucket's motion, when the gravity it
+  // feels in the bucket's frame changes by more than kRestRelease |g| or a zone appears. The
+  // machine sees the same load either way (the held particles' body, digging/digging); the
+  // particles' own wrench on the bucket (MultiscaleStep::bucket_wrench, recorded, not applied)
+  // leaves the riding ones out. false: every particle in the DEM
+  bool rest_in_bucket = false;
   unsigned seed = 1;                      // of the particles' sizes
 };
 
@@ -131,6 +156,8 @@ struct MultiscaleStep {
   int spawned = 0;          // particles made from the pool (seeds)
   int grown = 0;            // particles that grew from the pool
   int merged = 0;           // particles merged back into the voxels
+  int resting = 0;          // particles riding with the bucket at rest (rest_in_bucket)
+  int released = 0;         // riding particles given back to the DEM (rest_in_bucket)
   double avalanched = 0.0;  // soil that slid [kg]
   Vec6 bucket_wrench =
       Vec6::Zero();  // the particles' mean wrench on the bucket about its frame's origin
@@ -153,11 +180,14 @@ class MultiscaleTerrain {
   void step(const KinematicBucket& bucket);
 
   const VoxelTerrain& voxels() const { return voxels_; }
-  // the particles as the last step left them on the device (downloaded once per step), and each
-  // one's mass from the ledger [kg]
+  // the particles as the last step left them on the device (downloaded once per step; those riding
+  // with the bucket, rest_in_bucket, where it carried them and with their own masses, though the
+  // device holds them fixed), and each one's mass from the ledger [kg]
   const Particles& particles() const { return state_; }
   const std::vector<double>& particle_masses() const { return ledger_; }
   MassBalance mass_balance() const;
+  // whether particle k rides with the bucket at rest (rest_in_bucket), fixed on the device
+  bool rides(size_t k) const { return k < rest_.size() && rest_[k].resting; }
   const MultiscaleStep& last_step() const { return last_; }
   // the zone's particle world (its last step's statistics: contacts, sweeps)
   const DemWorld& dem() const { return *dem_; }
@@ -187,6 +217,10 @@ class MultiscaleTerrain {
   // DemWorld::renumber_particles needs; spawn then appends)
   int merge(Particles& particles, const KinematicBucket& bucket,
             std::vector<int>* new_index_of_old);
+  // rest_in_bucket: the held particles at rest in the bucket made fixed and moved with it, those
+  // a change of their felt gravity or a zone releases given back their masses; true if any
+  // particle's state changed (always, while any rides: the bucket moves them)
+  bool ride_with_bucket(Particles& particles, const KinematicBucket& bucket);
   // step 1's zone: predicted from the bucket's edges on the soil's surface under `particles`
   ActiveZone zone_for(const KinematicBucket& bucket, const Particles& particles) const;
   // the host copy of the device's particles that every reader uses (empty without particles)
@@ -207,6 +241,19 @@ class MultiscaleTerrain {
   std::unique_ptr<ToolWorld> tools_;
   std::vector<double> ledger_;  // mass of each particle on the device, in its order [kg]
   std::vector<double> full_;    // the diameter each particle grows to, in the same order [m]
+  // rest_in_bucket, in the particles' order: how long each has been slow relative to the bucket
+  // [s], and for a riding one where it sits in the bucket's frame, the gravity it felt there when
+  // it came to rest [m/s^2], and its own inverse mass and inertia; and the bucket's motion at the
+  // last step (its acceleration)
+  struct Rest {
+    double still = 0.0;
+    bool resting = false;
+    Vec3 local = Vec3::Zero();
+    Vec3 gravity = Vec3::Zero();
+    double inv_mass = 0.0, inv_inertia = 0.0;
+  };
+  std::vector<Rest> rest_;
+  std::optional<KinematicBucket> last_bucket_;
   Particles state_;             // the device's particles after the last step (host copy)
   double pool_ = 0.0;           // dynamic soil not yet made into particles [kg]
   std::vector<ExcavatedColumn>

@@ -2,7 +2,8 @@
 // carries the weight of the grains on it, a loaded platen comes to rest on a bed with its weight
 // balanced by the grains, a tool that would turn is refused, a kinematic one turns as prescribed,
 // and two runs are bit-identical (also with the particles renumbered in place halfway), and a
-// kinematic tool's rows give the same bits whichever launches solve them.
+// kinematic tool's rows give the same bits whichever launches solve them. Fixed particles get no
+// rows with a tool.
 #include "solvers/tool_world.hpp"
 
 #include <gtest/gtest.h>
@@ -94,6 +95,35 @@ TEST(ToolWorld, AKinematicPlateCarriesTheWeightOfTheGrainsOnIt) {
               100.0 * (-mean.z() / weight - 1.0), tools.load(0).contacts);
   EXPECT_NEAR(-mean.z(), weight, 0.01 * weight);
   EXPECT_DOUBLE_EQ(tools.tool(0).position.z(), 0.0);  // kinematic at rest: it never moves
+}
+
+TEST(ToolWorld, FixedParticlesGetNoRowsWithATool) {
+  // the bed settled on a kinematic plate, then its lower half fixed (zero inverse mass, as the
+  // type-G bucket's riding load): the plate meets only the grains that can still move
+  Device dev;
+  Bed b = make_bed(dev, 0.0, 3);
+  Tool floor;
+  add_box(floor.mesh, Vec3(0, 0, -0.5 * kD), Vec3(6 * kD, 6 * kD, 0.5 * kD));
+  ToolWorld tools(dev, *b.dem, {floor});
+  for (int k = 0; k < 200; ++k) tools.step();
+  const int all = tools.load(0).contacts;
+  Particles p = b.dem->particles();
+  int fixed = 0;
+  for (size_t i = 0; i < p.size(); ++i)
+    if (p.position[i].z() < 2.0 * kD) {
+      p.inv_mass[i] = 0.0;
+      p.inv_inertia[i] = 0.0;
+      ++fixed;
+    }
+  b.dem->resize_particles(p);
+  tools.step();
+  std::printf("[ measured ] %d plate contacts, %d with %d of %zu grains fixed\n", all,
+              tools.load(0).contacts, fixed, p.size());
+  EXPECT_GT(all, 20);
+  EXPECT_GT(fixed, 0);
+  // every grain on the plate lies in the bed's lowest layer: fixed, so no contact is left
+  EXPECT_EQ(tools.load(0).contacts, 0);
+  EXPECT_EQ(tools.load(0).wrench, Vec6::Zero());
 }
 
 TEST(ToolWorld, ALoadedPlatenComesToRestWithItsWeightBalanced) {
