@@ -28,8 +28,10 @@ namespace talus {
 // machine constraint), the aggregate log's support force, held mass, soil force and particle
 // force, type D's soil force log (2026-11-29, issue 14); 8: the aggregate log's terrain force,
 // interface B's whole force on the aggregate, and its zone's particles' mean velocity (2026-11-30,
-// issue 14); 9: type D's soil force log split by the bucket's faces (2026-11-30, issue 14)
-inline constexpr std::uint32_t kStateFormatVersion = 9;
+// issue 14); 9: type D's soil force log split by the bucket's faces (2026-11-30, issue 14); 10:
+// type G's resting load riding with the bucket (its study option, and with it on each particle's
+// rest and the bucket's last motion; 2026-12-01, issue 14)
+inline constexpr std::uint32_t kStateFormatVersion = 10;
 
 struct SavedStateHeader {
   std::string key;     // "name=value" lines: what the simulation was made from

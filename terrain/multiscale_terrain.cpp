@@ -174,6 +174,16 @@ ActiveZone MultiscaleTerrain::zone_for(const KinematicBucket& bucket,
 
 void MultiscaleTerrain::download_particles() {
   state_ = ledger_.empty() ? Particles{} : dem_->particles();
+  // the DEM leaves fixed particles where the step began: the riding ones (rest_in_bucket) are
+  // where the bucket took them by the step's end, with their own masses, as every reader (the
+  // loaded mass, the held load's body, the zone, the output) expects the step's particles; the
+  // next step places them from the bucket's pose again and fixes them on the device
+  for (size_t k = 0; k < rest_.size() && k < state_.size(); ++k) {
+    if (!rest_[k].resting) continue;
+    state_.position[k] += level_.dt * state_.velocity[k];
+    state_.inv_mass[k] = rest_[k].inv_mass;
+    state_.inv_inertia[k] = rest_[k].inv_inertia;
+  }
 }
 
 MultiscaleTerrain::~MultiscaleTerrain() = default;
@@ -255,17 +265,6 @@ void MultiscaleTerrain::step(const KinematicBucket& bucket) {
   // the particles as the step left them, downloaded once for everyone who reads them
   stage.emplace(dev, "transfers");
   download_particles();
-  // the DEM leaves fixed particles where the step began: the riding ones are where the bucket
-  // took them by the step's end, with their own masses, as every reader (the loaded mass, the held
-  // load's body, the zone, the output) expects the step's particles; the next step places them
-  // from the bucket's pose again and fixes them on the device
-  if (options_.rest_in_bucket)
-    for (size_t k = 0; k < rest_.size(); ++k) {
-      if (!rest_[k].resting) continue;
-      state_.position[k] += level_.dt * state_.velocity[k];
-      state_.inv_mass[k] = rest_[k].inv_mass;
-      state_.inv_inertia[k] = rest_[k].inv_inertia;
-    }
 
   // 5. the surface relaxes, but not into the columns the bucket stands on: the slopes into the
   // pit under the bucket would refill it every step, and the bucket would move the same soil
@@ -588,11 +587,6 @@ ActiveZone read_zone(ByteReader& r) {
 }  // namespace
 
 void MultiscaleTerrain::save_state(ByteWriter& w) const {
-  if (options_.rest_in_bucket)
-    throw InputError(
-        "a saved state of a type-G terrain whose bucket's resting load rides with it "
-        "(rest_in_bucket, --rest-in-bucket): not yet (the riding particles' places in the bucket "
-        "are not saved); save without the study option");
   w.tag("voxels");
   voxels_.save_state(w);
   w.tag("zone particles");
@@ -624,6 +618,27 @@ void MultiscaleTerrain::save_state(ByteWriter& w) const {
   w.i64(last_.merged);
   w.f64(last_.avalanched);
   write_matrix(w, last_.bucket_wrench);
+  // the bucket's resting load (rest_in_bucket): each particle's rest, the bucket's last motion
+  w.tag("resting load");
+  w.u8(options_.rest_in_bucket ? 1 : 0);
+  if (!options_.rest_in_bucket) return;
+  w.i64(last_.resting);
+  w.i64(last_.released);
+  for (const Rest& rest : rest_) {
+    w.f64(rest.still);
+    w.u8(rest.resting ? 1 : 0);
+    write_matrix(w, rest.local);
+    write_matrix(w, rest.gravity);
+    w.f64(rest.inv_mass);
+    w.f64(rest.inv_inertia);
+  }
+  w.u8(last_bucket_ ? 1 : 0);
+  if (last_bucket_) {
+    write_matrix(w, last_bucket_->position);
+    write_matrix(w, last_bucket_->orientation.coeffs());
+    write_matrix(w, last_bucket_->velocity);
+    write_matrix(w, last_bucket_->omega);
+  }
 }
 
 void MultiscaleTerrain::restore_state(ByteReader& r) {
@@ -690,10 +705,58 @@ void MultiscaleTerrain::restore_state(ByteReader& r) {
   last.merged = static_cast<int>(merged);
   last.avalanched = r.f64("last step");
   read_matrix(r, last.bucket_wrench, "last step");
+  // the bucket's resting load, saved by a terrain with the same study option
+  r.expect("resting load");
+  const bool riding = r.u8("resting load") != 0;
+  if (riding != options_.rest_in_bucket)
+    throw InputError(r.where() + ": saved by a type-G terrain with the bucket's resting load " +
+                     (riding ? "riding" : "in the DEM") + " (rest_in_bucket " +
+                     (riding ? "on" : "off") + "), restored into one with it " +
+                     (options_.rest_in_bucket ? "on" : "off") +
+                     "; restore with the option it was saved with");
+  std::vector<Rest> rest(n);
+  std::optional<KinematicBucket> last_bucket;
+  if (riding) {
+    const std::int64_t resting = r.i64("resting load"), released = r.i64("resting load");
+    if (resting < 0 || resting > static_cast<std::int64_t>(n) || released < 0 ||
+        released > std::numeric_limits<int>::max())
+      throw InputError(r.where() + ": " + std::to_string(resting) + " particles riding and " +
+                       std::to_string(released) + " released (corrupt)");
+    last.resting = static_cast<int>(resting);
+    last.released = static_cast<int>(released);
+    r.need_elements(n, 8 + 1 + 8 * 6 + 8 + 8, "resting load");
+    for (Rest& rest_k : rest) {
+      rest_k.still = r.f64("resting load");
+      rest_k.resting = r.u8("resting load") != 0;
+      read_matrix(r, rest_k.local, "resting load");
+      read_matrix(r, rest_k.gravity, "resting load");
+      rest_k.inv_mass = r.f64("resting load");
+      rest_k.inv_inertia = r.f64("resting load");
+      // a riding particle's own mass, kept while the device holds it fixed
+      if (!(rest_k.still >= 0.0 && std::isfinite(rest_k.still)) ||
+          (rest_k.resting && !(rest_k.inv_mass > 0.0 && rest_k.inv_inertia > 0.0)) ||
+          !rest_k.local.allFinite() || !rest_k.gravity.allFinite())
+        throw InputError(r.where() + ": a riding particle's rest that does not read (corrupt)");
+    }
+    if (r.u8("resting load") != 0) {
+      KinematicBucket b;
+      Eigen::Vector4d q;
+      read_matrix(r, b.position, "resting load");
+      read_matrix(r, q, "resting load");
+      read_matrix(r, b.velocity, "resting load");
+      read_matrix(r, b.omega, "resting load");
+      if (!(std::abs(q.norm() - 1.0) < 1e-9))
+        throw InputError(r.where() +
+                         ": the bucket's last orientation is not a unit quaternion "
+                         "(corrupt)");
+      b.orientation.coeffs() = q;
+      last_bucket = b;
+    }
+  }
   ledger_ = std::move(ledger);
   full_ = std::move(full);
-  rest_.assign(ledger_.size(), Rest{});
-  last_bucket_.reset();
+  rest_ = std::move(rest);
+  last_bucket_ = last_bucket;
   pool_ = pool;
   sites_ = std::move(columns);
   sizes_ = sizes;

@@ -197,10 +197,12 @@ class MultiscaleTerrain {
   // the state a step carries to the next, for a saved state (digging/saved_state): the voxels'
   // soil, the pool, the zone's particles with their contacts, masses (the ledger) and full
   // diameters, the bucket's contact impulses, where the pool's soil came from, the size generator,
-  // the clock and what the last step did (its zone is what the aggregate reads next). restore_state
-  // reads it into a terrain made with the same profile, level, bucket and options; the terrain then
-  // steps on bit-identically to the saved one on the same device. InputError (naming the
-  // reader's place) for a state of another grid or a ledger that does not match the particles;
+  // the clock and what the last step did (its zone is what the aggregate reads next), and with
+  // rest_in_bucket each particle's rest and the bucket's last motion. restore_state reads it into
+  // a terrain made with the same profile, level, bucket and options; the terrain then steps on
+  // bit-identically to the saved one on the same device. InputError (naming the reader's place)
+  // for a state of another grid, a ledger that does not match the particles or another
+  // rest_in_bucket;
   // the checks run as the parts are read, so a failed restore may leave the terrain half
   // restored: the caller keeps a copy to undo it (embed/talus.cpp does)
   void save_state(ByteWriter& w) const;

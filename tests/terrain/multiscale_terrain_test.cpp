@@ -419,16 +419,68 @@ TEST(MultiscaleTerrain, TheBucketsRestingLoadRidesWithItUntilItsGravityChanges) 
   EXPECT_EQ(fixed, terrain.last_step().resting);
 }
 
-// a saved state does not yet hold the riding particles' places: refused, not lost
-TEST(MultiscaleTerrain, AStateWithTheRestingLoadRidingIsNotYetSaved) {
+// a state saved while the bucket's load rides with it (rest_in_bucket) steps on bit for bit once
+// restored into a terrain with the option, the riding particles still riding; a terrain without
+// the option refuses it by name
+TEST(MultiscaleTerrain, AStateSavedWhileTheLoadRidesStepsOnBitForBit) {
   Device dev;
   const vehicle::BucketMesh mesh = vehicle::make_bucket_mesh(vehicle::BucketGeometry{});
   MultiscaleOptions options;
   options.rest_in_bucket = true;
-  MultiscaleTerrain terrain(dev, default_pile_profile(), *find_multiscale_preset("G400"), mesh,
-                            KinematicBucket{}, options);
+  const FidelityPreset& preset = *find_multiscale_preset("G400");
+  const double dt = preset.dt;
+  // the kinematic dig's path (kinematic_dig), then rising at 0.5 m/s^2 while the load rides
+  const auto path = [&](int k, KinematicBucket& b) {
+    const double t = k * dt;
+    b.velocity = t < 1.5 ? Vec3(1.0, 0, 0) : t < 3.5 ? Vec3(0, 0, 0.5) : Vec3::Zero();
+    b.omega = t >= 1.5 && t < 3.5 ? Vec3(0, -0.4, 0) : Vec3::Zero();
+    if (t >= 5.5) b.velocity = Vec3(0, 0, 0.5 * (t - 5.5 + dt));
+  };
+  const auto advance = [&](MultiscaleTerrain& t, KinematicBucket& b, int from, int to) {
+    for (int k = from; k < to; ++k) {
+      path(k, b);
+      t.step(b);
+      b.position += dt * b.velocity;
+      if (b.omega.norm() > 0.0)
+        b.orientation =
+            (Eigen::AngleAxisd(dt * b.omega.norm(), b.omega.normalized()) * b.orientation)
+                .normalized();
+    }
+  };
+  KinematicBucket start;
+  start.position = Vec3(-0.3, 0.0, 0.1);
+  KinematicBucket b = start;
+  MultiscaleTerrain a(dev, default_pile_profile(), preset, mesh, b, options);
+  const int saved_at = static_cast<int>(std::lround(5.8 / dt));
+  advance(a, b, 0, saved_at);
+  ASSERT_GT(a.last_step().resting, 5);  // the load rides when the state is written
   ByteWriter w;
-  EXPECT_THROW(terrain.save_state(w), InputError);
+  a.save_state(w);
+  // a second terrain from the same start, restored, steps on as the first does
+  MultiscaleTerrain c(dev, default_pile_profile(), preset, mesh, start, options);
+  ByteReader r(w.bytes(), w.bytes().size(), "test state", "");
+  c.restore_state(r);
+  EXPECT_EQ(a.particles().position, c.particles().position);
+  EXPECT_EQ(a.particles().inv_mass, c.particles().inv_mass);
+  KinematicBucket bc = b;
+  const int end = saved_at + static_cast<int>(std::lround(0.5 / dt));
+  advance(a, b, saved_at, end);
+  advance(c, bc, saved_at, end);
+  ASSERT_EQ(a.particles().size(), c.particles().size());
+  EXPECT_EQ(a.particles().position, c.particles().position);
+  EXPECT_EQ(a.particles().velocity, c.particles().velocity);
+  EXPECT_EQ(a.particle_masses(), c.particle_masses());
+  EXPECT_EQ(a.last_step().resting, c.last_step().resting);
+  EXPECT_GT(c.last_step().resting, 5);
+  // a terrain whose load does not ride refuses the state, naming the option
+  MultiscaleTerrain off(dev, default_pile_profile(), preset, mesh, start, MultiscaleOptions{});
+  ByteReader again(w.bytes(), w.bytes().size(), "test state", "");
+  try {
+    off.restore_state(again);
+    ADD_FAILURE() << "a state with the load riding restored into a terrain without the option";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("rest_in_bucket"), std::string::npos) << e.what();
+  }
 }
 
 TEST(MultiscaleTerrain, ATypeDLevelIsRefused) {
