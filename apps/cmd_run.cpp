@@ -250,7 +250,7 @@ class Snapshots {
 struct ParticleTally {
   size_t most = 0;
   double sum = 0.0;
-  double resting_sum = 0.0;  // of those riding with the bucket (type G, --rest-in-bucket)
+  double resting_sum = 0.0;  // of those riding with the bucket (type G, rest_in_bucket)
   long steps = 0;
   void add(size_t n, int resting) {
     most = std::max(most, n);
@@ -282,7 +282,7 @@ nlohmann::json dig_details(const RunOptions& o, const vehicle::Scenario& sc,
       {"particles_most", static_cast<long>(tally.most)},
       {"particles_mean", tally.mean()},
       // of them, those riding with the bucket at rest, out of the DEM's rows (their mean over the
-      // steps; type G with --rest-in-bucket, else 0)
+      // steps; type G unless --no-rest-in-bucket, else 0)
       {"particles_resting_mean", tally.resting_mean()},
       {"model", sim.multiscale() ? "multiscale (type G)" : "particles (type D)"},
       {"dt_s", preset.dt},
@@ -323,7 +323,7 @@ nlohmann::json dig_details(const RunOptions& o, const vehicle::Scenario& sc,
         // a zone particle slower than this may merge back into the voxels [m/s] (type G; the
         // default at type D, which has no voxels)
         {"merge_speed_m_s", options.merge_speed},
-        // the bucket's resting load rides with it as fixed particles (type G, a study)
+        // the bucket's resting load rides with it as fixed particles (type G; the default)
         {"rest_in_bucket", options.rest_in_bucket},
         // the zone's particles on its failure plane (true) or its columns' staircase (type G)
         {"failure_plane_floor", options.failure_plane_floor},
@@ -593,7 +593,8 @@ void run_scenario(const RunOptions& o) {
               "type-G zone to excavate");
   type_g_only(o.merge_speed != kMergeSpeed, "--merge-speed " + std::to_string(o.merge_speed),
               "type-G particles to merge back into voxels");
-  type_g_only(o.rest_in_bucket, "--rest-in-bucket", "type-G bucket to carry its resting load");
+  type_g_only(!o.rest_in_bucket, "--no-rest-in-bucket",
+              "type-G bucket whose resting load to keep in the DEM");
   type_g_only(!o.failure_plane_floor, "--no-failure-plane-floor",
               "type-G zone whose floor to make of voxel columns");
   type_g_only(o.repose_angle != AvalancheOptions{}.repose_deg,
@@ -701,11 +702,13 @@ void add_run_command(CLI::App& app, const std::string& command_line) {
                   "particles\")")
       ->check(positive_number())
       ->capture_default_str();
-  cmd->add_flag("--rest-in-bucket", opts->rest_in_bucket,
-                "study, type G: while the bucket digs nothing, a particle at rest in it for 0.2 s "
-                "rides with it as a fixed particle, out of the DEM's rows, until the gravity it "
-                "feels in the bucket's frame changes by 0.1 g or the bucket digs again "
-                "(docs/multiscale.md \"The bucket's resting load\")");
+  cmd->add_flag("--rest-in-bucket,!--no-rest-in-bucket", opts->rest_in_bucket,
+                "type G: while the bucket digs nothing, a particle at rest in it for 0.2 s rides "
+                "with it as a fixed particle, out of the DEM's rows, until the gravity it feels "
+                "in the bucket's frame changes by 0.1 g or the bucket digs again (the default); "
+                "--no-rest-in-bucket, a study: every particle in the DEM (docs/multiscale.md "
+                "\"The bucket's resting load\")")
+      ->capture_default_str();
   cmd->add_option("--repose-angle", opts->repose_angle,
                   "study, type G: the voxel surface's angle of repose, to which it avalanches "
                   "[deg], in [5, 60] (docs/validation.md \"D100's face creeps from t = 0\")")

@@ -49,8 +49,9 @@ struct RunOptions {
   // type G, a study: a zone particle slower than this may merge back into the voxels [m/s]
   // (--merge-speed)
   double merge_speed = kMergeSpeed;
-  // type G, a study: the bucket's resting load rides with it, out of the DEM (--rest-in-bucket)
-  bool rest_in_bucket = false;
+  // type G: the bucket's resting load rides with it, out of the DEM (the default);
+  // --no-rest-in-bucket: every particle in the DEM (a study)
+  bool rest_in_bucket = true;
   // type G, a study: the aggregate's interfaces' damping time [s]; 0: two of the level's steps
   // (--interface-damping-time)
   double interface_damping_time = 0.0;

@@ -129,10 +129,12 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
                      ": only the type-G levels merge particles back into voxels; use a G level "
                      "or leave it at " +
                      message_number(kMergeSpeed) + " m/s");
-  if (!is_multiscale(preset) && options.rest_in_bucket)
-    throw InputError("rest_in_bucket at " + preset.name +
-                     ": only the type-G levels' kinematic bucket can carry its resting load as "
-                     "fixed particles; use a G level or leave it off");
+  if (!is_multiscale(preset) && !options.rest_in_bucket)
+    throw InputError("rest_in_bucket off at " + preset.name +
+                     ": only the type-G levels' kinematic bucket carries its resting load as "
+                     "fixed particles (a type-D bucket's load is its particles' own); keeping "
+                     "that load in the DEM is a type-G study (a G level), or leave rest_in_bucket "
+                     "on");
   if (!is_multiscale(preset) && !options.failure_plane_floor)
     throw InputError("failure_plane_floor off at " + preset.name +
                      ": only the type-G levels have a zone of excavated voxel columns to stand "

@@ -71,7 +71,7 @@ inline constexpr double kGrowthSpeed = 1.0;
 // 9 per second (SPEC §2.5); a study option (MultiscaleOptions::merge_speed, `--merge-speed`)
 // measures what the faster merge does (docs/multiscale.md "How many particles")
 inline constexpr double kMergeSpeed = BulkSoil{}.activation_speed;
-// the bucket's resting load (MultiscaleOptions::rest_in_bucket, a study): [m/s] a held particle
+// the bucket's resting load (MultiscaleOptions::rest_in_bucket): [m/s] a held particle
 // slower than this relative to the bucket is at rest in it: the zone's activation speed, as for
 // the merge's default (soil slower than the tool that mobilises it counts as at rest), whatever
 // merge speed a study sets
@@ -118,8 +118,9 @@ struct MultiscaleOptions {
   // docs/multiscale.md "The zone's floor is its failure plane", measured); false: the columns'
   // boxes alone (a study)
   bool failure_plane_floor = true;
-  // a study (docs/multiscale.md "The bucket's resting load"): while the bucket digs nothing (no
-  // zone), a particle held in it (inside its heaped volume) that has moved slower than
+  // the default since 2026-12-02 (docs/multiscale.md "The bucket's resting load": the same errors
+  // against D100, 1.1-1.4 times faster where the load is carried long): while the bucket digs
+  // nothing (no zone), a particle held in it (inside its heaped volume) that has moved slower than
   // kRestSpeed relative to the bucket for kRestTime rides with the bucket as a fixed particle
   // (zero inverse mass, the bucket's motion): no rows with the bucket, its neighbours at rest or
   // the ground, while the particles that still move meet it as a moving wall. It is released,
@@ -127,8 +128,8 @@ struct MultiscaleOptions {
   // feels in the bucket's frame changes by more than kRestRelease |g| or a zone appears. The
   // machine sees the same load either way (the held particles' body, digging/digging); the
   // particles' own wrench on the bucket (MultiscaleStep::bucket_wrench, recorded, not applied)
-  // leaves the riding ones out. false: every particle in the DEM
-  bool rest_in_bucket = false;
+  // leaves the riding ones out. false, a study: every particle in the DEM
+  bool rest_in_bucket = true;
   unsigned seed = 1;                      // of the particles' sizes
 };
 

@@ -277,12 +277,12 @@ TEST(CliErrors, StepCountsAndLoadsOutsideTheirRangeAreRefused) {
   // the bucket's content by its weight alone, a factor on the cutting edge's resistance, the
   // soil under the bucket giving way, the aggregate's interfaces' damping time, the zone's
   // excavation reach, its floor of voxel columns, the surface's avalanche and the bucket's
-  // resting load riding with it: a pile scenario at a G level only
+  // resting load kept in the DEM: a pile scenario at a G level only
   for (const char* option :
        {" --no-content-inertia", " --edge-resistance 0", " --no-bucket-support",
         " --interface-damping-time 0.01", " --excavation-reach 0.6", " --merge-speed 4",
         " --no-failure-plane-floor", " --repose-angle 20", " --avalanche-rate 30",
-        " --rest-in-bucket"}) {
+        " --no-rest-in-bucket"}) {
     for (const char* cmd :
          {"run --scenario hd27 --fidelity D400", "run --scenario load-carry --fidelity G400"}) {
       const Outcome o = run("", std::string(cmd) + " --out /tmp/talus_cli_seed" + option);

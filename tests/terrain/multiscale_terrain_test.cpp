@@ -323,7 +323,7 @@ TEST(MultiscaleTerrain, SeedGrowthReachMergePressedDepthAndAvalancheOutsideTheir
   }
 }
 
-// the bucket's resting load (rest_in_bucket, a study): the kinematic dig's bucket, once it digs
+// the bucket's resting load (rest_in_bucket, the default): the kinematic dig's bucket, once it digs
 // nothing, holds still until its load rests and rides with it; then it rises with a gentle
 // acceleration (0.5 m/s^2: 0.05 g, below the release's 0.1 g), the riding particles keeping their
 // places in the bucket's frame, the mass kept; then, rising on at constant speed, it curls back
@@ -473,7 +473,9 @@ TEST(MultiscaleTerrain, AStateSavedWhileTheLoadRidesStepsOnBitForBit) {
   EXPECT_EQ(a.last_step().resting, c.last_step().resting);
   EXPECT_GT(c.last_step().resting, 5);
   // a terrain whose load does not ride refuses the state, naming the option
-  MultiscaleTerrain off(dev, default_pile_profile(), preset, mesh, start, MultiscaleOptions{});
+  MultiscaleOptions without;
+  without.rest_in_bucket = false;
+  MultiscaleTerrain off(dev, default_pile_profile(), preset, mesh, start, without);
   ByteReader again(w.bytes(), w.bytes().size(), "test state", "");
   try {
     off.restore_state(again);
