@@ -683,28 +683,10 @@ class Search {
     const std::vector<const Candidate*> screened = screen(candidates, dr);
     say("round " + std::to_string(number) + ": " + std::to_string(screened.size()) + " candidates to scan, " +
         std::to_string(dr.screened_out.size()) + " screened out by their signature");
-    std::vector<Scanned> scanned = scan(screened, dr);
-    // 3. fit the best few (those better than the model without them), each fit on its own thread;
-    // 4. validate them with the parameter penalty. Reported in rank order, as a serial loop would
-    std::size_t fitted = 0;
-    while (fitted < scanned.size() && fitted < static_cast<std::size_t>(kFitted) &&
-           scanned[fitted].score.excess < current_cal_)
-      ++fitted;
-    std::vector<FittedEffect> fits(fitted);
-    const std::vector<Failure> fit_failures =
-        run_tasks(fitted, threads_, [&](std::size_t j) { fits[j] = fit(scanned[j]); });
-    for (std::size_t j = 0; j < fitted; ++j) {
-      if (fit_failures[j].failed) {
-        failed(dr, scanned[j].c->label(), fit_failures[j].what);
-        continue;
-      }
-      say_fit(fits[j]);
-      dr.fitted.push_back(fits[j]);
-    }
-    std::sort(dr.fitted.begin(), dr.fitted.end(), [](const auto& a, const auto& b) { return a.score < b.score; });
-    // 5. add the winner only when it explains enough of what is left; else the best pair, if it
-    // does; 6. then, if an earlier round's effect carries fitted parameters, all of them refitted
-    // together
+    fit_best(scan(screened, dr), dr);
+    // 5. add the winner only when it explains enough of what is left; else the best pair, or set
+    // of three, that does; 6. then, if an earlier round's effect carries fitted parameters, all of
+    // them refitted together
     const bool earlier_fitted = std::any_of(d_.found.begin(), d_.found.end(),
                                             [](const FittedEffect& f) { return !f.x.empty(); });
     if (!dr.fitted.empty() && dr.fitted[0].explained >= kMinExplained &&
@@ -712,19 +694,22 @@ class Search {
       dr.added = true;
       add(dr.fitted[0]);
       say("round " + std::to_string(number) + ": added " + dr.fitted[0].spec);
-    } else if (search_pairs(candidates, dr);
-               !dr.pairs.empty() && dr.pairs[0].explained >= kMinExplained &&
-               holds_on_reference(dr, {dr.pairs[0].first.spec, dr.pairs[0].second.spec},
-                                  dr.pairs[0].explained_on)) {
+    } else if (const FittedSet* set = joint_set(candidates, dr)) {
       dr.added = true;
-      add(dr.pairs[0].first);
-      add(dr.pairs[0].second);
-      current_cal_ = dr.pairs[0].excess_calibration;
-      current_val_ = dr.pairs[0].excess_validation;
-      say("round " + std::to_string(number) + ": added the pair " + dr.pairs[0].first.spec +
-          " and " + dr.pairs[0].second.spec);
+      std::string specs;
+      for (std::size_t k = 0; k < set->members.size(); ++k) {
+        add(set->members[k]);
+        specs += (k == 0                         ? ""
+                  : k + 1 == set->members.size() ? " and "
+                                                 : ", ") +
+                 set->members[k].spec;
+      }
+      current_cal_ = set->excess_calibration;
+      current_val_ = set->excess_validation;
+      say("round " + std::to_string(number) + ": added the " +
+          (set->members.size() == 2 ? "pair " : "set ") + specs);
     } else {
-      say("round " + std::to_string(number) + ": no candidate or pair explains " +
+      say("round " + std::to_string(number) + ": no candidate, pair or set of three explains " +
           message_number(100.0 * kMinExplained) + " % of the excess left; nothing added");
     }
     if (dr.added && earlier_fitted) dr.refit = refit_found(number);
@@ -1114,8 +1099,10 @@ class Search {
     return mean_of(v);
   }
 
-  // 1. the signature screen: candidates not yet found whose channels hold enough excess
-  std::vector<const Candidate*> screen(const std::vector<Candidate>& candidates, DiagnosisRound& dr) const {
+  // 1. the signature screen: candidates not yet found whose channels hold `share` of the excess
+  // (a single must remove kMinExplained; a set's member kMemberShare)
+  std::vector<const Candidate*> screen(const std::vector<Candidate>& candidates, DiagnosisRound& dr,
+                                       double share = kMinExplained) const {
     std::vector<const Candidate*> screened;
     for (const auto& c : candidates) {
       const bool taken =
@@ -1133,7 +1120,7 @@ class Search {
           bound.push_back(current_residuals_[i].excess_of(c.signature));
           own.push_back(current_residuals_[i].excess_of({c.signature.front()}));
         }
-        if (mean_of(bound) < kMinExplained * current_cal_ || mean_of(own) < kSignificantExcess) {
+        if (mean_of(bound) < share * current_cal_ || mean_of(own) < kSignificantExcess) {
           dr.screened_out.push_back(c.label());
           continue;
         }
@@ -1366,122 +1353,223 @@ class Search {
     current_residuals_ = std::move(m.residuals);
   }
 
-  // pairs (step 5): each of the best singles provisionally in the model, a second candidate
-  // searched on top of it (its scan on the threads), then both refitted jointly, the joint fits
-  // of all the firsts on the threads at once, and validated against the excess before either;
-  // dr.pairs holds them, best score first
-  void search_pairs(const std::vector<Candidate>& candidates, DiagnosisRound& dr) {
+  // 3. fit the best few of a scan (those better than the model without them), each fit on its
+  // own thread; 4. validate them with the parameter penalty. Reported in rank order, as a serial
+  // loop would; dr.fitted gains them, best score first
+  void fit_best(std::vector<Scanned> scanned, DiagnosisRound& dr) {
+    std::size_t fitted = 0;
+    while (fitted < scanned.size() && fitted < static_cast<std::size_t>(kFitted) &&
+           scanned[fitted].score.excess < current_cal_)
+      ++fitted;
+    std::vector<FittedEffect> fits(fitted);
+    const std::vector<Failure> fit_failures =
+        run_tasks(fitted, threads_, [&](std::size_t j) { fits[j] = fit(scanned[j]); });
+    for (std::size_t j = 0; j < fitted; ++j) {
+      if (fit_failures[j].failed) {
+        failed(dr, scanned[j].c->label(), fit_failures[j].what);
+        continue;
+      }
+      say_fit(fits[j]);
+      dr.fitted.push_back(fits[j]);
+    }
+    std::sort(dr.fitted.begin(), dr.fitted.end(),
+              [](const auto& a, const auto& b) { return a.score < b.score; });
+  }
+
+  // joint sets (step 5), when no single candidate explains enough: pairs on the best singles,
+  // then sets of three on the best pairs; the first set that explains enough and holds on the
+  // chaos reference (dr.pairs[0] or dr.triples[0]), else nullptr
+  const FittedSet* joint_set(const std::vector<Candidate>& candidates, DiagnosisRound& dr) {
+    static_assert(kLargestSet == 3, "DiagnosisRound holds pairs and sets of three");
+    // the best few of some sets (singles or pairs) that explain something: the bases of the next
+    // size
+    const auto bases_of = [](const auto& sets, const auto& members) {
+      std::vector<std::vector<FittedEffect>> bases;
+      for (const auto& set : sets)
+        if (std::isfinite(set.score) && set.explained > 0.0 &&
+            static_cast<int>(bases.size()) < kSetBases)
+          bases.push_back(members(set));
+      return bases;
+    };
+    const auto single = [](const FittedEffect& f) { return std::vector<FittedEffect>{f}; };
+    const auto members = [](const FittedSet& s) { return s.members; };
+    // too few singles to be bases (five comparable effects can leave every channel below the
+    // singles' screen, docs/sim2real.md step 5): the candidates that screen left out whose channels
+    // still hold a member's share (kMemberShare) are scanned and fitted now, as singles
+    if (bases_of(dr.fitted, single).size() < static_cast<std::size_t>(kSetBases)) {
+      DiagnosisRound members_screen;
+      std::vector<const Candidate*> more;
+      for (const Candidate* c : screen(candidates, members_screen, kMemberShare))
+        if (std::find(dr.screened_out.begin(), dr.screened_out.end(), c->label()) !=
+            dr.screened_out.end())
+          more.push_back(c);
+      if (!more.empty()) {
+        say("sets: " + std::to_string(more.size()) +
+            " candidates screened out as singles scanned as members of a set");
+        for (const Candidate* c : more)
+          dr.screened_out.erase(
+              std::find(dr.screened_out.begin(), dr.screened_out.end(), c->label()));
+        fit_best(scan(more, dr), dr);
+      }
+    }
+    // pairs on the best singles, the second candidate screened as a single would be
+    dr.pairs = search_sets(candidates, dr, bases_of(dr.fitted, single), kMinExplained);
+    if (const FittedSet* set = accepted(dr, dr.pairs)) return set;
+    // sets of three on the best pairs, where one could remove enough: were the shares additive, a
+    // set that removes kMinExplained holds a pair that removes two thirds of it, so below that no
+    // third member is searched (a diagnosis the candidates cannot explain stops here); the third
+    // screened by a member's share of what the pair leaves
+    if (dr.pairs.empty() || dr.pairs[0].explained < kMinExplained * (kLargestSet - 1) / kLargestSet)
+      return nullptr;
+    dr.triples = search_sets(candidates, dr, bases_of(dr.pairs, members), kMemberShare);
+    return accepted(dr, dr.triples);
+  }
+
+  // the best of some sets (best score first) when it removes kMinExplained and holds on the chaos
+  // reference, else nullptr
+  const FittedSet* accepted(DiagnosisRound& dr, const std::vector<FittedSet>& sets) {
+    if (sets.empty() || sets[0].explained < kMinExplained) return nullptr;
+    std::vector<std::string> specs;
+    for (const auto& m : sets[0].members) specs.push_back(m.spec);
+    return holds_on_reference(dr, specs, sets[0].explained_on) ? &sets[0] : nullptr;
+  }
+
+  // each base (a set of fitted effects) provisionally in the model, one more candidate searched on
+  // top of it (screened by `share` of what the base leaves; its scan on the threads), then all
+  // refitted jointly, the joint fits of all the
+  // bases on the threads at once, and validated against the excess before any of them; best
+  // score first
+  std::vector<FittedSet> search_sets(const std::vector<Candidate>& candidates, DiagnosisRound& dr,
+                                     const std::vector<std::vector<FittedEffect>>& bases,
+                                     double share) {
+    if (bases.empty()) return {};
     const Model before = model();
     const bool disjoint = d_.validation != d_.calibration;
-    std::vector<const FittedEffect*> firsts;
-    for (const auto& f : dr.fitted)
-      if (std::isfinite(f.score) && f.explained > 0.0 &&
-          static_cast<int>(firsts.size()) < kPairCandidates)
-        firsts.push_back(&f);
-    // the second candidate of each first, searched with the first in the model
+    // the candidate of each member and of the one searched on top, and their values in that order
     struct Trial {
-      const Candidate* ca = nullptr;  // the first
-      const Candidate* cb = nullptr;  // the second: the best of the scan on top of it
-      std::vector<double> x;          // both candidates' values, the first's first
-      std::size_t ka = 0;             // how many of x are the first's
+      std::vector<const Candidate*> members;
+      std::vector<std::size_t> sizes;  // how many of x each member's
+      std::vector<double> x;
+      std::string base;  // the base's labels, for the notes
     };
+    const auto candidate_of = [&](const std::string& label) -> const Candidate* {
+      for (const auto& c : candidates)
+        if (c.label() == label) return &c;
+      return nullptr;
+    };
+    const std::string kind = bases.front().size() == 1 ? "pairs" : "sets of three";
     std::vector<Trial> trials;
-    for (const FittedEffect* a : firsts) {
+    for (const auto& base : bases) {
       Trial t;
+      for (const auto& m : base) t.base += (t.base.empty() ? "" : " and ") + m.candidate.label();
       try {
-        // a provisionally in the model: the screen and the scan see what it leaves
-        found_specs_.push_back(a->spec);
+        // the base provisionally in the model: the screen and the scan see what it leaves
+        for (const auto& m : base) found_specs_.push_back(m.spec);
         current_runs_ = simulate_all(nullptr);
         for (std::size_t i = 0; i < runs_.size(); ++i) {
           current_residuals_[i] = compute_residuals(current_runs_[i], runs_[i].run, sigma_[i]);
         }
         current_cal_ = mean_excess(current_residuals_, d_.calibration);
         current_val_ = mean_excess(current_residuals_, d_.validation);
-        say("pairs: " + a->candidate.label() + " taken provisionally (excess " +
-            message_number(current_cal_) + ")");
+        say(kind + ": " + t.base + " taken provisionally (excess " + message_number(current_cal_) +
+            ")");
         DiagnosisRound inner;
         std::vector<const Candidate*> screened;
-        for (const Candidate* c : screen(candidates, inner))
-          if (c->label() != a->candidate.label()) screened.push_back(c);
+        for (const Candidate* c : screen(candidates, inner, share)) {
+          const bool in_base = std::any_of(base.begin(), base.end(), [&](const FittedEffect& m) {
+            return m.candidate.label() == c->label();
+          });
+          if (!in_base) screened.push_back(c);
+        }
         std::vector<Scanned> scanned = scan(screened, inner);
         for (const auto& f : inner.failed) dr.failed.push_back(f);
         restore(before);
         if (scanned.empty()) continue;
-        for (const auto& c : candidates)
-          if (c.label() == a->candidate.label()) t.ca = &c;
-        t.cb = scanned[0].c;
-        t.ka = a->x.size();
-        t.x = a->x;
+        for (const auto& m : base) {
+          t.members.push_back(candidate_of(m.candidate.label()));
+          t.sizes.push_back(m.x.size());
+          t.x.insert(t.x.end(), m.x.begin(), m.x.end());
+        }
+        t.members.push_back(scanned[0].c);
+        t.sizes.push_back(scanned[0].x.size());
         t.x.insert(t.x.end(), scanned[0].x.begin(), scanned[0].x.end());
         trials.push_back(std::move(t));
       } catch (const Interrupted&) {
         throw;
       } catch (const std::exception& e) {
         restore(before);
-        failed(dr, "pair with " + a->candidate.label(), e.what());
+        failed(dr, kind + " with " + t.base, e.what());
       }
     }
-    // both refitted together from their own values, on the calibration runs: each first's fit on
+    // all refitted together from their own values, on the calibration runs: each base's fit on
     // its own thread (the model is the one before the round again, and stays so)
-    std::vector<FittedPair> pairs(trials.size());
+    std::vector<FittedSet> fitted(trials.size());
     const std::vector<Failure> failures = run_tasks(trials.size(), threads_, [&](std::size_t k) {
-      pairs[k] = fit_pair(trials[k].ca, trials[k].cb, trials[k].x, trials[k].ka, disjoint);
+      fitted[k] = fit_set(trials[k].members, trials[k].sizes, trials[k].x, disjoint);
     });
+    std::vector<FittedSet> sets;
     for (std::size_t k = 0; k < trials.size(); ++k) {
       if (failures[k].failed) {
-        failed(dr, "pair with " + trials[k].ca->label(), failures[k].what);
+        failed(dr, kind + " with " + trials[k].base, failures[k].what);
         continue;
       }
-      const FittedPair& p = pairs[k];
-      say("  pair " + p.first.spec + " + " + p.second.spec + ": explains " +
-          message_number(100.0 * p.explained) + " % on the " + p.explained_on + " runs");
-      dr.pairs.push_back(p);
+      std::string specs;
+      for (const auto& m : fitted[k].members) specs += (specs.empty() ? "" : " + ") + m.spec;
+      say("  " + std::string(fitted[k].members.size() == 2 ? "pair " : "set ") + specs +
+          ": explains " + message_number(100.0 * fitted[k].explained) + " % on the " +
+          fitted[k].explained_on + " runs");
+      sets.push_back(fitted[k]);
     }
-    std::sort(dr.pairs.begin(), dr.pairs.end(),
+    std::sort(sets.begin(), sets.end(),
               [](const auto& a, const auto& b) { return a.score < b.score; });
+    return sets;
   }
 
-  // the pair (ca at x[0, ka), cb at x[ka, end)) fitted jointly from x on the calibration runs and
-  // validated as one model: its shares against the excess before either. The likelihood's joint
-  // optimum is the estimate, as a single fit's is (until 2026-12-01 the start, each effect fitted
-  // on its own, was kept where its floored excess was lower: near the floor that is noise)
-  FittedPair fit_pair(const Candidate* ca, const Candidate* cb, std::vector<double> x,
-                      std::size_t ka, bool disjoint) {
+  // the set (candidate k at the next sizes[k] values of x) fitted jointly from x on the
+  // calibration runs and validated as one model: its shares against the excess before any of
+  // them. The likelihood's joint optimum is the estimate, as a single fit's is (until 2026-12-01
+  // a pair's start, each effect fitted on its own, was kept where its floored excess was lower:
+  // near the floor that is noise)
+  FittedSet fit_set(const std::vector<const Candidate*>& members,
+                    const std::vector<std::size_t>& sizes, std::vector<double> x, bool disjoint) {
     auto split = [&](const std::vector<double>& y) {
-      return std::vector<std::pair<const Candidate*, std::vector<double>>>{
-          {ca, std::vector<double>(y.begin(), y.begin() + static_cast<std::ptrdiff_t>(ka))},
-          {cb, std::vector<double>(y.begin() + static_cast<std::ptrdiff_t>(ka), y.end())}};
+      std::vector<std::pair<const Candidate*, std::vector<double>>> parts;
+      auto at = y.begin();
+      for (std::size_t k = 0; k < members.size(); ++k) {
+        const auto next = at + static_cast<std::ptrdiff_t>(sizes[k]);
+        parts.push_back({members[k], std::vector<double>(at, next)});
+        at = next;
+      }
+      return parts;
     };
-    auto score_pair = [&](const std::vector<std::size_t>& which, const std::vector<double>& y) {
+    auto score_set = [&](const std::vector<std::size_t>& which, const std::vector<double>& y) {
       return score_model(which, [&](std::size_t i) { return simulate_with(i, split(y)); });
     };
-    minimise([&](const std::vector<double>& y) { return score_pair(d_.calibration, y).log_ratio; },
+    minimise([&](const std::vector<double>& y) { return score_set(d_.calibration, y).log_ratio; },
              x, 0.5 / kScanPointsPerAxis2,
              kFitEvaluationsPerParameter * static_cast<int>(x.size()));
-    FittedPair p;
-    const auto parts = split(x);
-    p.first = as_fitted(*ca, parts[0].second);
-    p.second = as_fitted(*cb, parts[1].second);
-    p.excess_calibration = score_pair(d_.calibration, x).excess;
-    p.excess_validation = disjoint ? score_pair(d_.validation, x).excess : p.excess_calibration;
-    const Share share = share_explained(p.excess_calibration, p.excess_validation);
-    p.explained = share.explained;
-    p.explained_on = share.on;
+    FittedSet set;
+    for (const auto& [c, xs] : split(x)) set.members.push_back(as_fitted(*c, xs));
+    set.excess_calibration = score_set(d_.calibration, x).excess;
+    set.excess_validation = disjoint ? score_set(d_.validation, x).excess : set.excess_calibration;
+    const Share share = share_explained(set.excess_calibration, set.excess_validation);
+    set.explained = share.explained;
+    set.explained_on = share.on;
     const bool harmless =
-        p.explained_on == "validation" || p.excess_validation < kSignificantExcess;
-    p.score = harmless
-                  ? (p.explained_on == "validation" ? p.excess_validation : p.excess_calibration) +
-                        kParameterPenalty * static_cast<double>(x.size())
-                  : HUGE_VAL;
-    // each effect reports the pair's shares (they are added together or not at all)
-    for (FittedEffect* f : {&p.first, &p.second}) {
-      f->excess_calibration = p.excess_calibration;
-      f->excess_validation = p.excess_validation;
-      f->explained = p.explained;
-      f->explained_on = p.explained_on;
-      f->score = p.score;
+        set.explained_on == "validation" || set.excess_validation < kSignificantExcess;
+    set.score = harmless ? (set.explained_on == "validation" ? set.excess_validation
+                                                             : set.excess_calibration) +
+                               kParameterPenalty * static_cast<double>(x.size())
+                         : HUGE_VAL;
+    // each effect reports the set's shares (they are added together or not at all)
+    for (FittedEffect& f : set.members) {
+      f.excess_calibration = set.excess_calibration;
+      f.excess_validation = set.excess_validation;
+      f.explained = set.explained;
+      f.explained_on = set.explained_on;
+      f.score = set.score;
     }
-    return p;
+    return set;
   }
 
   // a candidate at normalised values as a FittedEffect (its spec, JSON and parameters)
@@ -1662,15 +1750,24 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
     json failed = json::array();
     for (const auto& [label, what] : r.failed)
       failed.push_back({{"candidate", label}, {"error", what}});
-    json pairs = json::array();
-    for (const auto& p : r.pairs)
-      pairs.push_back({{"candidates", {p.first.candidate.label(), p.second.candidate.label()}},
-                       {"specs", {p.first.spec, p.second.spec}},
-                       {"excess_calibration", p.excess_calibration},
-                       {"excess_validation", p.excess_validation},
-                       {"explained", p.explained},
-                       {"explained_on", p.explained_on},
-                       {"score", p.score}});
+    auto sets_json = [](const std::vector<FittedSet>& sets) {
+      json out = json::array();
+      for (const auto& set : sets) {
+        json labels = json::array(), specs = json::array();
+        for (const auto& m : set.members) {
+          labels.push_back(m.candidate.label());
+          specs.push_back(m.spec);
+        }
+        out.push_back({{"candidates", labels},
+                       {"specs", specs},
+                       {"excess_calibration", set.excess_calibration},
+                       {"excess_validation", set.excess_validation},
+                       {"explained", set.explained},
+                       {"explained_on", set.explained_on},
+                       {"score", set.score}});
+      }
+      return out;
+    };
     json refit = nullptr;
     if (r.refit)
       refit = {{"before", r.refit->before},
@@ -1687,7 +1784,8 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
                       {"screened_out", r.screened_out},
                       {"failed", failed},
                       {"fitted", fitted},
-                      {"pairs", pairs},
+                      {"pairs", sets_json(r.pairs)},
+                      {"triples", sets_json(r.triples)},
                       {"added", r.added},
                       {"chaos_checks", chaos_checks_json(r.chaos_checks)},
                       {"refit", refit}});

@@ -9,7 +9,8 @@
 //  1. signature screen: a candidate that can change only some channels (a sensor's bias or delay,
 //     the wheel-slip speed reading) can at most remove the excess of those channels; when that
 //     bound is below the share a winner must explain, or the channel it acts on shows no excess
-//     of its own, it is not simulated at all
+//     of its own, it is not simulated at all (for a set's member, step 5, the bound is the share
+//     one member of a set must explain, kMemberShare)
 //  2. coarse scan: each remaining candidate at kScanPoints values across its range (and towards
 //     zero on a range that starts there), a 2-D grid for two parameters, a Halton design for three
 //     or more, on the calibration runs; a candidate whose simulation throws is reported and skipped
@@ -26,11 +27,16 @@
 //     plus kParameterPenalty per fitted parameter, so a richer effect must earn its parameters
 //     (the calibration excess when the held-out runs show nothing to explain, see 5)
 //  5. decision: the best-scoring candidate is added when it removes at least kMinExplained of the
-//     validation excess that is left. Else pairs: each of the kPairCandidates best singles is taken
+//     validation excess that is left. Else pairs: each of the kSetBases best singles is taken
 //     provisionally, a second candidate searched on top of it (screen, scan, fit), and the two
 //     refitted jointly from there and validated as one model (both effects' parameters
-//     penalised); the best pair is added when it removes kMinExplained together. Else the round
-//     adds nothing. Held-out runs that show no
+//     penalised); the best pair is added when it removes kMinExplained together. Else, when the
+//     best pair removes at least two thirds of kMinExplained, sets of three, the same way on top
+//     of each of the kSetBases best pairs (five or more effects of comparable size share the
+//     residual: of five, a pair removes two fifths), the third screened by kMemberShare. With
+//     fewer than kSetBases singles to build on, the candidates the screen left out whose channels
+//     hold kMemberShare are scanned and fitted as singles first. Else the round adds nothing.
+//     Held-out runs that show no
 //     excess (an effect that needs a manoeuvre they lack) cannot confirm a candidate, only refute
 //     it: then the share explained is the calibration runs', if the candidate keeps the held-out
 //     runs within noise
@@ -78,8 +84,11 @@ inline constexpr int kScanPoints = 9;
 inline constexpr int kScanPointsPerAxis2 = 5;
 // candidates fitted per round, and the simulations each fit may use
 inline constexpr int kFitted = 3;
-// singles each taken as the first of a pair when none explains enough alone
-inline constexpr int kPairCandidates = 2;
+// the sets each taken as the base of a larger one when none explains enough: singles as the first
+// of a pair, pairs as the first two of a set of three
+inline constexpr int kSetBases = 2;
+// the largest set of candidates fitted jointly (a pair, then three)
+inline constexpr int kLargestSet = 3;
 inline constexpr int kFitEvaluations = 24;
 // a one-parameter fit samples the window between the best scan point's neighbours at this many
 // more points on each side of it (sim2real/response_surface.hpp): with the three scan points
@@ -87,6 +96,9 @@ inline constexpr int kFitEvaluations = 24;
 inline constexpr int kWindowPointsPerSide = 3;
 // a winner must remove this share of the excess left (on the validation runs)
 inline constexpr double kMinExplained = 0.5;
+// the share of the excess a candidate's channels must hold to be searched as a member of a set:
+// of a set that removes kMinExplained, some member removes at least kMinExplained / kLargestSet
+inline constexpr double kMemberShare = kMinExplained / kLargestSet;
 // the excess one fitted parameter must pay for, per run (in the units of Residuals::excess: one
 // channel-phase cell whose mean-square residual is e^0.2 = 1.22 times the noise allowance)
 inline constexpr double kParameterPenalty = 0.2;
@@ -166,15 +178,16 @@ struct FittedEffect {
   bool trend_estimate = false;
 };
 
-// two candidates fitted jointly (when no single one explains enough): the first taken
-// provisionally, the second searched on top of it, both refitted together and validated as one
-// model
-struct FittedPair {
-  FittedEffect first, second;  // each with the joint fit's values
+// two or three candidates fitted jointly (when no smaller set explains enough): a smaller set
+// taken provisionally, one more candidate searched on top of it, all refitted together and
+// validated as one model
+struct FittedSet {
+  std::vector<FittedEffect>
+      members;  // in the order they were taken, each with the joint fit's values
   double excess_calibration = 0.0, excess_validation = 0.0;
-  double explained = 0.0;  // share of the excess left before the pair that the pair removes
+  double explained = 0.0;  // share of the excess left before the set that the set removes
   std::string explained_on;
-  double score = 0.0;  // as a single's, with both effects' parameters penalised
+  double score = 0.0;  // as a single's, with every member's parameters penalised
 };
 
 // the effects found refitted together after a round added one (greedy forward selection fits each
@@ -199,7 +212,7 @@ struct JointRefit {
 // the addition must explain kMinExplained of the excess there too, and nothing when the reference
 // leaves no excess beyond noise (what it explained was the first ensemble's realisation)
 struct ChaosCheck {
-  std::vector<std::string> effects;  // the addition's specs: one effect, or a pair's two
+  std::vector<std::string> effects;  // the addition's specs: one effect, or a set's two or three
   double excess_before = 0.0;        // the calibration runs' mean excess on the reference
   double excess_with = 0.0;          // the same with the addition
   double explained = 0.0;            // (before - with) / before; 0 when before is within noise
@@ -213,8 +226,9 @@ struct DiagnosisRound {
   // candidates whose simulation threw (label, message): reported and skipped
   std::vector<std::pair<std::string, std::string>> failed;
   std::vector<FittedEffect> fitted;      // best score first
-  std::vector<FittedPair> pairs;         // when no single one explains enough; best score first
-  bool added = false;                    // fitted[0] was added, or pairs[0]'s two effects
+  std::vector<FittedSet> pairs;          // when no single one explains enough; best score first
+  std::vector<FittedSet> triples;        // when no pair explains enough either; best score first
+  bool added = false;  // fitted[0] was added, or pairs[0]'s two effects, or triples[0]'s three
   // the chaos checks of the additions tried (pile data, share counted on the calibration runs)
   std::vector<ChaosCheck> chaos_checks;
   // after an addition that leaves two or more effects with fitted parameters
