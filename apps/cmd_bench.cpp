@@ -232,7 +232,7 @@ void add_bench_dig(CLI::App& bench) {
   dig->add_option("--sweep-tolerance", opt->sweep_tolerance,
                   "end a step's sweeps once the particle rows' RMS residual is below this, the "
                   "level's sweeps the cap; 0 = always the level's, as the paper's presets "
-                  "(docs/dem.md) [m/s]")
+                  "(docs/dem.md); a D level's (a G level's zone always runs its level's) [m/s]")
       ->check(number_in(0.0, 1.0, "m/s", true))
       ->capture_default_str();
   opt->study.add_flags(*dig);
@@ -252,6 +252,7 @@ void add_bench_dig(CLI::App& bench) {
     check_dig_seconds(scenario, opt->seconds);
     const BucketSweep bucket_sweep = parse_bucket_sweep(opt->bucket_sweep, "--bucket-sweep");
     check_bucket_sweep(bucket_sweep, preset, "--bucket-sweep");
+    check_sweep_tolerance(opt->sweep_tolerance, preset, "--sweep-tolerance");
     if (!opt->json.empty()) check_writable(opt->json, "--json");
     Device dev(run_device_choice(preset));
     DiggingOptions options;

@@ -312,7 +312,7 @@ nlohmann::json dig_details(const RunOptions& o, const vehicle::Scenario& sc,
        {{"steps_with_bucket_contacts", sim.contact_steps()},
         {"mean_passes", sim.mean_passes()},
         {"mean_sweeps", sim.mean_sweeps()},
-        {"sweep_tolerance_m_s", options.sweep_tolerance},
+        {"sweep_tolerance_m_s", applied_sweep_tolerance(options.sweep_tolerance, preset)},
         {"pair_reach", options.pair_reach},
         {"relaxation", options.relaxation},
         {"bucket_sweep", bucket_sweep_name(options.coupling.bucket_sweep)},
@@ -570,6 +570,7 @@ void run_scenario(const RunOptions& o) {
                      "' has no pile, so no particle-bucket rows to colour; give a pile scenario "
                      "at a D level, or leave it serial");
   check_bucket_sweep(bucket_sweep, level, "--bucket-sweep");
+  if (sc.pile) check_sweep_tolerance(o.sweep_tolerance, level, "--sweep-tolerance");
   if (o.seed_diameter != 1.0 && !sc.pile)
     throw InputError("--seed-diameter " + std::to_string(o.seed_diameter) + ": scenario '" +
                      sc.name +
@@ -667,7 +668,7 @@ void add_run_command(CLI::App& app, const std::string& command_line) {
   cmd->add_option("--sweep-tolerance", opts->sweep_tolerance,
                   "end a step's sweeps once the particle rows' RMS residual is below this, the "
                   "level's sweeps the cap; 0 = always the level's, as the paper's presets "
-                  "(docs/dem.md) [m/s]")
+                  "(docs/dem.md); a D level's (a G level's zone always runs its level's) [m/s]")
       ->capture_default_str()
       // a residual above 1 m/s is no convergence at all (the bucket moves at about 1 m/s)
       ->check(number_in(0.0, 1.0, "m/s", true));

@@ -63,7 +63,7 @@ DigCost measure_dig_cost(Device& dev, const vehicle::Scenario& scenario,
   const DemWorld& dem = type_g ? sim.terrain().dem() : sim.dem();
   cost.dt = preset.dt;
   cost.iterations = preset.iterations;
-  cost.sweep_tolerance = options.sweep_tolerance;
+  cost.sweep_tolerance = applied_sweep_tolerance(options.sweep_tolerance, preset);
   StageTimes times;
   double plain_wall = 0.0, profiled_wall = 0.0;
   int plain = 0, profiled = 0;

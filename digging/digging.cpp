@@ -83,6 +83,19 @@ void check_bucket_sweep(BucketSweep sweep, const FidelityPreset& level, const st
                      "particle-bucket rows to colour; give a D level, or leave it serial");
 }
 
+double applied_sweep_tolerance(double tolerance, const FidelityPreset& level) {
+  return is_multiscale(level) ? 0.0 : tolerance;
+}
+
+void check_sweep_tolerance(double tolerance, const FidelityPreset& level,
+                           const std::string& field) {
+  if (is_multiscale(level) && tolerance != 0.0 && tolerance != kDigSweepTolerance)
+    throw InputError(field + " " + message_number(tolerance) + " m/s at " + level.name +
+                     ": a type-G zone runs its level's " + std::to_string(level.iterations) +
+                     " sweeps a step in one launch, with no residual to stop at; give a D level, "
+                     "or leave it at its default (which type G does not apply) or 0");
+}
+
 DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scenario, const FidelityPreset& preset,
                                      const PileBuild& pile, const DiggingOptions& options,
                                      vehicle::EffectSet* effects)
@@ -149,6 +162,7 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
                      "level the particles make the slope themselves (use a G level or leave the "
                      "avalanche at its defaults)");
   check_bucket_sweep(options.coupling.bucket_sweep, preset, "bucket_sweep");
+  check_sweep_tolerance(options.sweep_tolerance, preset, "sweep_tolerance");
   if (!is_multiscale(preset) && options.seed_diameter != 1.0)
     throw InputError("seed_diameter " + std::to_string(options.seed_diameter) + " at " +
                      preset.name +
@@ -209,7 +223,7 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
   DemSettings settings;
   settings.dt = h;
   settings.iterations = preset.iterations;
-  settings.tolerance = options.sweep_tolerance;
+  settings.tolerance = applied_sweep_tolerance(options.sweep_tolerance, preset);
   settings.sweep = options.sweep;
   settings.one_group_rows = options.one_group_rows;
   settings.pair_reach = options.pair_reach;

@@ -53,6 +53,13 @@ inline constexpr double kMaxAvalancheRate = 1000.0;
 // the bucket sweep at a level: the coloured one only at a type-D level (a type-G bucket meets the
 // soil through its aggregate, with no chain of particle-bucket rows); InputError naming `field`
 void check_bucket_sweep(BucketSweep sweep, const FidelityPreset& level, const std::string& field);
+// the residual tolerance a dig's particle sweeps stop at [m/s]: `tolerance` at a type-D level; 0
+// (none) at a type-G level, whose zone runs its level's N_it sweeps in one launch (the paper's
+// fixed iterations)
+double applied_sweep_tolerance(double tolerance, const FidelityPreset& level);
+// a sweep tolerance at a level: at a type-G level only the default (which it does not apply) or 0;
+// InputError naming `field`
+void check_sweep_tolerance(double tolerance, const FidelityPreset& level, const std::string& field);
 
 struct DiggingOptions {
   PileBuildOptions pile;         // settling of the pile before the machine starts

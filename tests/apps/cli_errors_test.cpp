@@ -292,6 +292,15 @@ TEST(CliErrors, StepCountsAndLoadsOutsideTheirRangeAreRefused) {
       EXPECT_FALSE(std::filesystem::exists("/tmp/talus_cli_seed")) << cmd << option;
     }
   }
+  // the particle sweeps' residual tolerance: a type-D level's (a G level's zone runs its N_it)
+  for (const char* cmd : {"run --scenario hd27 --fidelity G400 --out /tmp/talus_cli_seed",
+                          "bench dig --scenario hd27 --level G200 --json /tmp/talus_cli_seed"}) {
+    const Outcome o = run("", std::string(cmd) + " --sweep-tolerance 0.001");
+    EXPECT_EQ(o.code, 2) << cmd << ": " << o.err;
+    EXPECT_NE(o.err.find("--sweep-tolerance"), std::string::npos) << cmd << ": " << o.err;
+    EXPECT_NE(o.err.find("give a D level"), std::string::npos) << cmd << ": " << o.err;
+    EXPECT_FALSE(std::filesystem::exists("/tmp/talus_cli_seed")) << cmd;
+  }
   // outside its range
   const Outcome edge = run("",
                            "run --scenario hd27 --fidelity G400 --out /tmp/talus_cli_seed "
