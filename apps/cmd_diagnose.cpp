@@ -129,7 +129,11 @@ void add_diagnose_command(CLI::App& app) {
                                      "('-' for stdout)");
   cmd->add_option("--out", a->out, "also write diagnosis.json, report.md, errors-before/after.csv and per-run "
                                    "channel figures (measured, baseline, with effects) here");
-  cmd->add_option("--max-effects", a->max_effects, "effects to add at most")->capture_default_str()->check(CLI::Range(1, 5));
+  cmd->add_option("--max-effects", a->max_effects,
+                  "rounds that add effects, at most (a round adds one effect, a pair or a set of "
+                  "three)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 5));
   cmd->add_option("--validation", a->validation,
                   "how many of the runs (the last ones) to hold out for validation "
                   "(default: a third, at least one of two or more)")

@@ -570,7 +570,7 @@ void run_scenario(const RunOptions& o) {
                      "' has no pile, so no particle-bucket rows to colour; give a pile scenario "
                      "at a D level, or leave it serial");
   check_bucket_sweep(bucket_sweep, level, "--bucket-sweep");
-  if (sc.pile) check_sweep_tolerance(o.sweep_tolerance, level, "--sweep-tolerance");
+  check_sweep_tolerance(o.sweep_tolerance, level, "--sweep-tolerance");
   if (o.seed_diameter != 1.0 && !sc.pile)
     throw InputError("--seed-diameter " + std::to_string(o.seed_diameter) + ": scenario '" +
                      sc.name +

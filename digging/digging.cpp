@@ -223,7 +223,7 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
   DemSettings settings;
   settings.dt = h;
   settings.iterations = preset.iterations;
-  settings.tolerance = applied_sweep_tolerance(options.sweep_tolerance, preset);
+  settings.tolerance = options.sweep_tolerance;
   settings.sweep = options.sweep;
   settings.one_group_rows = options.one_group_rows;
   settings.pair_reach = options.pair_reach;

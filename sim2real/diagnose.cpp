@@ -24,6 +24,15 @@ namespace talus::sim2real {
 
 namespace {
 
+// the items joined by `between`, the last two by `last` ("a, b and c")
+std::string listed(const std::vector<std::string>& items, const std::string& between,
+                   const std::string& last) {
+  std::string out;
+  for (std::size_t k = 0; k < items.size(); ++k)
+    out += (k == 0 ? "" : k + 1 == items.size() ? last : between) + items[k];
+  return out;
+}
+
 // the power channel follows a changed force or speed reading (vehicle/effect.hpp), so a sensor
 // effect's signature always includes it
 constexpr std::size_t kPowerChannel = static_cast<std::size_t>(Channel::power);
@@ -696,18 +705,11 @@ class Search {
       say("round " + std::to_string(number) + ": added " + dr.fitted[0].spec);
     } else if (const FittedSet* set = joint_set(candidates, dr)) {
       dr.added = true;
-      std::string specs;
-      for (std::size_t k = 0; k < set->members.size(); ++k) {
-        add(set->members[k]);
-        specs += (k == 0                         ? ""
-                  : k + 1 == set->members.size() ? " and "
-                                                 : ", ") +
-                 set->members[k].spec;
-      }
+      for (const auto& m : set->members) add(m);
       current_cal_ = set->excess_calibration;
       current_val_ = set->excess_validation;
       say("round " + std::to_string(number) + ": added the " +
-          (set->members.size() == 2 ? "pair " : "set ") + specs);
+          (set->members.size() == 2 ? "pair " : "set ") + listed(set->specs(), ", ", " and "));
     } else {
       say("round " + std::to_string(number) + ": no candidate, pair or set of three explains " +
           message_number(100.0 * kMinExplained) + " % of the excess left; nothing added");
@@ -977,7 +979,7 @@ class Search {
 
   // the share of the excess left that a model with these excesses removes: on the held-out runs;
   // when they leave nothing beyond noise (the effect does not show in them), on the calibration
-  // runs, provided it keeps the held-out runs within noise. One rule for candidates, pairs and
+  // runs, provided it keeps the held-out runs within noise. One rule for candidates, sets and
   // learned corrections
   struct Share {
     double explained = 0.0;
@@ -1395,8 +1397,11 @@ class Search {
     const auto members = [](const FittedSet& s) { return s.members; };
     // too few singles to be bases (five comparable effects can leave every channel below the
     // singles' screen, docs/sim2real.md step 5): the candidates that screen left out whose channels
-    // still hold a member's share (kMemberShare) are scanned and fitted now, as singles
-    if (bases_of(dr.fitted, single).size() < static_cast<std::size_t>(kSetBases)) {
+    // still hold a member's share (kMemberShare) are scanned and fitted now, as singles, to fill
+    // the bases' free places (bases only: the round's single was decided on the singles' screen;
+    // they join `fitted`, and `screened_out` keeps that screen's list)
+    std::vector<std::vector<FittedEffect>> bases = bases_of(dr.fitted, single);
+    if (bases.size() < static_cast<std::size_t>(kSetBases)) {
       DiagnosisRound members_screen;
       std::vector<const Candidate*> more;
       for (const Candidate* c : screen(candidates, members_screen, kMemberShare))
@@ -1406,20 +1411,24 @@ class Search {
       if (!more.empty()) {
         say("sets: " + std::to_string(more.size()) +
             " candidates screened out as singles scanned as members of a set");
-        for (const Candidate* c : more)
-          dr.screened_out.erase(
-              std::find(dr.screened_out.begin(), dr.screened_out.end(), c->label()));
-        fit_best(scan(more, dr), dr);
+        DiagnosisRound extra;
+        fit_best(scan(more, extra), extra);
+        for (auto& f : extra.failed) dr.failed.push_back(f);
+        for (const auto& b : bases_of(extra.fitted, single))
+          if (bases.size() < static_cast<std::size_t>(kSetBases)) bases.push_back(b);
+        dr.fitted.insert(dr.fitted.end(), extra.fitted.begin(), extra.fitted.end());
       }
     }
     // pairs on the best singles, the second candidate screened as a single would be
-    dr.pairs = search_sets(candidates, dr, bases_of(dr.fitted, single), kMinExplained);
+    dr.pairs = search_sets(candidates, dr, bases, kMinExplained);
     if (const FittedSet* set = accepted(dr, dr.pairs)) return set;
-    // sets of three on the best pairs, where one could remove enough: were the shares additive, a
-    // set that removes kMinExplained holds a pair that removes two thirds of it, so below that no
+    // sets of three on the best pairs, where no pair removed enough (a pair that did but was
+    // refused by the chaos check ends the search) and one could: were the shares additive, a set
+    // that removes kMinExplained holds a pair that removes two thirds of it, so below that no
     // third member is searched (a diagnosis the candidates cannot explain stops here); the third
     // screened by a member's share of what the pair leaves
-    if (dr.pairs.empty() || dr.pairs[0].explained < kMinExplained * (kLargestSet - 1) / kLargestSet)
+    if (dr.pairs.empty() || dr.pairs[0].explained >= kMinExplained ||
+        dr.pairs[0].explained < kMinExplained * (kLargestSet - 1) / kLargestSet)
       return nullptr;
     dr.triples = search_sets(candidates, dr, bases_of(dr.pairs, members), kMemberShare);
     return accepted(dr, dr.triples);
@@ -1429,16 +1438,13 @@ class Search {
   // reference, else nullptr
   const FittedSet* accepted(DiagnosisRound& dr, const std::vector<FittedSet>& sets) {
     if (sets.empty() || sets[0].explained < kMinExplained) return nullptr;
-    std::vector<std::string> specs;
-    for (const auto& m : sets[0].members) specs.push_back(m.spec);
-    return holds_on_reference(dr, specs, sets[0].explained_on) ? &sets[0] : nullptr;
+    return holds_on_reference(dr, sets[0].specs(), sets[0].explained_on) ? &sets[0] : nullptr;
   }
 
   // each base (a set of fitted effects) provisionally in the model, one more candidate searched on
   // top of it (screened by `share` of what the base leaves; its scan on the threads), then all
-  // refitted jointly, the joint fits of all the
-  // bases on the threads at once, and validated against the excess before any of them; best
-  // score first
+  // refitted jointly (the fits of all the bases on the threads at once) and validated against the
+  // excess before any of them; best score first
   std::vector<FittedSet> search_sets(const std::vector<Candidate>& candidates, DiagnosisRound& dr,
                                      const std::vector<std::vector<FittedEffect>>& bases,
                                      double share) {
@@ -1457,11 +1463,16 @@ class Search {
         if (c.label() == label) return &c;
       return nullptr;
     };
-    const std::string kind = bases.front().size() == 1 ? "pairs" : "sets of three";
+    // what the notes and the failures call this search and one of its sets
+    const bool pairs = bases.front().size() == 1;
+    const std::string kind = pairs ? "pairs" : "sets of three";
+    const std::string one = pairs ? "pair" : "set of three";
     std::vector<Trial> trials;
     for (const auto& base : bases) {
       Trial t;
-      for (const auto& m : base) t.base += (t.base.empty() ? "" : " and ") + m.candidate.label();
+      std::vector<std::string> labels;
+      for (const auto& m : base) labels.push_back(m.candidate.label());
+      t.base = listed(labels, " and ", " and ");
       try {
         // the base provisionally in the model: the screen and the scan see what it leaves
         for (const auto& m : base) found_specs_.push_back(m.spec);
@@ -1493,12 +1504,23 @@ class Search {
         t.members.push_back(scanned[0].c);
         t.sizes.push_back(scanned[0].x.size());
         t.x.insert(t.x.end(), scanned[0].x.begin(), scanned[0].x.end());
-        trials.push_back(std::move(t));
+        // a set of three another base already reached ({A, B} + C and {A, C} + B) is fitted once
+        // (pairs keep both orders, as before sets of three: each start its own joint fit)
+        const auto labels_of = [](const Trial& tr) {
+          std::vector<std::string> l;
+          for (const Candidate* c : tr.members) l.push_back(c->label());
+          std::sort(l.begin(), l.end());
+          return l;
+        };
+        const bool again = !pairs && std::any_of(trials.begin(), trials.end(), [&](const Trial& u) {
+          return labels_of(u) == labels_of(t);
+        });
+        if (!again) trials.push_back(std::move(t));
       } catch (const Interrupted&) {
         throw;
       } catch (const std::exception& e) {
         restore(before);
-        failed(dr, kind + " with " + t.base, e.what());
+        failed(dr, one + " with " + t.base, e.what());
       }
     }
     // all refitted together from their own values, on the calibration runs: each base's fit on
@@ -1510,12 +1532,10 @@ class Search {
     std::vector<FittedSet> sets;
     for (std::size_t k = 0; k < trials.size(); ++k) {
       if (failures[k].failed) {
-        failed(dr, kind + " with " + trials[k].base, failures[k].what);
+        failed(dr, one + " with " + trials[k].base, failures[k].what);
         continue;
       }
-      std::string specs;
-      for (const auto& m : fitted[k].members) specs += (specs.empty() ? "" : " + ") + m.spec;
-      say("  " + std::string(fitted[k].members.size() == 2 ? "pair " : "set ") + specs +
+      say("  " + std::string(pairs ? "pair " : "set ") + listed(fitted[k].specs(), " + ", " + ") +
           ": explains " + message_number(100.0 * fitted[k].explained) + " % on the " +
           fitted[k].explained_on + " runs");
       sets.push_back(fitted[k]);
@@ -1753,13 +1773,10 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
     auto sets_json = [](const std::vector<FittedSet>& sets) {
       json out = json::array();
       for (const auto& set : sets) {
-        json labels = json::array(), specs = json::array();
-        for (const auto& m : set.members) {
-          labels.push_back(m.candidate.label());
-          specs.push_back(m.spec);
-        }
+        json labels = json::array();
+        for (const auto& m : set.members) labels.push_back(m.candidate.label());
         out.push_back({{"candidates", labels},
-                       {"specs", specs},
+                       {"specs", set.specs()},
                        {"excess_calibration", set.excess_calibration},
                        {"excess_validation", set.excess_validation},
                        {"explained", set.explained},

@@ -9,8 +9,9 @@
 //  1. signature screen: a candidate that can change only some channels (a sensor's bias or delay,
 //     the wheel-slip speed reading) can at most remove the excess of those channels; when that
 //     bound is below the share a winner must explain, or the channel it acts on shows no excess
-//     of its own, it is not simulated at all (for a set's member, step 5, the bound is the share
-//     one member of a set must explain, kMemberShare)
+//     of its own, it is not simulated at all (for the members of a set searched where too few
+//     singles pass, and for a set of three's third, step 5, the bound is the share one member of
+//     a set must explain, kMemberShare)
 //  2. coarse scan: each remaining candidate at kScanPoints values across its range (and towards
 //     zero on a range that starts there), a 2-D grid for two parameters, a Halton design for three
 //     or more, on the calibration runs; a candidate whose simulation throws is reported and skipped
@@ -40,8 +41,9 @@
 //     excess (an effect that needs a manoeuvre they lack) cannot confirm a candidate, only refute
 //     it: then the share explained is the calibration runs', if the candidate keeps the held-out
 //     runs within noise
-// Rounds repeat (each fits one more effect on top of those added, which keep their values) until
-// every run's excess is within noise, nothing qualifies, or max_effects are added. "Unexplained"
+// Rounds repeat (each fits one more effect, or a set, on top of those added, which keep their
+// values) until every run's excess is within noise, nothing qualifies, or max_effects rounds have
+// added. "Unexplained"
 // means some run keeps an excess beyond noise at the end.
 // Sensitivity (issue 17): "unexplained" must mean a missing effect, not the simulation's
 // sensitivity to the fitted parameters. After a round adds an effect (and after the discovery
@@ -182,12 +184,19 @@ struct FittedEffect {
 // taken provisionally, one more candidate searched on top of it, all refitted together and
 // validated as one model
 struct FittedSet {
-  std::vector<FittedEffect>
-      members;  // in the order they were taken, each with the joint fit's values
+  // in the order they were taken, each with the joint fit's values
+  std::vector<FittedEffect> members;
   double excess_calibration = 0.0, excess_validation = 0.0;
   double explained = 0.0;  // share of the excess left before the set that the set removes
   std::string explained_on;
   double score = 0.0;  // as a single's, with every member's parameters penalised
+
+  // the members' specs, in order
+  std::vector<std::string> specs() const {
+    std::vector<std::string> out;
+    for (const auto& m : members) out.push_back(m.spec);
+    return out;
+  }
 };
 
 // the effects found refitted together after a round added one (greedy forward selection fits each

@@ -81,7 +81,6 @@ TEST(CmdBench, DigAtATypeGLevelChargesTheTerrainsStages) {
   expect_stages_add_up(j);
   // the zone runs its level's sweeps: no tolerance applied, whatever the option's default
   EXPECT_EQ(j.at("sweep_tolerance_m_s").get<double>(), 0.0);
-  EXPECT_LE(j.at("sweeps").get<double>(), 10.0);
 }
 
 // a small type-G level steps in the calling thread (PoCL's basic device, which the tool lists
