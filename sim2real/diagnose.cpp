@@ -1471,6 +1471,7 @@ class Search {
     for (const auto& base : bases) {
       Trial t;
       std::vector<std::string> labels;
+      labels.reserve(base.size());
       for (const auto& m : base) labels.push_back(m.candidate.label());
       t.base = listed(labels, " and ", " and ");
       try {
