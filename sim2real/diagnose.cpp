@@ -22,9 +22,6 @@
 
 namespace talus::sim2real {
 
-namespace {
-
-// the items joined by `between`, the last two by `last` ("a, b and c")
 std::string listed(const std::vector<std::string>& items, const std::string& between,
                    const std::string& last) {
   std::string out;
@@ -32,6 +29,8 @@ std::string listed(const std::vector<std::string>& items, const std::string& bet
     out += (k == 0 ? "" : k + 1 == items.size() ? last : between) + items[k];
   return out;
 }
+
+namespace {
 
 // the power channel follows a changed force or speed reading (vehicle/effect.hpp), so a sensor
 // effect's signature always includes it
@@ -1582,8 +1581,11 @@ class Search {
                                                              : set.excess_calibration) +
                                kParameterPenalty * static_cast<double>(x.size())
                          : HUGE_VAL;
-    // each effect reports the set's shares (they are added together or not at all)
+    // each effect reports the set's shares (they are added together or not at all) and the others'
+    // labels (a later refit changes their values, not their labels)
     for (FittedEffect& f : set.members) {
+      for (const FittedEffect& other : set.members)
+        if (&other != &f) f.fitted_with.push_back(other.candidate.label());
       f.excess_calibration = set.excess_calibration;
       f.excess_validation = set.excess_validation;
       f.explained = set.explained;
@@ -1747,6 +1749,7 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
                 {"explained_on", f.explained_on},
                 {"score", f.score},
                 {"simulations", f.simulations},
+                {"fitted_with", f.fitted_with},
                 {"window_local_minima", f.local_minima},
                 {"roughness", std::isfinite(f.roughness) ? json(f.roughness) : json(nullptr)},
                 {"trend_estimate", f.trend_estimate}};

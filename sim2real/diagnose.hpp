@@ -170,6 +170,9 @@ struct FittedEffect {
   std::string explained_on;
   double score = 0.0;          // excess_validation + penalty
   int simulations = 0;
+  // the other members' candidate labels when it was fitted and added as one of a set (a pair or
+  // three): the shares above are then the set's, together
+  std::vector<std::string> fitted_with;
   std::vector<double> x;  // its parameters in the box normalised to [0, 1] (the fit's variables)
   // one parameter: the window's samples' local minima (0: no window) and their scatter about
   // their parabola against its rise (LocalParabola::roughness; NaN without a window, infinite
@@ -179,6 +182,11 @@ struct FittedEffect {
   double roughness = std::numeric_limits<double>::quiet_NaN();
   bool trend_estimate = false;
 };
+
+// the items joined by `between`, the last two by `last` ("a, b and c": ", ", " and "), for the
+// notes and the report
+std::string listed(const std::vector<std::string>& items, const std::string& between,
+                   const std::string& last);
 
 // two or three candidates fitted jointly (when no smaller set explains enough): a smaller set
 // taken provisionally, one more candidate searched on top of it, all refitted together and

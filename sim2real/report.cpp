@@ -156,8 +156,13 @@ std::string diagnosis_report(const Diagnosis& d, const std::vector<MeasuredRun>&
                              : "None added: the baseline residual is within the noise of the data.\n");
   } else {
     for (const auto& f : d.found) {
-      report << "- " << f.spec << " (explains " << std::setprecision(3) << 100.0 * f.explained
-             << " % of the excess of the " << f.explained_on << " runs)";
+      // one of a set: the share is the set's, which the line says
+      const std::string with = listed(f.fitted_with, ", ", " and ");
+      report << "- " << f.spec
+             << (with.empty() ? " (explains "
+                              : " (fitted with " + with + ", which together explain ")
+             << std::setprecision(3) << 100.0 * f.explained << " % of the excess of the "
+             << f.explained_on << " runs)";
       // a value read off the likelihood's trend rather than found by the optimiser
       if (f.trend_estimate)
         report << "; its value is the minimum of the likelihood's trend over the fit's window, "

@@ -80,6 +80,25 @@ TEST(Report, SaysWhenAnEffectsValueIsTheTrendOfARoughWindow) {
       << report;
 }
 
+// an effect added as one of a set says which others it was fitted with, and that the share is
+// theirs together
+TEST(Report, SaysWhichEffectsASetsMemberWasFittedWith) {
+  const MeasuredRun measured = reference_run();
+  Diagnosis d = one_run_diagnosis(measured, simulated_run());
+  FittedEffect f;
+  f.spec = "sensor_bias:channel=f_lift,bias=20000";
+  f.explained = 0.6;
+  f.explained_on = "validation";
+  f.fitted_with = {"sensor_bias[f_tilt]", "sensor_bias[v_drive]"};
+  d.found = {f};
+  const std::string report = diagnosis_report(d, {measured});
+  EXPECT_NE(report.find("- sensor_bias:channel=f_lift,bias=20000 (fitted with sensor_bias[f_tilt] "
+                        "and sensor_bias[v_drive], which together explain 60 % of the excess of "
+                        "the validation runs)"),
+            std::string::npos)
+      << report;
+}
+
 // a residual judged against a simulation's spread says so under its table, with the spread's
 // share per channel (and its degrees of freedom, where estimated); one judged against the sensor
 // noise alone says nothing more
