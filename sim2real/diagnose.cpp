@@ -1455,7 +1455,8 @@ class Search {
       std::vector<const Candidate*> members;
       std::vector<std::size_t> sizes;  // how many of x each member's
       std::vector<double> x;
-      std::string base;  // the base's labels, for the notes
+      std::string base;                 // the base's labels, for the notes
+      std::vector<std::string> labels;  // every member's, sorted: which set it is
     };
     const auto candidate_of = [&](const std::string& label) -> const Candidate* {
       for (const auto& c : candidates)
@@ -1470,7 +1471,7 @@ class Search {
     for (const auto& base : bases) {
       Trial t;
       std::vector<std::string> labels;
-      labels.reserve(base.size());
+      labels.reserve(base.size() + 1);
       for (const auto& m : base) labels.push_back(m.candidate.label());
       t.base = listed(labels, " and ", " and ");
       try {
@@ -1504,16 +1505,13 @@ class Search {
         t.members.push_back(scanned[0].c);
         t.sizes.push_back(scanned[0].x.size());
         t.x.insert(t.x.end(), scanned[0].x.begin(), scanned[0].x.end());
+        t.labels = labels;
+        t.labels.push_back(scanned[0].c->label());
+        std::sort(t.labels.begin(), t.labels.end());
         // a set of three another base already reached ({A, B} + C and {A, C} + B) is fitted once
         // (pairs keep both orders, as before sets of three: each start its own joint fit)
-        const auto labels_of = [](const Trial& tr) {
-          std::vector<std::string> l;
-          for (const Candidate* c : tr.members) l.push_back(c->label());
-          std::sort(l.begin(), l.end());
-          return l;
-        };
         const bool again = !pairs && std::any_of(trials.begin(), trials.end(), [&](const Trial& u) {
-          return labels_of(u) == labels_of(t);
+          return u.labels == t.labels;
         });
         if (!again) trials.push_back(std::move(t));
       } catch (const Interrupted&) {
