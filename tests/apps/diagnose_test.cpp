@@ -271,18 +271,21 @@ TEST(DiagnoseTest, FiveEffectsOfComparableSizeAreFoundThreeTogether) {
                           " --max-effects 1 --candidates 'sensor_bias[f_lift],sensor_bias[f_tilt],"
                           "sensor_bias[f_traction],sensor_bias[v_drive],sensor_bias[power]'");
   const auto& round = j["rounds"][0];
-  // the case needs a set of three: no pair cleared the bar. A draw whose best pair does (none of
+  // the case needs a set of three: no pair clears the bar. A draw whose best pair does (none of
   // the 15 measured; the pair's share about 2.4 of its standard deviations below the bar) needs no
-  // set and tests nothing here: skipped, with its seed
+  // set: then the pair is what the round must add, and no set of three is searched
   ASSERT_FALSE(round["pairs"].empty()) << context << ": " << round.dump();
-  if (round["pairs"][0]["explained"].get<double>() >= 0.5)
-    GTEST_SKIP() << context << ": a pair cleared the bar, so this draw needs no set of three: "
-                 << round["pairs"][0].dump();
-  // three biases added together, each on a channel that carries one and within 8 % of it (the
-  // draws measured: within 3.7 %)
+  const bool pair_enough = round["pairs"][0]["explained"].get<double>() >= 0.5;
+  // three biases added together (two where a pair was enough), each on a channel that carries one
+  // and within 8 % of it (the draws measured: within 3.7 %)
   ASSERT_TRUE(round["added"].get<bool>()) << context << ": " << round["triples"].dump();
-  ASSERT_FALSE(round["triples"].empty()) << context;
-  EXPECT_GE(round["triples"][0]["explained"].get<double>(), 0.5) << context;
+  if (pair_enough) {
+    EXPECT_TRUE(round["triples"].empty()) << context;
+  } else {
+    ASSERT_FALSE(round["triples"].empty()) << context;
+    EXPECT_GE(round["triples"][0]["explained"].get<double>(), 0.5) << context;
+  }
+  const std::size_t members = pair_enough ? 2 : 3;
   // (the discovery may then write one of the two biases left as a constant correction of its
   // reading: a learned correction, on a channel that carries a bias)
   int biases_found = 0;
@@ -299,8 +302,9 @@ TEST(DiagnoseTest, FiveEffectsOfComparableSizeAreFoundThreeTogether) {
     EXPECT_NEAR(f["params"]["bias"].get<double>(), truth->second, 0.08 * std::abs(truth->second))
         << context << ": " << f.dump();
   }
-  EXPECT_EQ(biases_found, 3) << context << ": " << j["effects_found"].dump();
-  EXPECT_EQ(channels.size(), 3u) << context << ": three channels, each once";
+  EXPECT_EQ(static_cast<std::size_t>(biases_found), members)
+      << context << ": " << j["effects_found"].dump();
+  EXPECT_EQ(channels.size(), members) << context << ": as many channels, each once";
 }
 
 TEST(DiagnoseTest, EffectsFoundInTwoRoundsAreRefittedTogether) {
