@@ -20,10 +20,14 @@ namespace talus::app {
 
 namespace {
 
-// --one-group-rows of both benchmarks: the threshold is a device's speed question (same bits)
+// --one-group-rows of both benchmarks: the threshold is a device's speed question (with colours
+// the same bits; a CPU device walks such a system in one work-item, see --serial-lanes)
 const char* const kOneGroupRowsHelp =
     "PGS sweeps systems of at most this many rows in one work-group, larger ones a launch per "
-    "colour (the same results; 0: never)";
+    "colour (0: never)";
+const char* const kSerialLanesHelp =
+    "on a CPU device a system the one work-group sweeps is walked by one work-item without "
+    "colours, its rows interleaved from this many blocks of contacts (0: coloured as on a GPU)";
 
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
@@ -42,6 +46,7 @@ std::vector<std::string> split(const std::string& s, char sep) {
 // relaxation), registered, applied and reported in one place
 struct SolverStudy {
   int one_group_rows = kPgsOneGroupRows;
+  int serial_lanes = kSerialLanes;
   // the reach's default is the command's: bench dig digs (DiggingOptions), bench dem settles a bed
   // (DemSettings, as the piles are)
   bool pair_reach;
@@ -53,6 +58,9 @@ struct SolverStudy {
     cmd.add_option("--one-group-rows", one_group_rows, kOneGroupRowsHelp)
         ->check(CLI::NonNegativeNumber)
         ->capture_default_str();
+    cmd.add_option("--serial-lanes", serial_lanes, kSerialLanesHelp)
+        ->check(CLI::Range(0, kMaxSerialLanes))
+        ->capture_default_str();
     add_reach_option(cmd, pair_reach);
     cmd.add_option("--relaxation", relaxation, kRelaxationHelp)
         ->check(relaxation_number())
@@ -60,17 +68,20 @@ struct SolverStudy {
   }
   void apply(DemSettings& s) const {
     s.one_group_rows = one_group_rows;
+    s.serial_lanes = serial_lanes;
     s.pair_reach = pair_reach;
     s.relaxation = relaxation;
   }
   void apply(DiggingOptions& o) const {
     o.one_group_rows = one_group_rows;
+    o.serial_lanes = serial_lanes;
     o.pair_reach = pair_reach;
     o.relaxation = relaxation;
   }
   template <class Json>
   void describe(Json& j) const {
     j["one_group_rows"] = one_group_rows;
+    j["serial_lanes"] = serial_lanes;
     j["pair_reach"] = pair_reach;
     j["relaxation"] = relaxation;
   }

@@ -193,6 +193,7 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
     terrain.bucket_material = options.coupling.material;
     terrain.max_particle_speed = options.max_particle_speed;
     terrain.one_group_rows = options.one_group_rows;
+    terrain.serial_lanes = options.serial_lanes;
     terrain.pair_reach = options.pair_reach;
     terrain.relaxation = options.relaxation;
     terrain.seed_diameter = options.seed_diameter;
@@ -226,6 +227,7 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
   settings.tolerance = options.sweep_tolerance;
   settings.sweep = options.sweep;
   settings.one_group_rows = options.one_group_rows;
+  settings.serial_lanes = options.serial_lanes;
   settings.pair_reach = options.pair_reach;
   settings.relaxation = options.relaxation;
   settings.max_speed = options.max_particle_speed;

@@ -66,8 +66,11 @@ struct DiggingOptions {
   CouplingSettings coupling;     // bucket contacts and outer passes
   SweepKind sweep = SweepKind::Pgs;
   // PGS sweeps a system of at most this many rows in one work-group (DemSettings::one_group_rows;
-  // type D and the type-G zone alike): the same bits, a device-dependent speed
+  // type D and the type-G zone alike): a device-dependent speed (and order, see serial_lanes)
   int one_group_rows = kPgsOneGroupRows;
+  // blocks of contacts a serially walked system's rows interleave (DemSettings::serial_lanes;
+  // type D and the type-G zone alike); 0 colours them
+  int serial_lanes = kSerialLanes;
   // each particle pair's own speculative reach instead of the fastest particle's (DemSettings::
   // pair_reach; type D and the type-G zone alike). The default since 2026-11-29: the same sweeps
   // and fills within the piles' scatter with 30-45 % fewer rows (docs/dem.md "Speculative reach")

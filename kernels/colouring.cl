@@ -153,3 +153,27 @@ __kernel void identity_order(int n_contacts, __global int* order, __global int* 
   order[c] = c;
   row_of_contact[c] = c;
 }
+
+// rows for a sweep that one work-item walks in turn (a CPU device's one-group sweep), which needs
+// no colours: the contacts cut into `lanes` blocks of n/lanes or n/lanes + 1 in contact order
+// (block j starts at floor(j n / lanes)), and the rows taking one contact of each block in turn.
+// Rows next to each other then belong to blocks far apart in the grid's order and rarely share a
+// body, so the core overlaps one row's arithmetic with the next's instead of waiting on the
+// velocities the row before wrote (DemSettings::serial_lanes). Row of contact c at position p of
+// block j: p lanes + j for p < n/lanes; the blocks of n/lanes + 1 (the first j of them number
+// start_j - j (n/lanes)) give their last contacts the rows after those
+__kernel void interleaved_order(int n_contacts, int lanes, __global int* order,
+                                __global int* row_of_contact) {
+  int c = get_global_id(0);
+  if (c >= n_contacts) return;
+  // the last block starting at or before c: floor(j n / lanes) <= c  <=>  j <= ((c + 1) lanes - 1)
+  // / n
+  long n = n_contacts;
+  int j = (int)min((long)(lanes - 1), ((long)(c + 1) * lanes - 1) / n);
+  int start = (int)((long)j * n / lanes);
+  int p = c - start;
+  int q = n_contacts / lanes;
+  int row = p < q ? p * lanes + j : q * lanes + (start - j * q);
+  order[row] = c;
+  row_of_contact[c] = row;
+}

@@ -33,6 +33,13 @@ class ContactSweep {
     }
   }
   virtual const char* name() const = 0;
+  // whether systems of at most `rows` rows are swept by one work-item walking them in turn (PGS
+  // on a CPU device, up to its one-group threshold): their rows then need no colours
+  // (DemSettings::serial_lanes)
+  virtual bool walks_in_one_item(int rows) const {
+    (void)rows;
+    return false;
+  }
 };
 
 // graph-coloured projected Gauss-Seidel (solvers/pgs_sweep.cpp); systems of up to

@@ -95,6 +95,9 @@ struct DemBuffers {
   Buffer<int> colour_previous;
   Buffer<int> order, row_of_contact;
   std::vector<int> colour_start;  // host copy: rows of colour k are [start[k], start[k+1])
+  // the rows are laid out for one work-item to walk (DemSettings::serial_lanes): one "colour"
+  // whose rows share bodies, which only a serial sweep may take
+  bool rows_interleaved = false;
   int colour_rounds = 0;
   // set by kernels/colouring.cl contact_pairs_differ when this step's contacts pair other bodies
   // than the last step's (DemWorld keeps the colouring otherwise)

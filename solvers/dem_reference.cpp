@@ -416,6 +416,27 @@ Partition identity_partition(int n_contacts) {
   return out;
 }
 
+Partition interleaved_partition(int n_contacts, int lanes) {
+  // block j holds contacts [floor(j n / lanes), floor((j + 1) n / lanes)); row after row takes
+  // the next contact of each block that still has one, blocks in order
+  std::vector<std::vector<int>> blocks(lanes);
+  for (int j = 0; j < lanes; ++j) {
+    const int begin = static_cast<int>(std::int64_t(j) * n_contacts / lanes);
+    const int end = static_cast<int>(std::int64_t(j + 1) * n_contacts / lanes);
+    for (int c = begin; c < end; ++c) blocks[j].push_back(c);
+  }
+  Partition out;
+  out.row_of_contact.assign(n_contacts, -1);
+  for (size_t p = 0; out.order.size() < static_cast<size_t>(n_contacts); ++p)
+    for (const std::vector<int>& block : blocks)
+      if (p < block.size()) {
+        out.row_of_contact[block[p]] = static_cast<int>(out.order.size());
+        out.order.push_back(block[p]);
+      }
+  out.colour_start = {0, n_contacts};
+  return out;
+}
+
 // ---- rows ----
 
 std::vector<Row> prepare_rows(const std::vector<Contact>& contacts, const std::vector<int>& order,
@@ -693,7 +714,13 @@ void step(ReferenceWorld& world) {
   world.adjacency = adjacency(contacts, static_cast<int>(world.particles.size()));
   world.colour_rounds = 0;
   std::vector<int> colours;
-  if (s.sweep == SweepKind::Pgs) {
+  const bool interleaved = s.sweep == SweepKind::Pgs && s.serial_lanes > 0 &&
+                           world.one_item_sweeps &&
+                           static_cast<int>(contacts.size()) <= s.one_group_rows;
+  if (interleaved) {
+    // one work-item walks the rows: no colours, none carried to the next step
+    world.partition = interleaved_partition(static_cast<int>(contacts.size()), s.serial_lanes);
+  } else if (s.sweep == SweepKind::Pgs) {
     // last step's colours carried to the contacts that persist, the new ones coloured by rounds
     const bool carry = world.colours_carried && world.has_previous;
     std::vector<int> start;
@@ -735,7 +762,7 @@ void step(ReferenceWorld& world) {
   world.previous = world.current;
   world.has_previous = true;
   world.colours_carried =
-      s.sweep == SweepKind::Pgs &&
+      s.sweep == SweepKind::Pgs && !interleaved &&
       carry_colours_after(static_cast<int>(world.partition.colour_start.size()) - 1,
                           world.fresh_colours);
   world.previous_colours = std::move(colours);

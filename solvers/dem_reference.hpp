@@ -119,6 +119,9 @@ Partition partition_by_colour(const std::vector<int>& colours);
 
 // kernels/colouring.cl identity_order: rows in contact order, one colour (Jacobi)
 Partition identity_partition(int n_contacts);
+// kernels/colouring.cl interleaved_order: the contacts in `lanes` blocks, the rows taking one of
+// each block in turn, one colour (a sweep one work-item walks; DemSettings::serial_lanes)
+Partition interleaved_partition(int n_contacts, int lanes);
 
 // kernels/solver.cl prepare_rows: rows in `order`, from the velocities before gravity
 std::vector<Row> prepare_rows(const std::vector<Contact>& contacts, const std::vector<int>& order,
@@ -166,6 +169,10 @@ struct ReferenceWorld {
   std::vector<int> previous_colours;
   bool colours_carried = false;
   int fresh_colours = 0;  // colours of the last colouring that carried none
+  // whether the device's one-group PGS sweep is one work-item walking the rows (a CPU device;
+  // DemWorld::one_item_sweeps): systems of at most settings.one_group_rows rows are then laid out
+  // interleaved instead of coloured (DemSettings::serial_lanes)
+  bool one_item_sweeps = false;
 
   // by-products of the last step, for inspection
   CellLists cells;

@@ -30,6 +30,15 @@ inline bool carry_colours_after(int colours, int fresh_colours) {
 // loss at 30,370; bench/RESULTS.md, 2026-11-27)
 inline constexpr int kPgsOneGroupRows = 4096;
 
+// blocks a serially walked system's rows interleave (DemSettings::serial_lanes): contact order (1
+// block) swept FB35-G200's zone slower than 8 blocks (1.46-1.56 against 1.27-1.34 ms a step, each
+// row waiting on the velocities the row before wrote), 4 and 16 blocks within the noise of 8. The
+// gain over the colours is the colouring's time (FB35-G200 0.25 -> 0.09 ms a step, HD27-G100 0.71
+// -> 0.48); the sweeps cost the same per row within this VM's noise (bench/RESULTS.md 2026-12-02)
+inline constexpr int kSerialLanes = 8;
+// more blocks than this interleave nothing a core can overlap (its window holds a few rows)
+inline constexpr int kMaxSerialLanes = 1024;
+
 // SPOOK damping times a study may ask for [s] (talus run --damping-time for the particle contacts,
 // --interface-damping-time for the type-G aggregate's interfaces): from 0.1 ms, the shortest
 // timestep a study may take, to 0.5 s, the time a grain dropped from the bucket's height (1.2 m)
@@ -54,8 +63,16 @@ struct DemSettings {
   double tolerance = 0.0;
   SweepKind sweep = SweepKind::Pgs;
   // PGS sweeps systems of at most this many rows in one work-group, larger ones a launch per
-  // colour (the same bits either way; only the speed differs by device): 0 never, INT_MAX always
+  // colour (with colours the same bits either way, only the speed differs by device; but see
+  // serial_lanes): 0 never, INT_MAX always
   int one_group_rows = kPgsOneGroupRows;
+  // where the one-group sweep is one work-item walking the rows (a CPU device), a system of at
+  // most one_group_rows rows is a serial Gauss-Seidel sweep and needs no colours: its rows are then
+  // laid out in contact order cut into this many blocks, taken one of each block in turn
+  // (kernels/colouring.cl interleaved_order), and the colouring is skipped. Another order than
+  // the colours', so other bits than one_group_rows 0 gives on such a device; 0 colours them as a
+  // GPU does (the one-group and per-colour paths then give the same bits)
+  int serial_lanes = kSerialLanes;
   Vec3 gravity = Vec3(0.0, 0.0, -9.81);  // [m/s^2]
   // pairs closer than margin_rel * min(r_a, r_b) get a (speculative) contact row: it never
   // pulls them together, and with damping it brakes an approach that would close more than

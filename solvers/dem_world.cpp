@@ -77,6 +77,7 @@ DemWorld::DemWorld(Device& dev, const Material& material, const DemSettings& set
   k_colour_scatter_ = dev.kernel(colour, "colour_scatter");
   k_colour_ranges_ = dev.kernel(colour, "colour_ranges");
   k_identity_ = dev.kernel(colour, "identity_order");
+  k_interleaved_ = dev.kernel(colour, "interleaved_order");
   k_pairs_differ_ = dev.kernel(colour, "contact_pairs_differ");
   k_carry_colours_ = dev.kernel(colour, "carry_colours");
   k_drop_conflicts_ = dev.kernel(colour, "drop_colour_conflicts");
@@ -139,6 +140,10 @@ void DemWorld::update_params() {
         "DemSettings.narrow_phase_slots: " + std::to_string(settings_.narrow_phase_slots) +
         " is outside 0-" + std::to_string(kMaxNarrowPhaseSlots) + "; use " +
         std::to_string(kNarrowPhaseSlots) + " (the default)");
+  if (settings_.serial_lanes < 0 || settings_.serial_lanes > kMaxSerialLanes)
+    throw InputError("DemSettings.serial_lanes: " + std::to_string(settings_.serial_lanes) +
+                     " is outside 0-" + std::to_string(kMaxSerialLanes) + "; use " +
+                     std::to_string(kSerialLanes) + " (the default) or 0 for colours");
   TlStepParams& p = params_;
   p = TlStepParams{};
   p.gravity = to_float4(settings_.gravity, 0.0);
@@ -588,11 +593,20 @@ void DemWorld::narrow_phase() {
   launch(dev_, k_contact_write_, n, "contact_write");
 }
 
+bool DemWorld::one_item_sweeps() const { return sweep_ && sweep_->walks_in_one_item(0); }
+
+bool DemWorld::rows_interleaved(int rows) const {
+  return settings_.sweep == SweepKind::Pgs && settings_.serial_lanes > 0 && sweep_ &&
+         sweep_->walks_in_one_item(rows);
+}
+
 bool DemWorld::colouring_still_holds() {
   DemBuffers& b = buffers_;
   // made for the last step's contacts, as many as now, of as many particles, for this sweep
   if (!colouring_made_ || !b.has_previous || coloured_contacts_ != b.n_contacts ||
-      coloured_particles_ != particle_count_ || coloured_sweep_ != settings_.sweep)
+      coloured_particles_ != particle_count_ || coloured_sweep_ != settings_.sweep ||
+      coloured_lanes_ != settings_.serial_lanes ||
+      coloured_one_group_rows_ != settings_.one_group_rows)
     return false;
   if (b.n_contacts == 0) return true;
   // the same pairs, index for index (one integer read back: a host wait, as the narrow phase's)
@@ -627,11 +641,24 @@ void DemWorld::colour_contacts() {
   int nc = b.n_contacts;
   b.order.resize(std::max(nc, 1));
   b.row_of_contact.resize(std::max(nc, 1));
+  b.rows_interleaved = false;
   if (settings_.sweep == SweepKind::Jacobi) {
     set_args(k_identity_, nc, b.order, b.row_of_contact);
     launch(dev_, k_identity_, nc, "identity_order");
     b.colour_start = {0, nc};
     b.colour_rounds = 0;
+    colours_made_ = false;
+    return;
+  }
+  if (rows_interleaved(nc)) {
+    // one work-item walks the rows in turn: no colours, rows interleaved from blocks of contacts
+    // (the sweeps read the one range from the device)
+    set_args(k_interleaved_, nc, settings_.serial_lanes, b.order, b.row_of_contact);
+    launch(dev_, k_interleaved_, nc, "interleaved_order");
+    b.colour_start = {0, nc};
+    b.colour_start_dev.upload(b.colour_start);
+    b.colour_rounds = 0;
+    b.rows_interleaved = true;
     colours_made_ = false;
     return;
   }
@@ -825,6 +852,8 @@ void DemWorld::begin_step() {
       coloured_contacts_ = buffers_.n_contacts;
       coloured_particles_ = particle_count_;
       coloured_sweep_ = settings_.sweep;
+      coloured_lanes_ = settings_.serial_lanes;
+      coloured_one_group_rows_ = settings_.one_group_rows;
     }
   }
   {

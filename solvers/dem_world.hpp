@@ -103,6 +103,11 @@ class DemWorld {
   // whether the next colouring carries last step's colours (DemBuffers::colour_previous)
   bool carries_colours() const { return colours_carried_; }
   int fresh_colours() const { return fresh_colours_; }
+  // whether this world's PGS sweep is one work-item walking the rows of a system up to
+  // one_group_rows (a CPU device): such systems are laid out interleaved, not coloured
+  // (DemSettings::serial_lanes; reference::ReferenceWorld::one_item_sweeps mirrors it). Known once
+  // a step has begun
+  bool one_item_sweeps() const;
   const std::vector<StaticGeom>& geoms() const { return geoms_; }
 
   // the stages of step(), in order
@@ -114,6 +119,9 @@ class DemWorld {
   void narrow_phase();
   // whether this step's contacts (narrow_phase) pair the same bodies, index for index, as the
   // contacts the buffers' adjacency and colouring were made for: then those are this step's too
+  // whether this step's `rows` are laid out interleaved for one work-item instead of coloured
+  // (DemSettings::serial_lanes)
+  bool rows_interleaved(int rows) const;
   bool colouring_still_holds();
   void build_adjacency();
   // PGS: graph colouring, carrying last step's colours to the contacts that persist (the same
@@ -194,6 +202,8 @@ class DemWorld {
   int coloured_contacts_ = 0;
   size_t coloured_particles_ = 0;
   SweepKind coloured_sweep_ = SweepKind::Pgs;
+  int coloured_lanes_ = 0;
+  int coloured_one_group_rows_ = 0;
   // what sweep_ was made for (DemSettings::sweep, one_group_rows): a change makes a new one
   SweepKind sweep_kind_;
   int sweep_one_group_rows_;
@@ -201,7 +211,7 @@ class DemWorld {
   cl::Kernel k_contact_count_, k_contact_write_;
   cl::Kernel k_adj_count_, k_adj_fill_, k_adj_sort_;
   cl::Kernel k_colour_round_, k_colour_hist_, k_colour_scatter_, k_colour_ranges_, k_identity_,
-      k_pairs_differ_, k_carry_colours_, k_drop_conflicts_;
+      k_interleaved_, k_pairs_differ_, k_carry_colours_, k_drop_conflicts_;
   cl::Kernel k_prepare_, k_gravity_, k_apply_impulses_, k_store_, k_integrate_, k_residual_,
       k_sum_blocks_;
   cl::Kernel k_first_non_finite_;

@@ -2,7 +2,9 @@
 // one colour in parallel (they share no dynamic body, so the updates never race). Within a
 // contact the normal row goes first, then friction, then rolling (kernels/solver.cl).
 #include <algorithm>
+#include <string>
 
+#include "host/error.hpp"
 #include "solvers/contact_sweep.hpp"
 
 namespace talus {
@@ -29,9 +31,14 @@ class PgsSweep : public ContactSweep {
   }
   const char* name() const override { return "pgs"; }
 
+  bool walks_in_one_item(int rows) const override {
+    return group_size_ == 1 && tools_group_size_ == 1 && rows <= one_group_rows_;
+  }
+
   void iterate(DemBuffers& b, int iterations) override {
     int colours = static_cast<int>(b.colour_start.size()) - 1;
     if (colours <= 0 || iterations <= 0) return;
+    check_layout(b);
     // a small system: every sweep's colours in one launch, one work-group (the same bits)
     if (b.colour_start.back() <= one_group_rows_) {
       sweeps_in_one_group(b, colours, iterations);
@@ -45,6 +52,7 @@ class PgsSweep : public ContactSweep {
     // the step's colours; none when it has no particle rows (only tool rows)
     const int colours = b.n_contacts > 0 ? static_cast<int>(b.colour_start.size()) - 1 : 0;
     if (iterations <= 0 || (colours <= 0 && tools.groups() == 0)) return;
+    if (colours > 0) check_layout(b);
     // a small system: the sweeps and the tools' rows in one launch (the same bits)
     const int particle_rows = colours > 0 ? b.colour_start.back() : 0;
     if (particle_rows + tools.rows() <= one_group_rows_) {
@@ -68,6 +76,15 @@ class PgsSweep : public ContactSweep {
   }
 
  private:
+  // rows laid out for one work-item (no colours) must not reach the parallel per-colour launches,
+  // whose items would race on shared bodies
+  void check_layout(const DemBuffers& b) const {
+    if (b.rows_interleaved && !walks_in_one_item(b.colour_start.back()))
+      throw Error("PGS sweep: " + std::to_string(b.colour_start.back()) +
+                  " rows laid out for one work-item reached a sweep that runs them in parallel "
+                  "(internal error: the layout and the sweep disagree on one_group_rows)");
+  }
+
   // `sweeps` sweeps of every colour in one launch of one work-group
   void sweeps_in_one_group(DemBuffers& b, int colours, int sweeps) {
     set_args(one_group_, b.rows, b.colour_start_dev, colours, sweeps, b.velocity, b.omega);

@@ -376,12 +376,16 @@ TEST(Digging, TheCuttingEdgesResistanceIsTheLawTimesItsStudyFactor) {
 // the aggregate's interfaces' damping time, a type-G study: two of the level's steps by default,
 // the study's in seconds when given, on both interfaces every step; and at G200 it, not the step,
 // sets HD27's breakout (docs/validation.md "HD27's breakout follows the interfaces' damping time":
-// on piles 1-3 at G200 the largest lift over 3.1-3.7 s is 263-309 kN with the default 40 ms and
-// 200-220 kN with 10 ms). Refused at a type-D level and outside [kMinDampingTime, kMaxDampingTime]
-// unless 0
+// on piles 1-3 at G200 the largest lift over 3.1-3.7 s was 263-309 kN with the default 40 ms and
+// 200-220 kN with 10 ms when measured). One pile's peak is a chaotic realisation: re-measured
+// 2026-12-02 with three orders of the zone's rows (DemSettings::serial_lanes 0, 8, 16) the ratio
+// of a pile's peaks was 0.74-0.86, of the three piles' summed peaks 0.78-0.82. So the sum is held
+// below 0.85 and each pile below 0.95. Refused at a type-D level and outside
+// [kMinDampingTime, kMaxDampingTime] unless 0
 TEST(Digging, TheInterfacesDampingTimeIsTwoStepsOrTheStudys) {
   const vehicle::Scenario sc = vehicle::load_scenario("hd27");
   const FidelityPreset& g200 = level_preset("G200");
+  double summed[2] = {0.0, 0.0};
   for (const unsigned seed : {1u, 2u, 3u}) {
     double breakout[2] = {0.0, 0.0};
     for (const double tau : {0.0, 0.01}) {
@@ -404,8 +408,13 @@ TEST(Digging, TheInterfacesDampingTimeIsTwoStepsOrTheStudys) {
         "[ measured ] HD27-G200 pile %u: the largest lift over 3.1-3.7 s %.1f kN with the "
         "interfaces damped over two steps (40 ms), %.1f kN over 10 ms\n",
         seed, 1e-3 * breakout[0], 1e-3 * breakout[1]);
-    EXPECT_LT(breakout[1], 0.85 * breakout[0]) << seed;
+    EXPECT_LT(breakout[1], 0.95 * breakout[0]) << seed;
+    summed[0] += breakout[0];
+    summed[1] += breakout[1];
   }
+  std::printf("[ measured ] the three piles' peaks: %.3f of the default's with 10 ms\n",
+              summed[1] / summed[0]);
+  EXPECT_LT(summed[1], 0.85 * summed[0]);
   DiggingOptions d;
   d.interface_damping_time = 0.01;
   EXPECT_THROW(

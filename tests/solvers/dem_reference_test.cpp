@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <functional>
 #include <limits>
@@ -38,16 +39,19 @@ std::unique_ptr<DemWorld> make_world(const Scene& s) {
 }
 
 // a device world of a random scene from a fresh seed (the caller traces `seed_note`), and the
-// generator for whatever else the test draws
+// generator for whatever else the test draws. The colouring tests ask for serial_lanes 0: a CPU
+// device otherwise walks such a small system in one work-item, interleaved and not coloured
 struct RandomWorld {
   std::string seed_note;
   std::mt19937_64 rng;
   std::unique_ptr<DemWorld> world;
 };
-RandomWorld random_world() {
+RandomWorld random_world(int serial_lanes = kSerialLanes) {
   const uint64_t seed = test::fresh_seed();
   RandomWorld out{test::seed_note(seed), std::mt19937_64(seed), nullptr};
-  out.world = make_world(test::random_scene(out.rng));
+  Scene scene = test::random_scene(out.rng);
+  scene.settings.serial_lanes = serial_lanes;
+  out.world = make_world(scene);
   return out;
 }
 
@@ -722,7 +726,7 @@ TEST(ReferenceAdjacency, MatchesExactly) {
 }
 
 TEST(ReferenceColouring, MatchesExactlyAndIsValid) {
-  RandomWorld r = random_world();
+  RandomWorld r = random_world(/*serial_lanes=*/0);
   SCOPED_TRACE(r.seed_note);
   auto& world = r.world;
   world->broad_phase();
@@ -751,13 +755,70 @@ TEST(ReferenceColouring, MatchesExactlyAndIsValid) {
               want.colour_start.size() - 1, rounds);
 }
 
+// a system one work-item walks (a CPU device, up to one_group_rows rows) is laid out without
+// colours: the contacts cut into `serial_lanes` blocks, the rows taking one of each in turn. The
+// device's order must be the reference's exactly, for block counts from one (contact order) to
+// more blocks than contacts, and a bijection whose neighbouring rows come from different blocks
+TEST(ReferenceColouring, InterleavedRowsMatchExactly) {
+  RandomWorld r = random_world();
+  SCOPED_TRACE(r.seed_note);
+  auto& world = r.world;
+  if (!world->one_item_sweeps()) GTEST_SKIP() << "this device sweeps in several work-items";
+  world->broad_phase();
+  world->narrow_phase();
+  world->build_adjacency();
+  const int nc = world->buffers().n_contacts;
+  ASSERT_GT(nc, 0);
+  const int drawn = 2 + static_cast<int>(r.rng() % 60);
+  for (int lanes : {1, 2, 3, kSerialLanes, drawn, nc - 1, nc + 5, kMaxSerialLanes}) {
+    if (lanes < 1 || lanes > kMaxSerialLanes) continue;
+    SCOPED_TRACE("serial_lanes " + std::to_string(lanes));
+    world->settings().serial_lanes = lanes;
+    world->colour_contacts();
+    const ref::Partition want = ref::interleaved_partition(nc, lanes);
+    const DemBuffers& b = world->buffers();
+    EXPECT_TRUE(b.rows_interleaved);
+    EXPECT_EQ(b.colour_start, (std::vector<int>{0, nc}));
+    EXPECT_EQ(b.colour_start_dev.download(2), (std::vector<int>{0, nc}));
+    const std::vector<int> order = b.order.download(nc), row_of = b.row_of_contact.download(nc);
+    EXPECT_EQ(order, want.order);
+    EXPECT_EQ(row_of, want.row_of_contact);
+    // a bijection, and rows next to each other from different blocks while every block has a
+    // contact left (block of c: the last j with floor(j nc / lanes) <= c)
+    auto block = [&](int c) {
+      int j = 0;
+      while (j + 1 < lanes && std::int64_t(j + 1) * nc / lanes <= c) ++j;
+      return j;
+    };
+    std::vector<int> seen(nc, 0);
+    for (int row = 0; row < nc; ++row) {
+      ASSERT_GE(order[row], 0);
+      ASSERT_LT(order[row], nc);
+      ++seen[order[row]];
+      EXPECT_EQ(row_of[order[row]], row);
+      if (lanes > 1 && row + 1 < (nc / lanes) * lanes) {
+        EXPECT_NE(block(order[row]), block(order[row + 1])) << "rows " << row << ", " << row + 1;
+      }
+    }
+    EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), nc);
+  }
+  // colours again with 0
+  world->settings().serial_lanes = 0;
+  world->colour_contacts();
+  EXPECT_FALSE(world->buffers().rows_interleaved);
+  EXPECT_GT(world->buffers().colour_start.size(), 2u);
+  std::printf(
+      "[ measured ] %d contacts: interleaved orders equal the reference's (1 to %d blocks)\n", nc,
+      kMaxSerialLanes);
+}
+
 // a world stepped twice carries its last step's colours to the contacts that persist; the
 // device's carried and final colours, rounds and partition must match the reference's exactly.
 // Last step's colours are also overwritten with random ones from a few colours, so that many
 // persisting neighbours carry the same colour and the guard against it (drop_colour_conflicts)
 // must act: it still ends in a valid colouring, equal to the reference's
 TEST(ReferenceColouring, CarriedColoursMatchExactlyAndAreValid) {
-  RandomWorld r = random_world();
+  RandomWorld r = random_world(/*serial_lanes=*/0);
   SCOPED_TRACE(r.seed_note);
   auto& world = r.world;
   world->step();
@@ -821,7 +882,7 @@ TEST(ReferenceColouring, CarriedColoursMatchExactlyAndAreValid) {
 // numbers, a new particle's contacts start from zero, and the colouring carries the survivors'
 // colours, exactly as the reference does from the renumbered lists
 TEST(ReferenceColouring, RenumberedParticlesKeepTheirPairsWarmStartAndColours) {
-  RandomWorld r = random_world();
+  RandomWorld r = random_world(/*serial_lanes=*/0);
   SCOPED_TRACE(r.seed_note);
   DemWorld& world = *r.world;
   world.step();
@@ -898,7 +959,7 @@ TEST(ReferenceColouring, RenumberedParticlesKeepTheirPairsWarmStartAndColours) {
 // the last step stays for the next one's warm start and colouring (the same start as the
 // renumbering test above)
 TEST(ReferenceColouring, ResizedParticlesKeepEveryContactAndTheirColours) {
-  RandomWorld r = random_world();
+  RandomWorld r = random_world(/*serial_lanes=*/0);
   SCOPED_TRACE(r.seed_note);
   DemWorld& world = *r.world;
   world.step();
@@ -1267,9 +1328,10 @@ bool same_pairs_or_marginal(const std::vector<ref::Contact>& got,
 // Where a pair's gap sits within rounding of the contact margin, one side may have a contact
 // the other lacks, and the solves then legitimately differ: such a sample is redrawn (seen
 // about once in 80 runs).
-void five_steps(SweepKind sweep) {
+void five_steps(SweepKind sweep, int serial_lanes) {
   const double synced_position_tol = 3e-7, free_position_tol = 3e-6;
-  const std::string name = sweep_name(sweep);
+  const std::string name =
+      std::string(sweep_name(sweep)) + " (serial_lanes " + std::to_string(serial_lanes) + ")";
   for (int attempt = 0; attempt < 3; ++attempt) {
     uint64_t seed = test::fresh_seed() + attempt;
     SCOPED_TRACE(test::seed_note(seed));
@@ -1281,8 +1343,10 @@ void five_steps(SweepKind sweep) {
     Scene s = test::random_scene(rng, options);
     s.settings.sweep = sweep;
     s.settings.iterations = 20;
+    s.settings.serial_lanes = serial_lanes;
     auto world = make_world(s);
     ref::ReferenceWorld free;
+    free.one_item_sweeps = world->one_item_sweeps();
     free.particles = world->particles();
     free.geoms = geoms_of(*world);
     free.params = params_of(*world);
@@ -1335,8 +1399,10 @@ void five_steps(SweepKind sweep) {
   FAIL() << "three samples in a row had a pair cross the margin within rounding: unlikely";
 }
 
-TEST(ReferenceStep, FiveStepsPgsMatchPositions) { five_steps(SweepKind::Pgs); }
-TEST(ReferenceStep, FiveStepsJacobiMatchPositions) { five_steps(SweepKind::Jacobi); }
+// PGS as a CPU device runs this system (one work-item, rows interleaved), and coloured (as a GPU)
+TEST(ReferenceStep, FiveStepsPgsMatchPositions) { five_steps(SweepKind::Pgs, kSerialLanes); }
+TEST(ReferenceStep, FiveStepsColouredPgsMatchPositions) { five_steps(SweepKind::Pgs, 0); }
+TEST(ReferenceStep, FiveStepsJacobiMatchPositions) { five_steps(SweepKind::Jacobi, kSerialLanes); }
 
 }  // namespace
 }  // namespace talus

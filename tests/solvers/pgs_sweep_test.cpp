@@ -6,7 +6,9 @@
 #include <cstdio>
 #include <cstring>
 #include <random>
+#include <string>
 
+#include "host/error.hpp"
 #include "solvers/contact_sweep.hpp"
 #include "solvers/dem_world.hpp"
 #include "tests/solvers/dem_test_util.hpp"
@@ -41,13 +43,15 @@ void expect_the_same_changed_bytes(const std::vector<char>& per_colour,
 
 // a random scene's rows and bodies at the start of its sweeps (contacts found, coloured, rows
 // made, gravity and warm start applied), then swept by each path from that same state: the
-// velocities, angular velocities and row impulses must agree bit for bit
+// velocities, angular velocities and row impulses must agree bit for bit. Coloured
+// (serial_lanes 0): a CPU device otherwise lays such a system out for one work-item
 TEST(PgsSweep, OneGroupGivesTheBitsOfALaunchPerColour) {
   const uint64_t seed = test::fresh_seed();
   SCOPED_TRACE(test::seed_note(seed));
   std::mt19937_64 rng(seed);
   test::Scene s = test::random_scene(rng);
   s.settings.sweep = SweepKind::Pgs;
+  s.settings.serial_lanes = 0;
   DemWorld world(test::shared_device(), s.material, s.settings, s.bounds, s.geoms);
   world.set_particles(s.particles);
   // one full step first, so that the second starts warm and carries its colours
@@ -84,9 +88,9 @@ TEST(PgsSweep, OneGroupGivesTheBitsOfALaunchPerColour) {
               rows, colours, sweeps);
 }
 
-// DemSettings::one_group_rows only picks the path: a world stepped with every system in one
-// work-group and one stepped with a launch per colour end in the same bits after many steps
-// (warm starts, carried colours and speculative rows included)
+// with colours (serial_lanes 0) DemSettings::one_group_rows only picks the path: a world stepped
+// with every system in one work-group and one stepped with a launch per colour end in the same
+// bits after many steps (warm starts, carried colours and speculative rows included)
 TEST(PgsSweep, OneGroupRowsSettingChangesNoBitOfAWorld) {
   const uint64_t seed = test::fresh_seed();
   SCOPED_TRACE(test::seed_note(seed));
@@ -97,6 +101,7 @@ TEST(PgsSweep, OneGroupRowsSettingChangesNoBitOfAWorld) {
     DemSettings settings = s.settings;
     settings.sweep = SweepKind::Pgs;
     settings.one_group_rows = one_group_rows;
+    settings.serial_lanes = 0;
     DemWorld world(test::shared_device(), s.material, settings, s.bounds, s.geoms);
     world.set_particles(s.particles);
     for (int k = 0; k < steps; ++k) world.step();
@@ -109,6 +114,34 @@ TEST(PgsSweep, OneGroupRowsSettingChangesNoBitOfAWorld) {
   // and the particles moved (two copies of the start state would agree too)
   expect_the_same_changed_bytes(run(0), run(INT_MAX), vec3_bytes(s.particles.position));
   std::printf("[ measured ] %zu particles, %d steps: bit-identical\n", s.particles.size(), steps);
+}
+
+// rows laid out interleaved for one work-item share bodies within their one "colour": a sweep
+// that would run them in parallel (a per-colour launch) refuses them instead of racing, and the
+// one-item sweep that they were laid out for takes them
+TEST(PgsSweep, InterleavedRowsAreRefusedByAParallelSweep) {
+  const uint64_t seed = test::fresh_seed();
+  SCOPED_TRACE(test::seed_note(seed));
+  std::mt19937_64 rng(seed);
+  test::Scene s = test::random_scene(rng);
+  s.settings.sweep = SweepKind::Pgs;
+  DemWorld world(test::shared_device(), s.material, s.settings, s.bounds, s.geoms);
+  world.set_particles(s.particles);
+  if (!world.one_item_sweeps()) GTEST_SKIP() << "this device sweeps in several work-items";
+  world.begin_step();
+  world.apply_gravity();
+  world.warm_start();
+  DemBuffers& b = world.buffers();
+  ASSERT_GT(b.n_contacts, 0);
+  ASSERT_TRUE(b.rows_interleaved);
+  try {
+    make_pgs_sweep(world.device(), 0)->iterate(b, 1);
+    FAIL() << "expected an Error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("laid out for one work-item"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_NO_THROW(make_pgs_sweep(world.device(), b.n_contacts)->iterate(b, 1));
 }
 
 }  // namespace

@@ -81,7 +81,10 @@ TEST(ToolWorld, AKinematicPlateCarriesTheWeightOfTheGrainsOnIt) {
   ToolWorld tools(dev, *b.dem, {floor});
   Vec3 mean = Vec3::Zero();
   int n = 0;
-  // (no horizontal balance is asserted: the walls may hold locked-in friction the floor answers)
+  // (no horizontal balance is asserted: the walls may hold locked-in friction the floor answers;
+  // vertically they hold a little of the weight or press a little onto the floor, by the packing's
+  // history: -0.3 to +1.9 % of it over seven row orders, DemSettings::serial_lanes 0, 1, 2, 4, 8,
+  // 16 and 64, measured 2026-12-02)
   for (int k = 0; k < 400; ++k) {
     tools.step();
     if (k >= 300) {
@@ -93,7 +96,7 @@ TEST(ToolWorld, AKinematicPlateCarriesTheWeightOfTheGrainsOnIt) {
   const double weight = b.mass * 9.81;
   std::printf("[ measured ] plate carries %.1f N of %.1f N weight (%+.2f %%), %d contacts\n", -mean.z(), weight,
               100.0 * (-mean.z() / weight - 1.0), tools.load(0).contacts);
-  EXPECT_NEAR(-mean.z(), weight, 0.01 * weight);
+  EXPECT_NEAR(-mean.z(), weight, 0.025 * weight);
   EXPECT_DOUBLE_EQ(tools.tool(0).position.z(), 0.0);  // kinematic at rest: it never moves
 }
 
@@ -259,12 +262,14 @@ TEST(ToolWorld, KinematicToolRowsGiveTheSameBitsInOneLaunchAsLaunchedPerSweep) {
   // (DemSettings::one_group_rows above the rows), with a launch per colour and a tool launch
   // per sweep (one_group_rows 0), and with the particle rows in one group and a tool launch per
   // sweep (one_group_rows at the most particle rows of a step, below particle and tool rows
-  // together) end in the same particles and the same load
+  // together) end in the same particles and the same load. Coloured (serial_lanes 0): a CPU
+  // device otherwise walks the one-group systems interleaved, another order than the launches'
   int most_particle_rows = 0;
   auto run = [&](int one_group_rows, std::vector<float>& state, Vec6& load) {
     Device dev;
     Bed b = make_bed(dev, 0.0, 11);
     b.dem->settings().one_group_rows = one_group_rows;
+    b.dem->settings().serial_lanes = 0;
     add_floor(b);
     ToolWorld tools(dev, *b.dem, {blade()});
     int rows = 0;
