@@ -27,7 +27,8 @@ const char* const kOneGroupRowsHelp =
     "colour (0: never)";
 const char* const kSerialLanesHelp =
     "on a CPU device a system the one work-group sweeps is walked by one work-item without "
-    "colours, its rows interleaved from this many blocks of contacts (0: coloured as on a GPU)";
+    "colours, its rows interleaved from this many blocks of contacts (0: coloured as on a GPU); "
+    "the timed world's, not the pile's it is built from";
 
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());

@@ -117,15 +117,17 @@ class DemWorld {
   void check_finite();
   void broad_phase();
   void narrow_phase();
-  // whether this step's contacts (narrow_phase) pair the same bodies, index for index, as the
-  // contacts the buffers' adjacency and colouring were made for: then those are this step's too
   // whether this step's `rows` are laid out interleaved for one work-item instead of coloured
   // (DemSettings::serial_lanes)
   bool rows_interleaved(int rows) const;
+  // whether this step's contacts (narrow_phase) pair the same bodies, index for index, as the
+  // contacts the buffers' adjacency and colouring were made for (with the same serial_lanes and
+  // one_group_rows): then those are this step's too
   bool colouring_still_holds();
   void build_adjacency();
   // PGS: graph colouring, carrying last step's colours to the contacts that persist (the same
-  // result however often it runs within a step); Jacobi: one colour in contact order
+  // result however often it runs within a step), or for a system one work-item walks the
+  // interleaved rows (rows_interleaved); Jacobi: one colour in contact order
   void colour_contacts();
   void prepare_rows();
   void apply_gravity();
@@ -190,9 +192,10 @@ class DemWorld {
   std::unique_ptr<ContactSweep> sweep_;
   // what the buffers' adjacency and colouring were made for: the last step's contacts (false
   // before the first colouring and after a restored state, whose contacts came without them),
-  // their count, the particle count and the sweep kind
+  // their count, the particle count, the sweep kind, serial_lanes and one_group_rows
   bool colouring_made_ = false;
-  // `colour` holds this step's PGS colours (false after a Jacobi colouring), and
+  // `colour` holds this step's PGS colours (false after a Jacobi colouring or an interleaved
+  // layout), and
   // `colour_previous` last step's, which the next colouring carries (false until a PGS step has
   // ended, after new particles, and after a restored state that saved none)
   bool colours_made_ = false;

@@ -1,6 +1,9 @@
 // Graph-coloured projected Gauss-Seidel: the colours are solved one after another, the rows of
-// one colour in parallel (they share no dynamic body, so the updates never race). Within a
-// contact the normal row goes first, then friction, then rolling (kernels/solver.cl).
+// one colour in parallel (they share no dynamic body, so the updates never race). A system that
+// one work-item walks (a CPU device, up to one_group_rows rows) comes as one "colour" of
+// interleaved rows that do share bodies (DemSettings::serial_lanes): only that walk may take it
+// (check_layout). Within a contact the normal row goes first, then friction, then rolling
+// (kernels/solver.cl).
 #include <algorithm>
 #include <string>
 
@@ -39,7 +42,8 @@ class PgsSweep : public ContactSweep {
     int colours = static_cast<int>(b.colour_start.size()) - 1;
     if (colours <= 0 || iterations <= 0) return;
     check_layout(b);
-    // a small system: every sweep's colours in one launch, one work-group (the same bits)
+    // a small system: every sweep's colours in one launch, one work-group (with colours the same
+    // bits as a launch per colour)
     if (b.colour_start.back() <= one_group_rows_) {
       sweeps_in_one_group(b, colours, iterations);
       return;
@@ -53,7 +57,7 @@ class PgsSweep : public ContactSweep {
     const int colours = b.n_contacts > 0 ? static_cast<int>(b.colour_start.size()) - 1 : 0;
     if (iterations <= 0 || (colours <= 0 && tools.groups() == 0)) return;
     if (colours > 0) check_layout(b);
-    // a small system: the sweeps and the tools' rows in one launch (the same bits)
+    // a small system: the sweeps and the tools' rows in one launch (with colours the same bits)
     const int particle_rows = colours > 0 ? b.colour_start.back() : 0;
     if (particle_rows + tools.rows() <= one_group_rows_) {
       set_args(one_group_tools_, b.rows, b.colour_start_dev, std::max(colours, 0), iterations,

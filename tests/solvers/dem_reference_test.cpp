@@ -1372,6 +1372,11 @@ void five_steps(SweepKind sweep, int serial_lanes) {
       world->step();
       ref::step(synced);
       ref::step(free);
+      // the layout under test is the one the device made
+      EXPECT_EQ(b.rows_interleaved, sweep == SweepKind::Pgs && serial_lanes > 0 &&
+                                        free.one_item_sweeps &&
+                                        b.n_contacts <= s.settings.one_group_rows)
+          << "step " << step;
       // this step's contacts (the device swapped its current and previous lists)
       std::vector<ref::Contact> got = contacts_of(*world, 1 - b.current);
       if (!same_pairs_or_marginal(got, synced.current.contacts, synced, step) ||

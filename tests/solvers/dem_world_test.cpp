@@ -150,8 +150,11 @@ void kept_layout_gives_the_bits_of_a_fresh_one(int serial_lanes) {
   DemWorld& fresh = *bed.second;
   const int steps = 600;
   int kept_steps = 0;
+  // the layout asked for is the one made (interleaved only where one work-item walks the rows)
+  const bool interleaved = serial_lanes > 0 && kept.one_item_sweeps();
   for (int i = 0; i < steps; ++i) {
     kept.step();
+    ASSERT_EQ(kept.buffers().rows_interleaved, interleaved) << "step " << i;
     kept_steps += kept.stats().colouring_kept ? 1 : 0;
     fresh.begin_step();
     EXPECT_EQ(fresh.stats().colouring_kept, kept.stats().colouring_kept) << "step " << i;
@@ -180,6 +183,37 @@ TEST(DemWorld, AColouringKeptWhileThePairsHoldGivesTheBitsOfAFreshOne) {
 // the same keep for rows a CPU device's one work-item walks, laid out interleaved (no colours)
 TEST(DemWorld, AnInterleavedLayoutKeptWhileThePairsHoldGivesTheBitsOfAFreshOne) {
   kept_layout_gives_the_bits_of_a_fresh_one(kSerialLanes);
+}
+
+// the layout follows settings changed between steps: a world walked interleaved that is asked for
+// a launch per colour (one_group_rows 0), for colours (serial_lanes 0), and back, lays out each
+// step as asked (a layout kept from the step before would reach a sweep it was not made for, which
+// refuses it) and steps on without an error
+TEST(DemWorld, TheRowLayoutFollowsSettingsChangedBetweenSteps) {
+  Device dev;
+  BedPair bed = bed_pair(dev, kSerialLanes);
+  DemWorld& world = *bed.first;
+  if (!world.one_item_sweeps()) GTEST_SKIP() << "this device sweeps in several work-items";
+  // the bed at rest, where steps keep their layout
+  for (int i = 0; i < 300; ++i) world.step();
+  struct Change {
+    int one_group_rows, serial_lanes;
+    bool interleaved;
+  };
+  for (const Change c :
+       {Change{0, kSerialLanes, false}, Change{kPgsOneGroupRows, kSerialLanes, true},
+        Change{kPgsOneGroupRows, 0, false}, Change{kPgsOneGroupRows, 3, true},
+        Change{kPgsOneGroupRows, kSerialLanes, true}}) {
+    SCOPED_TRACE("one_group_rows " + std::to_string(c.one_group_rows) + ", serial_lanes " +
+                 std::to_string(c.serial_lanes));
+    world.settings().one_group_rows = c.one_group_rows;
+    world.settings().serial_lanes = c.serial_lanes;
+    for (int i = 0; i < 5; ++i) {
+      ASSERT_NO_THROW(world.step()) << "step " << i;
+      EXPECT_EQ(world.buffers().rows_interleaved, c.interleaved) << "step " << i;
+      EXPECT_EQ(world.stats().colours > 1, !c.interleaved) << "step " << i;
+    }
+  }
 }
 
 // the keep's guards: a world restored to an earlier state (its colouring buffers then belong to
