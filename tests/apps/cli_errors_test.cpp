@@ -245,6 +245,14 @@ TEST(CliErrors, StepCountsAndLoadsOutsideTheirRangeAreRefused) {
       EXPECT_NE(o.err.find("--one-group-rows"), std::string::npos)
           << bench << rows << ": " << o.err;
     }
+  // the serially walked system's blocks: a whole number in 0-1024
+  for (const char* lanes : {"-1", "1025", "x", "2.5"})
+    for (const char* bench :
+         {"bench dem --levels D400 --serial-lanes ", "bench dig --serial-lanes "}) {
+      const Outcome o = run("", std::string(bench) + lanes);
+      EXPECT_EQ(o.code, 2) << bench << lanes << ": " << o.err;
+      EXPECT_NE(o.err.find("--serial-lanes"), std::string::npos) << bench << lanes << ": " << o.err;
+    }
   // the PGS relaxation: a number in (0, 2), refused before any pile is built or folder made
   for (const char* omega : {"0", "0.001", "2", "1.99999999", "-0.5", "nan", "x"})
     for (const char* cmd : {"bench dem --levels D400 --relaxation ", "bench dig --relaxation ",

@@ -541,6 +541,28 @@ TEST(DemWorld, ToleranceStopsTheSweepsEarly) {
 
 // a tolerance that is negative or not finite is refused by the step that would use it, before
 // it changes the particles, naming the field
+// serial_lanes outside 0-kMaxSerialLanes is refused by the step that would use it, naming the
+// field, before it changes the particles
+TEST(DemWorld, SerialLanesOutsideTheirRangeAreRefused) {
+  Device dev;
+  Scene scene = small_bed();
+  DemWorld world(dev, scene.material, scene.settings, scene.bounds, scene.geoms);
+  world.set_particles(scene.particles);
+  const auto before = world.buffers().position.download(world.size());
+  for (int bad : {-1, kMaxSerialLanes + 1}) {
+    world.settings().serial_lanes = bad;
+    try {
+      world.step();
+      FAIL() << "expected an InputError for " << bad;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("DemSettings.serial_lanes"), std::string::npos)
+          << e.what();
+    }
+  }
+  const auto after = world.buffers().position.download(world.size());
+  EXPECT_EQ(0, std::memcmp(before.data(), after.data(), before.size() * sizeof(before[0])));
+}
+
 TEST(DemWorld, AToleranceThatIsNegativeOrNotFiniteIsRefused) {
   Device dev;
   Scene scene = small_bed();
