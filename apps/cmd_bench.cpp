@@ -24,11 +24,15 @@ namespace {
 // the same bits; a CPU device walks such a system in one work-item, see --serial-lanes)
 const char* const kOneGroupRowsHelp =
     "PGS sweeps systems of at most this many rows in one work-group, larger ones a launch per "
-    "colour (0: never)";
+    "colour or, on a CPU device, in parts (0: never)";
 const char* const kSerialLanesHelp =
     "on a CPU device a system the one work-group sweeps is walked by one work-item without "
     "colours, its rows interleaved from this many blocks of contacts (0: coloured as on a GPU); "
     "the timed world's, not the pile's it is built from";
+
+const char* const kSweepPartsHelp =
+    "on a CPU device a larger system is cut into this many parts by particle index, walked side "
+    "by side by a work-item each, then their boundary (0: one per compute unit)";
 
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
@@ -48,6 +52,7 @@ std::vector<std::string> split(const std::string& s, char sep) {
 struct SolverStudy {
   int one_group_rows = kPgsOneGroupRows;
   int serial_lanes = kSerialLanes;
+  int sweep_parts = 0;
   // the reach's default is the command's: bench dig digs (DiggingOptions), bench dem settles a bed
   // (DemSettings, as the piles are)
   bool pair_reach;
@@ -62,6 +67,9 @@ struct SolverStudy {
     cmd.add_option("--serial-lanes", serial_lanes, kSerialLanesHelp)
         ->check(CLI::Range(0, kMaxSerialLanes))
         ->capture_default_str();
+    cmd.add_option("--sweep-parts", sweep_parts, kSweepPartsHelp)
+        ->check(CLI::Range(0, kMaxSweepParts))
+        ->capture_default_str();
     add_reach_option(cmd, pair_reach);
     cmd.add_option("--relaxation", relaxation, kRelaxationHelp)
         ->check(relaxation_number())
@@ -70,12 +78,14 @@ struct SolverStudy {
   void apply(DemSettings& s) const {
     s.one_group_rows = one_group_rows;
     s.serial_lanes = serial_lanes;
+    s.sweep_parts = sweep_parts;
     s.pair_reach = pair_reach;
     s.relaxation = relaxation;
   }
   void apply(DiggingOptions& o) const {
     o.one_group_rows = one_group_rows;
     o.serial_lanes = serial_lanes;
+    o.sweep_parts = sweep_parts;
     o.pair_reach = pair_reach;
     o.relaxation = relaxation;
   }
@@ -83,6 +93,7 @@ struct SolverStudy {
   void describe(Json& j) const {
     j["one_group_rows"] = one_group_rows;
     j["serial_lanes"] = serial_lanes;
+    j["sweep_parts"] = sweep_parts;
     j["pair_reach"] = pair_reach;
     j["relaxation"] = relaxation;
   }
@@ -109,7 +120,7 @@ nlohmann::json bench_level(Device& dev, const FidelityPreset& preset, int steps,
   DemWorld world(dev, gravel(), settings, pile.bounds, pile.geoms);
   world.set_particles(pile.particles);
   world.step();  // contacts exist from here on, warm start as in a run
-  std::vector<double> step_s, sweep_s, contacts;
+  std::vector<double> step_s, sweep_s, contacts, boundary;
   for (int i = 0; i < steps; ++i) {
     auto t0 = std::chrono::steady_clock::now();
     world.step();
@@ -117,6 +128,7 @@ nlohmann::json bench_level(Device& dev, const FidelityPreset& preset, int steps,
     step_s.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
     sweep_s.push_back(world.stats().sweep_seconds);
     contacts.push_back(world.stats().contacts);
+    boundary.push_back(world.stats().boundary_rows);
   }
   double ms = 1e3 * median(step_s);
   double n_contacts = median(contacts);
@@ -124,6 +136,7 @@ nlohmann::json bench_level(Device& dev, const FidelityPreset& preset, int steps,
                       {"particles", world.size()},
                       {"contacts", n_contacts},
                       {"colours", world.stats().colours},
+                      {"boundary_share", median(boundary) / std::max(n_contacts, 1.0)},
                       {"iterations", preset.iterations},
                       {"dt_s", preset.dt},
                       {"steps_timed", steps},
@@ -131,6 +144,14 @@ nlohmann::json bench_level(Device& dev, const FidelityPreset& preset, int steps,
                       {"ms_sweeps_per_step", 1e3 * median(sweep_s)},
                       {"contact_updates_per_s", n_contacts * preset.iterations / median(sweep_s)},
                       {"realtime_factor", preset.dt / median(step_s)}};
+  // the last step's runs (a CPU device's layout of a large system): each part's rows, the
+  // boundary's last; the slowest part sets a sweep's time
+  if (world.buffers().row_layout == RowLayout::Runs) {
+    const std::vector<int>& start = world.buffers().colour_start;
+    std::vector<int> rows;
+    for (size_t k = 0; k + 1 < start.size(); ++k) rows.push_back(start[k + 1] - start[k]);
+    j["run_rows"] = rows;
+  }
   study.describe(j);
   return j;
 }
@@ -203,6 +224,7 @@ nlohmann::ordered_json dig_cost_json(const DigCost& c, const std::string& device
           {"realtime_factor", c.realtime_factor},
           {"stages", stages},
           {"contacts", c.contacts},
+          {"boundary_rows", c.boundary_rows},
           {"bucket_contacts", c.bucket_contacts},
           {"passes", c.passes},
           {"sweeps", c.sweeps},

@@ -87,11 +87,13 @@ DigCost measure_dig_cost(Device& dev, const vehicle::Scenario& scenario,
       // otherwise), then with the level's sweeps (solvers/tool_world)
       if (sim.particle_count() > 0) {
         cost.contacts += dem.stats().contacts;
+        cost.boundary_rows += dem.stats().boundary_rows;
         cost.passes += 1;
         cost.sweeps += preset.iterations;
       }
     } else {
       cost.contacts += dem.stats().contacts;
+      cost.boundary_rows += dem.stats().boundary_rows;
       cost.bucket_contacts += sim.split().stats().bucket_contacts;
       cost.passes += sim.split().stats().passes;
       cost.sweeps += sim.split().stats().sweeps;
@@ -109,6 +111,7 @@ DigCost measure_dig_cost(Device& dev, const vehicle::Scenario& scenario,
     cost.stages.emplace_back(name, 1e3 * total / profiled);
   cost.particles /= measured_steps;
   cost.contacts /= measured_steps;
+  cost.boundary_rows /= measured_steps;
   cost.bucket_contacts /= measured_steps;
   cost.passes /= measured_steps;
   cost.sweeps /= measured_steps;

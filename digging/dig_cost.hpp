@@ -31,6 +31,9 @@ struct DigCost {
   std::vector<std::pair<std::string, double>> stages;
   // the work measured: means over the measured steps
   double contacts = 0.0;         // particle-particle and particle-geometry contacts
+  // of them, rows in the boundary of the runs (StepStats::boundary_rows; 0 unless a CPU device
+  // walks the system in parts), walked after the parts by one work-item
+  double boundary_rows = 0.0;
   double bucket_contacts = 0.0;  // particle-bucket rows (type D; type G's bucket is kinematic)
   double passes = 0.0;           // outer coupling passes
   double sweeps = 0.0;           // particle sweeps, all passes (fewer with a sweep tolerance)

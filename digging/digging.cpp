@@ -194,6 +194,7 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
     terrain.max_particle_speed = options.max_particle_speed;
     terrain.one_group_rows = options.one_group_rows;
     terrain.serial_lanes = options.serial_lanes;
+    terrain.sweep_parts = options.sweep_parts;
     terrain.pair_reach = options.pair_reach;
     terrain.relaxation = options.relaxation;
     terrain.seed_diameter = options.seed_diameter;
@@ -228,6 +229,7 @@ DiggingSimulation::DiggingSimulation(Device& dev, const vehicle::Scenario& scena
   settings.sweep = options.sweep;
   settings.one_group_rows = options.one_group_rows;
   settings.serial_lanes = options.serial_lanes;
+  settings.sweep_parts = options.sweep_parts;
   settings.pair_reach = options.pair_reach;
   settings.relaxation = options.relaxation;
   settings.max_speed = options.max_particle_speed;

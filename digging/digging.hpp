@@ -71,6 +71,9 @@ struct DiggingOptions {
   // blocks of contacts a serially walked system's rows interleave (DemSettings::serial_lanes;
   // type D and the type-G zone alike); 0 colours them
   int serial_lanes = kSerialLanes;
+  // parts a larger system's rows are walked in on a CPU device (DemSettings::sweep_parts; type D
+  // and the type-G zone alike); 0: one per compute unit
+  int sweep_parts = 0;
   // each particle pair's own speculative reach instead of the fastest particle's (DemSettings::
   // pair_reach; type D and the type-G zone alike). The default since 2026-11-29: the same sweeps
   // and fills within the piles' scatter with 30-45 % fewer rows (docs/dem.md "Speculative reach")

@@ -239,6 +239,14 @@ void launch(Device& dev, cl::Kernel& kernel, size_t count, const char* what) {
   });
 }
 
+void launch_walks(Device& dev, cl::Kernel& kernel, size_t groups, const char* what) {
+  if (groups == 0) return;
+  cl_checked(what, [&] {
+    return dev.queue().enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(groups),
+                                            cl::NDRange(1));
+  });
+}
+
 void launch_group(Device& dev, cl::Kernel& kernel, size_t size, const char* what) {
   cl_checked(what, [&] {
     return dev.queue().enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(size),

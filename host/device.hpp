@@ -78,6 +78,10 @@ class Device {
   // on one core, so a barrier costs a turn of every item, and kernels with barriers over mostly
   // idle items (the one-group sweeps, short scans) take one work-item there instead
   bool is_cpu() const { return is_cpu_; }
+  // the device's compute units (CL_DEVICE_MAX_COMPUTE_UNITS): cores of a CPU device
+  int compute_units() const {
+    return static_cast<int>(device_.getInfo<CL_DEVICE_MAX_COMPUTE_UNITS>());
+  }
   // "platform / device (compute units, global memory)"
   std::string description() const { return description_; }
   // the device's global memory [bytes] (CL_DEVICE_GLOBAL_MEM_SIZE), what its buffers share
@@ -289,5 +293,9 @@ void launch(Device& dev, cl::Kernel& kernel, size_t count, const char* what);
 // enqueues `kernel` as one work-group of `size` work-items (a chain walked by one work-item with
 // the group's help: kernels/bucket.cl)
 void launch_group(Device& dev, cl::Kernel& kernel, size_t size, const char* what);
+
+// enqueues `kernel` as `groups` work-groups of one work-item each: one walk per group, side by
+// side on a CPU device's cores (kernels/solver.cl pgs_runs)
+void launch_walks(Device& dev, cl::Kernel& kernel, size_t groups, const char* what);
 
 }  // namespace talus

@@ -162,10 +162,7 @@ __kernel void identity_order(int n_contacts, __global int* order, __global int* 
 // velocities the row before wrote (DemSettings::serial_lanes). Row of contact c at position p of
 // block j: p lanes + j for p < n/lanes; the blocks of n/lanes + 1 (the first j of them number
 // start_j - j (n/lanes)) give their last contacts the rows after those
-__kernel void interleaved_order(int n_contacts, int lanes, __global int* order,
-                                __global int* row_of_contact) {
-  int c = get_global_id(0);
-  if (c >= n_contacts) return;
+int interleaved_row(int c, int n_contacts, int lanes) {
   // the last block starting at or before c: floor(j n / lanes) <= c  <=>  j <= ((c + 1) lanes - 1)
   // / n
   long n = n_contacts;
@@ -173,7 +170,49 @@ __kernel void interleaved_order(int n_contacts, int lanes, __global int* order,
   int start = (int)((long)j * n / lanes);
   int p = c - start;
   int q = n_contacts / lanes;
-  int row = p < q ? p * lanes + j : q * lanes + (start - j * q);
+  return p < q ? p * lanes + j : q * lanes + (start - j * q);
+}
+
+__kernel void interleaved_order(int n_contacts, int lanes, __global int* order,
+                                __global int* row_of_contact) {
+  int c = get_global_id(0);
+  if (c >= n_contacts) return;
+  int row = interleaved_row(c, n_contacts, lanes);
+  order[row] = c;
+  row_of_contact[c] = row;
+}
+
+// Parts (issue 13): a large system on a CPU device is swept as `parts` runs of rows, each walked
+// by one work-item of its own work-group, side by side on the cores, then the boundary's rows by
+// one work-item (solvers/pgs_sweep.cpp). Particle i belongs to part floor(i parts / particles); a
+// contact belongs to the part of its dynamic bodies when they share one, else to the boundary
+// (part `parts`). Two parts then share no dynamic body, so their walks never race and the result
+// is that of one walk over all rows in turn, bit for bit. The piles emit particles layer by layer
+// and the grains of a dig stay near their neighbours, so index ranges are regions of the pile and
+// few contacts cross them (bench/RESULTS.md 2026-12-02, "runs")
+__kernel void contact_part(__global const TlContact* contacts, int n_contacts, int particles,
+                           int parts, __global int* part) {
+  int c = get_global_id(0);
+  if (c >= n_contacts) return;
+  int pa = (int)((long)contacts[c].a * parts / particles);
+  int b = contacts[c].b;
+  int pb = b >= 0 ? (int)((long)b * parts / particles) : pa;
+  part[c] = pa == pb ? pa : parts;
+}
+
+// the rows of each part (laid out part after part by the stable partition, `by_part`; the runs'
+// first rows in part_start, `runs` + 1 entries) interleaved within their run as interleaved_order
+// lays out a whole system
+__kernel void interleave_runs(__global const int* by_part, __global const int* part_start, int runs,
+                              int n_contacts, int lanes, __global int* order,
+                              __global int* row_of_contact) {
+  int i = get_global_id(0);
+  if (i >= n_contacts) return;
+  int k = 0;
+  while (k + 1 < runs && part_start[k + 1] <= i) ++k;
+  int begin = part_start[k];
+  int row = begin + interleaved_row(i - begin, part_start[k + 1] - begin, lanes);
+  int c = by_part[i];
   order[row] = c;
   row_of_contact[c] = row;
 }

@@ -34,6 +34,8 @@ DemBuffers::DemBuffers(Device& dev)
       colour_previous(dev, 1),
       order(dev, 1),
       row_of_contact(dev, 1),
+      part(dev, 1),
+      by_part(dev, 1),
       pairs_differ(dev, 1),
       rows(dev, 1),
       delta_lin(dev, 1),

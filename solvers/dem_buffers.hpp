@@ -11,6 +11,14 @@
 
 namespace talus {
 
+// how a step's rows are laid out for the PGS sweeps (DemWorld::colour_contacts):
+// Colours: colour after colour, no dynamic body twice in a colour (any sweep may take them);
+// Interleaved: one "colour" whose rows share bodies, for one work-item to walk
+//   (DemSettings::serial_lanes);
+// Runs: the parts of a large system, then their boundary, each interleaved within itself, for a
+//   work-item per part to walk (DemSettings::sweep_parts): colour_start holds the runs' rows
+enum class RowLayout { Colours, Interleaved, Runs };
+
 struct DemBuffers {
   explicit DemBuffers(Device& dev);
   // the device memory of every array below [bytes] (their capacities)
@@ -51,6 +59,8 @@ struct DemBuffers {
                           colour_start_dev.bytes(),
                           order.bytes(),
                           row_of_contact.bytes(),
+                          part.bytes(),
+                          by_part.bytes(),
                           pairs_differ.bytes(),
                           rows.bytes(),
                           delta_lin.bytes(),
@@ -95,9 +105,11 @@ struct DemBuffers {
   Buffer<int> colour_previous;
   Buffer<int> order, row_of_contact;
   std::vector<int> colour_start;  // host copy: rows of colour k are [start[k], start[k+1])
-  // the rows are laid out for one work-item to walk (DemSettings::serial_lanes): one "colour"
-  // whose rows share bodies, which only a serial sweep may take
-  bool rows_interleaved = false;
+  // how the rows are laid out (RowLayout); colour_start holds the colours' or the runs' rows
+  RowLayout row_layout = RowLayout::Colours;
+  // runs: each contact's part (kernels/colouring.cl contact_part) and the contacts part after
+  // part in contact order, which the runs' interleaving reads
+  Buffer<int> part, by_part;
   int colour_rounds = 0;
   // set by kernels/colouring.cl contact_pairs_differ when this step's contacts pair other bodies
   // than the last step's (DemWorld keeps the colouring otherwise)

@@ -437,6 +437,34 @@ Partition interleaved_partition(int n_contacts, int lanes) {
   return out;
 }
 
+Partition run_partition(const std::vector<Contact>& contacts, int particles, int parts, int lanes) {
+  // each contact's run: its dynamic bodies' part when they share one, else the boundary
+  const auto part_of = [&](int body) {
+    return static_cast<int>(std::int64_t(body) * parts / particles);
+  };
+  std::vector<std::vector<int>> runs(parts + 1);
+  for (size_t c = 0; c < contacts.size(); ++c) {
+    const int pa = part_of(contacts[c].a);
+    const int pb = contacts[c].b >= 0 ? part_of(contacts[c].b) : pa;
+    runs[pa == pb ? pa : parts].push_back(static_cast<int>(c));
+  }
+  // run after run, each laid out as a whole system of its contacts is
+  Partition out;
+  out.row_of_contact.assign(contacts.size(), -1);
+  out.colour_start = {0};
+  for (const std::vector<int>& run : runs) {
+    const int begin = static_cast<int>(out.order.size());
+    const Partition within = interleaved_partition(static_cast<int>(run.size()), lanes);
+    for (int row = 0; row < static_cast<int>(run.size()); ++row) {
+      const int c = run[within.order[row]];
+      out.order.push_back(c);
+      out.row_of_contact[c] = begin + row;
+    }
+    out.colour_start.push_back(static_cast<int>(out.order.size()));
+  }
+  return out;
+}
+
 // ---- rows ----
 
 std::vector<Row> prepare_rows(const std::vector<Contact>& contacts, const std::vector<int>& order,
@@ -717,9 +745,15 @@ void step(ReferenceWorld& world) {
   const bool interleaved = s.sweep == SweepKind::Pgs && s.serial_lanes > 0 &&
                            world.one_item_sweeps &&
                            static_cast<int>(contacts.size()) <= s.one_group_rows;
+  const bool runs =
+      s.sweep == SweepKind::Pgs && s.serial_lanes > 0 && world.one_item_sweeps && !interleaved;
   if (interleaved) {
     // one work-item walks the rows: no colours, none carried to the next step
     world.partition = interleaved_partition(static_cast<int>(contacts.size()), s.serial_lanes);
+  } else if (runs) {
+    // a work-item per part, then the boundary: one walk over the runs in turn, no colours
+    world.partition = run_partition(contacts, static_cast<int>(world.particles.size()),
+                                    world.sweep_parts, s.serial_lanes);
   } else if (s.sweep == SweepKind::Pgs) {
     // last step's colours carried to the contacts that persist, the new ones coloured by rounds
     const bool carry = world.colours_carried && world.has_previous;
@@ -762,7 +796,7 @@ void step(ReferenceWorld& world) {
   world.previous = world.current;
   world.has_previous = true;
   world.colours_carried =
-      s.sweep == SweepKind::Pgs && !interleaved &&
+      s.sweep == SweepKind::Pgs && !interleaved && !runs &&
       carry_colours_after(static_cast<int>(world.partition.colour_start.size()) - 1,
                           world.fresh_colours);
   world.previous_colours = std::move(colours);

@@ -38,6 +38,10 @@ inline constexpr int kPgsOneGroupRows = 4096;
 inline constexpr int kSerialLanes = 8;
 // more blocks than this interleave nothing a core can overlap (its window holds a few rows)
 inline constexpr int kMaxSerialLanes = 1024;
+// the most parts a large system's rows are walked in (DemSettings::sweep_parts): the parts and
+// their boundary are partitioned as colours are, at most TL_MAX_COLOURS (kernels/dem_types.h) of
+// them (a static_assert in solvers/dem_world.cpp)
+inline constexpr int kMaxSweepParts = 63;
 
 // SPOOK damping times a study may ask for [s] (talus run --damping-time for the particle contacts,
 // --interface-damping-time for the type-G aggregate's interfaces): from 0.1 ms, the shortest
@@ -73,6 +77,15 @@ struct DemSettings {
   // the colours', so other bits than one_group_rows 0 gives on such a device; 0 colours them as a
   // GPU does (the one-group and per-colour paths then give the same bits)
   int serial_lanes = kSerialLanes;
+  // where the sweep walks rows with one work-item (a CPU device) and serial_lanes > 0, a system
+  // of more than one_group_rows rows is cut into this many parts by particle index: a contact
+  // whose dynamic bodies lie in one part belongs to it, the rest to the boundary
+  // (kernels/colouring.cl contact_part). Each sweep walks the parts side by side, one work-item
+  // each, then the boundary; each run of rows interleaved as serial_lanes says. No colouring, and
+  // another order than the colours' (other bits); 0: one part per compute unit of the device
+  // (Device::compute_units), so the bits follow the device as a GPU's colours do. 1 to
+  // kMaxSweepParts: that many, on any CPU device
+  int sweep_parts = 0;
   Vec3 gravity = Vec3(0.0, 0.0, -9.81);  // [m/s^2]
   // pairs closer than margin_rel * min(r_a, r_b) get a (speculative) contact row: it never
   // pulls them together, and with damping it brakes an approach that would close more than

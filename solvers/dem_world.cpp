@@ -78,6 +78,8 @@ DemWorld::DemWorld(Device& dev, const Material& material, const DemSettings& set
   k_colour_ranges_ = dev.kernel(colour, "colour_ranges");
   k_identity_ = dev.kernel(colour, "identity_order");
   k_interleaved_ = dev.kernel(colour, "interleaved_order");
+  k_contact_part_ = dev.kernel(colour, "contact_part");
+  k_interleave_runs_ = dev.kernel(colour, "interleave_runs");
   k_pairs_differ_ = dev.kernel(colour, "contact_pairs_differ");
   k_carry_colours_ = dev.kernel(colour, "carry_colours");
   k_drop_conflicts_ = dev.kernel(colour, "drop_colour_conflicts");
@@ -144,6 +146,10 @@ void DemWorld::update_params() {
     throw InputError("DemSettings.serial_lanes: " + std::to_string(settings_.serial_lanes) +
                      " is outside 0-" + std::to_string(kMaxSerialLanes) + "; use " +
                      std::to_string(kSerialLanes) + " (the default) or 0 for colours");
+  if (settings_.sweep_parts < 0 || settings_.sweep_parts > kMaxSweepParts)
+    throw InputError("DemSettings.sweep_parts: " + std::to_string(settings_.sweep_parts) +
+                     " is outside 0-" + std::to_string(kMaxSweepParts) +
+                     "; use 0 (the default: one per compute unit)");
   TlStepParams& p = params_;
   p = TlStepParams{};
   p.gravity = to_float4(settings_.gravity, 0.0);
@@ -600,13 +606,26 @@ bool DemWorld::rows_interleaved(int rows) const {
          sweep_->walks_in_one_item(rows);
 }
 
+bool DemWorld::rows_in_runs(int rows) const {
+  return settings_.sweep == SweepKind::Pgs && settings_.serial_lanes > 0 && sweep_ &&
+         sweep_->walks_in_runs(rows);
+}
+
+// the parts and their boundary are partitioned as colours (kernels/colouring.cl)
+static_assert(kMaxSweepParts + 1 <= TL_MAX_COLOURS, "the parts and boundary must fit the colours");
+
+int DemWorld::sweep_parts() const {
+  if (settings_.sweep_parts > 0) return settings_.sweep_parts;
+  return std::clamp(dev_.compute_units(), 1, kMaxSweepParts);
+}
+
 bool DemWorld::colouring_still_holds() {
   DemBuffers& b = buffers_;
   // made for the last step's contacts, as many as now, of as many particles, for this sweep
   if (!colouring_made_ || !b.has_previous || coloured_contacts_ != b.n_contacts ||
       coloured_particles_ != particle_count_ || coloured_sweep_ != settings_.sweep ||
       coloured_lanes_ != settings_.serial_lanes ||
-      coloured_one_group_rows_ != settings_.one_group_rows)
+      coloured_one_group_rows_ != settings_.one_group_rows || coloured_parts_ != sweep_parts())
     return false;
   if (b.n_contacts == 0) return true;
   // the same pairs, index for index (one integer read back: a host wait, as the narrow phase's)
@@ -641,7 +660,7 @@ void DemWorld::colour_contacts() {
   int nc = b.n_contacts;
   b.order.resize(std::max(nc, 1));
   b.row_of_contact.resize(std::max(nc, 1));
-  b.rows_interleaved = false;
+  b.row_layout = RowLayout::Colours;
   if (settings_.sweep == SweepKind::Jacobi) {
     set_args(k_identity_, nc, b.order, b.row_of_contact);
     launch(dev_, k_identity_, nc, "identity_order");
@@ -658,7 +677,27 @@ void DemWorld::colour_contacts() {
     b.colour_start = {0, nc};
     b.colour_start_dev.upload(b.colour_start);
     b.colour_rounds = 0;
-    b.rows_interleaved = true;
+    b.row_layout = RowLayout::Interleaved;
+    colours_made_ = false;
+    return;
+  }
+  if (rows_in_runs(nc)) {
+    // a work-item per part walks its rows, then one the boundary's: each contact's part, the
+    // contacts part by part (the colours' stable partition), each run interleaved
+    const int parts = sweep_parts();
+    b.part.resize(std::max(nc, 1));
+    b.by_part.resize(std::max(nc, 1));
+    set_args(k_contact_part_, b.contacts[b.current], nc, static_cast<int>(particle_count_), parts,
+             b.part);
+    launch(dev_, k_contact_part_, nc, "contact_part");
+    partition_rows(b.part, b.by_part);
+    set_args(k_interleave_runs_, b.by_part, b.colour_start_dev, parts + 1, nc,
+             settings_.serial_lanes, b.order, b.row_of_contact);
+    launch(dev_, k_interleave_runs_, nc, "interleave_runs");
+    // every run kept, empty or not: the sweep launches the parts together and the boundary last
+    b.colour_start = b.colour_start_dev.download(parts + 2);
+    b.colour_rounds = 0;
+    b.row_layout = RowLayout::Runs;
     colours_made_ = false;
     return;
   }
@@ -704,22 +743,28 @@ void DemWorld::colour_contacts() {
     }
   }
   b.colour_rounds = round;
-  // stable partition by colour: block histograms, one scan, block scatters
-  int blocks = std::max(1, (nc + kColourBlock - 1) / kColourBlock);
-  b.colour_histogram.resize(size_t(TL_MAX_COLOURS) * blocks);
-  set_args(k_colour_hist_, b.colour, nc, blocks, b.colour_histogram);
-  launch(dev_, k_colour_hist_, blocks, "colour_histogram");
-  scan_.exclusive(b.colour_histogram, b.colour_offsets, size_t(TL_MAX_COLOURS) * blocks);
-  set_args(k_colour_scatter_, b.colour, nc, blocks, b.colour_offsets, b.order, b.row_of_contact);
-  launch(dev_, k_colour_scatter_, blocks, "colour_scatter");
-  set_args(k_colour_ranges_, b.colour_offsets, blocks, b.colour_start_dev);
-  launch(dev_, k_colour_ranges_, TL_MAX_COLOURS + 1, "colour_ranges");
+  partition_rows(b.colour, b.order);
   // host copy of the ranges, trimmed to the colours in use
   b.colour_start = b.colour_start_dev.download(TL_MAX_COLOURS + 1);
   while (b.colour_start.size() > 2 && b.colour_start[b.colour_start.size() - 2] == nc)
     b.colour_start.pop_back();
   if (!carry) fresh_colours_ = static_cast<int>(b.colour_start.size()) - 1;
   colours_made_ = true;
+}
+
+void DemWorld::partition_rows(const Buffer<int>& colour, Buffer<int>& order) {
+  DemBuffers& b = buffers_;
+  const int nc = b.n_contacts;
+  // stable partition by colour: block histograms, one scan, block scatters, each colour's start
+  int blocks = std::max(1, (nc + kColourBlock - 1) / kColourBlock);
+  b.colour_histogram.resize(size_t(TL_MAX_COLOURS) * blocks);
+  set_args(k_colour_hist_, colour, nc, blocks, b.colour_histogram);
+  launch(dev_, k_colour_hist_, blocks, "colour_histogram");
+  scan_.exclusive(b.colour_histogram, b.colour_offsets, size_t(TL_MAX_COLOURS) * blocks);
+  set_args(k_colour_scatter_, colour, nc, blocks, b.colour_offsets, order, b.row_of_contact);
+  launch(dev_, k_colour_scatter_, blocks, "colour_scatter");
+  set_args(k_colour_ranges_, b.colour_offsets, blocks, b.colour_start_dev);
+  launch(dev_, k_colour_ranges_, TL_MAX_COLOURS + 1, "colour_ranges");
 }
 
 void DemWorld::prepare_rows() {
@@ -854,6 +899,7 @@ void DemWorld::begin_step() {
       coloured_sweep_ = settings_.sweep;
       coloured_lanes_ = settings_.serial_lanes;
       coloured_one_group_rows_ = settings_.one_group_rows;
+      coloured_parts_ = sweep_parts();
     }
   }
   {
@@ -862,6 +908,9 @@ void DemWorld::begin_step() {
   }
   stats_.contacts = buffers_.n_contacts;
   stats_.colours = static_cast<int>(buffers_.colour_start.size()) - 1;
+  const std::vector<int>& start = buffers_.colour_start;
+  stats_.boundary_rows =
+      buffers_.row_layout == RowLayout::Runs ? start.back() - start[start.size() - 2] : 0;
   stats_.colour_rounds = stats_.colouring_kept ? 0 : buffers_.colour_rounds;
 }
 

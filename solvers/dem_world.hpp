@@ -24,7 +24,8 @@ namespace talus {
 
 struct StepStats {
   int contacts = 0;
-  int colours = 0;
+  int colours = 0;         // colours, or runs (RowLayout::Runs: the parts and their boundary)
+  int boundary_rows = 0;   // rows in the runs' boundary, walked after the parts (else 0)
   int colour_rounds = 0;   // Jones-Plassmann rounds launched (whole batches: solvers/dem_world.cpp)
   // the contacts paired the same bodies as the last step's, so their colouring was kept
   bool colouring_kept = false;
@@ -120,6 +121,12 @@ class DemWorld {
   // whether this step's `rows` are laid out interleaved for one work-item instead of coloured
   // (DemSettings::serial_lanes)
   bool rows_interleaved(int rows) const;
+  // whether this step's `rows` are laid out in runs, parts and their boundary, each walked by one
+  // work-item, instead of coloured (DemSettings::sweep_parts)
+  bool rows_in_runs(int rows) const;
+  // the parts a large system's rows are cut into: DemSettings::sweep_parts, or for 0 the
+  // device's compute units (at most kMaxSweepParts)
+  int sweep_parts() const;
   // whether this step's contacts (narrow_phase) pair the same bodies, index for index, as the
   // contacts the buffers' adjacency and colouring were made for (with the same serial_lanes and
   // one_group_rows): then those are this step's too
@@ -127,8 +134,13 @@ class DemWorld {
   void build_adjacency();
   // PGS: graph colouring, carrying last step's colours to the contacts that persist (the same
   // result however often it runs within a step), or for a system one work-item walks the
-  // interleaved rows (rows_interleaved); Jacobi: one colour in contact order
+  // interleaved rows (rows_interleaved), or for a larger one on such a device its runs
+  // (rows_in_runs); Jacobi: one colour in contact order
   void colour_contacts();
+  // the stable partition of the contacts by `colour` (a colour or a part each): the contacts
+  // colour by colour in contact order into `order`, row_of_contact, and each colour's first row
+  // in colour_start_dev (TL_MAX_COLOURS + 1 entries)
+  void partition_rows(const Buffer<int>& colour, Buffer<int>& order);
   void prepare_rows();
   void apply_gravity();
   void warm_start();       // applies the rows' initial impulses to the bodies
@@ -192,10 +204,10 @@ class DemWorld {
   std::unique_ptr<ContactSweep> sweep_;
   // what the buffers' adjacency and colouring were made for: the last step's contacts (false
   // before the first colouring and after a restored state, whose contacts came without them),
-  // their count, the particle count, the sweep kind, serial_lanes and one_group_rows
+  // their count, the particle count, the sweep kind, serial_lanes, one_group_rows and the parts
   bool colouring_made_ = false;
-  // `colour` holds this step's PGS colours (false after a Jacobi colouring or an interleaved
-  // layout), and
+  // `colour` holds this step's PGS colours (false after a Jacobi colouring, an interleaved layout
+  // or runs), and
   // `colour_previous` last step's, which the next colouring carries (false until a PGS step has
   // ended, after new particles, and after a restored state that saved none)
   bool colours_made_ = false;
@@ -207,6 +219,7 @@ class DemWorld {
   SweepKind coloured_sweep_ = SweepKind::Pgs;
   int coloured_lanes_ = 0;
   int coloured_one_group_rows_ = 0;
+  int coloured_parts_ = 0;
   // what sweep_ was made for (DemSettings::sweep, one_group_rows): a change makes a new one
   SweepKind sweep_kind_;
   int sweep_one_group_rows_;
@@ -214,7 +227,8 @@ class DemWorld {
   cl::Kernel k_contact_count_, k_contact_write_;
   cl::Kernel k_adj_count_, k_adj_fill_, k_adj_sort_;
   cl::Kernel k_colour_round_, k_colour_hist_, k_colour_scatter_, k_colour_ranges_, k_identity_,
-      k_interleaved_, k_pairs_differ_, k_carry_colours_, k_drop_conflicts_;
+      k_interleaved_, k_pairs_differ_, k_carry_colours_, k_drop_conflicts_, k_contact_part_,
+      k_interleave_runs_;
   cl::Kernel k_prepare_, k_gravity_, k_apply_impulses_, k_store_, k_integrate_, k_residual_,
       k_sum_blocks_;
   cl::Kernel k_first_non_finite_;

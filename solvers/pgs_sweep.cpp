@@ -1,9 +1,11 @@
-// Graph-coloured projected Gauss-Seidel: the colours are solved one after another, the rows of
-// one colour in parallel (they share no dynamic body, so the updates never race). A system that
-// one work-item walks (a CPU device, up to one_group_rows rows) comes as one "colour" of
-// interleaved rows that do share bodies (DemSettings::serial_lanes): only that walk may take it
-// (check_layout). Within a contact the normal row goes first, then friction, then rolling
-// (kernels/solver.cl).
+// Projected Gauss-Seidel in one of three row layouts (RowLayout). Colours: solved one after
+// another, the rows of one colour in parallel (they share no dynamic body, so the updates never
+// race). On a CPU device, whose work-groups run one item at a time on a core, no colours: a
+// system of up to one_group_rows rows comes as one "colour" of interleaved rows that one
+// work-item walks (DemSettings::serial_lanes), a larger one as runs, its parts walked side by
+// side by a work-item each and then their boundary (DemSettings::sweep_parts). Rows that share
+// bodies may only reach the walk they were laid out for (check_layout). Within a contact the
+// normal row goes first, then friction, then rolling (kernels/solver.cl).
 #include <algorithm>
 #include <string>
 
@@ -29,6 +31,7 @@ class PgsSweep : public ContactSweep {
     kernel_ = dev.kernel(program, "pgs_colour");
     one_group_ = dev.kernel(program, "pgs_sweeps_one_group");
     one_group_tools_ = dev.kernel(program, "pgs_sweeps_one_group_tools");
+    runs_ = dev.kernel(program, "pgs_runs");
     group_size_ = group_size(one_group_);
     tools_group_size_ = group_size(one_group_tools_);
   }
@@ -36,6 +39,10 @@ class PgsSweep : public ContactSweep {
 
   bool walks_in_one_item(int rows) const override {
     return group_size_ == 1 && tools_group_size_ == 1 && rows <= one_group_rows_;
+  }
+
+  bool walks_in_runs(int rows) const override {
+    return group_size_ == 1 && tools_group_size_ == 1 && rows > one_group_rows_;
   }
 
   void iterate(DemBuffers& b, int iterations) override {
@@ -48,8 +55,9 @@ class PgsSweep : public ContactSweep {
       sweeps_in_one_group(b, colours, iterations);
       return;
     }
-    // one launch per colour and sweep, all on the in-order queue without host waits
-    for (int it = 0; it < iterations; ++it) sweep_colours(b, colours);
+    // one launch per colour (or per set of runs) and sweep, all on the in-order queue without
+    // host waits
+    for (int it = 0; it < iterations; ++it) sweep_large(b, colours);
   }
 
   void iterate_with_tools(DemBuffers& b, int iterations, KinematicToolRows& tools) override {
@@ -73,7 +81,7 @@ class PgsSweep : public ContactSweep {
       if (one_group) {
         sweeps_in_one_group(b, colours, 1);
       } else {
-        sweep_colours(b, colours);
+        sweep_large(b, colours);
       }
       tools.sweep(b.velocity, b.omega);
     }
@@ -83,10 +91,34 @@ class PgsSweep : public ContactSweep {
   // rows laid out for one work-item (no colours) must not reach the parallel per-colour launches,
   // whose items would race on shared bodies
   void check_layout(const DemBuffers& b) const {
-    if (b.rows_interleaved && !walks_in_one_item(b.colour_start.back()))
-      throw Error("PGS sweep: " + std::to_string(b.colour_start.back()) +
+    const int rows = b.colour_start.back();
+    if (b.row_layout == RowLayout::Interleaved && !walks_in_one_item(rows))
+      throw Error("PGS sweep: " + std::to_string(rows) +
                   " rows laid out for one work-item reached a sweep that runs them in parallel "
                   "(internal error: the layout and the sweep disagree on one_group_rows)");
+    if (b.row_layout == RowLayout::Runs && !walks_in_runs(rows))
+      throw Error("PGS sweep: " + std::to_string(rows) +
+                  " rows laid out in runs reached a sweep that does not walk runs (internal "
+                  "error: the layout and the sweep disagree on one_group_rows or the device)");
+  }
+
+  // one sweep of a system above the one-group threshold: its runs or its colours
+  void sweep_large(DemBuffers& b, int colours) {
+    if (b.row_layout == RowLayout::Runs) {
+      sweep_runs(b, colours);
+    } else {
+      sweep_colours(b, colours);
+    }
+  }
+
+  // one sweep over runs: the parts side by side (a work-group of one item each), then the
+  // boundary, the last run, after them (the in-order queue keeps the two launches in turn)
+  void sweep_runs(DemBuffers& b, int runs) {
+    set_args(runs_, b.rows, b.colour_start_dev, 0, b.velocity, b.omega);
+    launch_walks(dev_, runs_, static_cast<size_t>(runs - 1), "pgs_runs");
+    if (b.colour_start[runs] == b.colour_start[runs - 1]) return;
+    set_args(runs_, b.rows, b.colour_start_dev, runs - 1, b.velocity, b.omega);
+    launch_walks(dev_, runs_, 1, "pgs_runs");
   }
 
   // `sweeps` sweeps of every colour in one launch of one work-group
@@ -117,7 +149,7 @@ class PgsSweep : public ContactSweep {
 
   Device& dev_;
   int one_group_rows_;
-  cl::Kernel kernel_, one_group_, one_group_tools_;
+  cl::Kernel kernel_, one_group_, one_group_tools_, runs_;
   size_t group_size_ = 1, tools_group_size_ = 1;
 };
 

@@ -142,6 +142,7 @@ MultiscaleTerrain::MultiscaleTerrain(Device& dev, const PileProfile& profile,
   settings.max_speed = options.max_particle_speed;
   settings.one_group_rows = options.one_group_rows;
   settings.serial_lanes = options.serial_lanes;
+  settings.sweep_parts = options.sweep_parts;
   settings.pair_reach = options.pair_reach;
   settings.relaxation = options.relaxation;
   dem_ = std::make_unique<DemWorld>(dev, options.particle_material, settings,

@@ -101,6 +101,7 @@ struct MultiscaleOptions {
   double max_particle_speed = 4.0;        // [m/s] DemSettings::max_speed of the zone's particles
   int one_group_rows = kPgsOneGroupRows;  // DemSettings::one_group_rows of the zone's sweeps
   int serial_lanes = kSerialLanes;        // DemSettings::serial_lanes of the zone's sweeps
+  int sweep_parts = 0;                    // DemSettings::sweep_parts of the zone's sweeps
   bool pair_reach = true;                 // DemSettings::pair_reach of the zone's particles (digs')
   double relaxation = 1.0;                // DemSettings::relaxation of the zone's sweeps
   // a particle appears as a seed of this fraction of its full diameter and grows as the pool

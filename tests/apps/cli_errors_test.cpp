@@ -253,6 +253,14 @@ TEST(CliErrors, StepCountsAndLoadsOutsideTheirRangeAreRefused) {
       EXPECT_EQ(o.code, 2) << bench << lanes << ": " << o.err;
       EXPECT_NE(o.err.find("--serial-lanes"), std::string::npos) << bench << lanes << ": " << o.err;
     }
+  // the parts of a large system: a whole number in 0-63
+  for (const char* parts : {"-1", "64", "x", "1.5"})
+    for (const char* bench :
+         {"bench dem --levels D400 --sweep-parts ", "bench dig --sweep-parts "}) {
+      const Outcome o = run("", std::string(bench) + parts);
+      EXPECT_EQ(o.code, 2) << bench << parts << ": " << o.err;
+      EXPECT_NE(o.err.find("--sweep-parts"), std::string::npos) << bench << parts << ": " << o.err;
+    }
   // the PGS relaxation: a number in (0, 2), refused before any pile is built or folder made
   for (const char* omega : {"0", "0.001", "2", "1.99999999", "-0.5", "nan", "x"})
     for (const char* cmd : {"bench dem --levels D400 --relaxation ", "bench dig --relaxation ",

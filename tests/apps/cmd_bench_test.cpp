@@ -63,6 +63,23 @@ TEST(CmdBench, DigWithTheColouredBucketSweep) {
   expect_stages_add_up(j);
 }
 
+// a system above the one-group threshold on a CPU device is walked in parts and their boundary
+// (DemSettings::sweep_parts): here D400's with the threshold at 0, in 2 parts, named in the JSON,
+// with a boundary the parts' walks leave to the last
+TEST(CmdBench, DigInPartsCountsTheBoundarysRows) {
+  const nlohmann::json j =
+      bench_dig("--scenario hd27 --level D400 --seconds 0.2 --one-group-rows 0 --sweep-parts 2",
+                "talus_bench_dig_parts.json");
+  ASSERT_FALSE(j.is_null());
+  EXPECT_EQ(j.at("sweep_parts").get<int>(), 2);
+  const std::string device = j.at("device").get<std::string>();
+  if (device.find("Portable Computing Language") == std::string::npos)
+    GTEST_SKIP() << "not PoCL (its sweeps are coloured): " << device;
+  EXPECT_GT(j.at("boundary_rows").get<double>(), 0.0);
+  EXPECT_LT(j.at("boundary_rows").get<double>(), 0.5 * j.at("contacts").get<double>());
+  expect_stages_add_up(j);
+}
+
 // at a type-G level (issue 14) the breakdown charges the terrain's own stages (the zone and its
 // excavation, spawning and merging, the avalanche) beside the zone's DEM and the machine's solve,
 // and counts the zone's particles

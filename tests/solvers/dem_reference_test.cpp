@@ -13,6 +13,7 @@
 #include <map>
 #include <memory>
 #include <set>
+#include <utility>
 
 #include "host/error.hpp"
 #include "host/scan.hpp"
@@ -46,11 +47,12 @@ struct RandomWorld {
   std::mt19937_64 rng;
   std::unique_ptr<DemWorld> world;
 };
-RandomWorld random_world(int serial_lanes = kSerialLanes) {
+RandomWorld random_world(int serial_lanes = kSerialLanes, int one_group_rows = kPgsOneGroupRows) {
   const uint64_t seed = test::fresh_seed();
   RandomWorld out{test::seed_note(seed), std::mt19937_64(seed), nullptr};
   Scene scene = test::random_scene(out.rng);
   scene.settings.serial_lanes = serial_lanes;
+  scene.settings.one_group_rows = one_group_rows;
   out.world = make_world(scene);
   return out;
 }
@@ -777,7 +779,7 @@ TEST(ReferenceColouring, InterleavedRowsMatchExactly) {
     world->colour_contacts();
     const ref::Partition want = ref::interleaved_partition(nc, lanes);
     const DemBuffers& b = world->buffers();
-    EXPECT_TRUE(b.rows_interleaved);
+    EXPECT_TRUE(b.row_layout == RowLayout::Interleaved);
     EXPECT_EQ(b.colour_start, (std::vector<int>{0, nc}));
     EXPECT_EQ(b.colour_start_dev.download(2), (std::vector<int>{0, nc}));
     const std::vector<int> order = b.order.download(nc), row_of = b.row_of_contact.download(nc);
@@ -805,11 +807,84 @@ TEST(ReferenceColouring, InterleavedRowsMatchExactly) {
   // colours again with 0
   world->settings().serial_lanes = 0;
   world->colour_contacts();
-  EXPECT_FALSE(world->buffers().rows_interleaved);
+  EXPECT_FALSE(world->buffers().row_layout == RowLayout::Interleaved);
   EXPECT_GT(world->buffers().colour_start.size(), 2u);
   std::printf(
       "[ measured ] %d contacts: interleaved orders equal the reference's (1 to %d blocks)\n", nc,
       kMaxSerialLanes);
+}
+
+// a large system on a CPU device is laid out in runs (its parts by particle index, then their
+// boundary, each interleaved): the device's layout must equal the reference's for parts and
+// blocks drawn fresh, no dynamic body may appear in two parts' runs (their walks run side by
+// side), and the boundary holds exactly the contacts whose bodies lie in two parts
+TEST(ReferenceColouring, RunsMatchExactlyAndKeepThePartsApart) {
+  // every system walks in runs, however small (the threshold is a speed question)
+  RandomWorld r = random_world(kSerialLanes, /*one_group_rows=*/0);
+  SCOPED_TRACE(r.seed_note);
+  auto& world = r.world;
+  if (!world->one_item_sweeps()) GTEST_SKIP() << "this device sweeps in several work-items";
+  world->broad_phase();
+  world->narrow_phase();
+  world->build_adjacency();
+  const int nc = world->buffers().n_contacts;
+  const int n = static_cast<int>(world->size());
+  ASSERT_GT(nc, 0);
+  const std::vector<ref::Contact> contacts = current_contacts(*world);
+  const int drawn_parts = 2 + static_cast<int>(r.rng() % 30);
+  const int drawn_lanes = 1 + static_cast<int>(r.rng() % 40);
+  int boundary_seen = 0;
+  for (auto [parts, lanes] :
+       {std::pair{1, kSerialLanes}, std::pair{2, kSerialLanes}, std::pair{3, 1},
+        std::pair{drawn_parts, drawn_lanes}, std::pair{kMaxSweepParts, 2}}) {
+    SCOPED_TRACE("sweep_parts " + std::to_string(parts) + ", serial_lanes " +
+                 std::to_string(lanes));
+    world->settings().sweep_parts = parts;
+    world->settings().serial_lanes = lanes;
+    ASSERT_EQ(world->sweep_parts(), parts);
+    world->colour_contacts();
+    const ref::Partition want = ref::run_partition(contacts, n, parts, lanes);
+    const DemBuffers& b = world->buffers();
+    ASSERT_TRUE(b.row_layout == RowLayout::Runs);
+    EXPECT_EQ(b.colour_start, want.colour_start);
+    ASSERT_EQ(b.colour_start.size(), static_cast<size_t>(parts + 2));
+    const std::vector<int> order = b.order.download(nc), row_of = b.row_of_contact.download(nc);
+    EXPECT_EQ(order, want.order);
+    EXPECT_EQ(row_of, want.row_of_contact);
+    // a bijection; each part's run holds only bodies of that part, the boundary only contacts
+    // across two parts
+    std::vector<int> seen(nc, 0);
+    for (int k = 0; k <= parts; ++k) {
+      for (int row = b.colour_start[k]; row < b.colour_start[k + 1]; ++row) {
+        const int c = order[row];
+        ASSERT_GE(c, 0);
+        ASSERT_LT(c, nc);
+        ++seen[c];
+        EXPECT_EQ(row_of[c], row);
+        const int pa = static_cast<int>(std::int64_t(contacts[c].a) * parts / n);
+        const int pb =
+            contacts[c].b >= 0 ? static_cast<int>(std::int64_t(contacts[c].b) * parts / n) : pa;
+        if (k < parts) {
+          EXPECT_EQ(pa, k) << "row " << row;
+          EXPECT_EQ(pb, k) << "row " << row;
+        } else {
+          EXPECT_NE(pa, pb) << "boundary row " << row;
+        }
+      }
+    }
+    EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), nc);
+    const int boundary = b.colour_start[parts + 1] - b.colour_start[parts];
+    if (parts == 1) {
+      EXPECT_EQ(boundary, 0);
+    }
+    boundary_seen += boundary;
+    std::printf("[ measured ] %d parts: %d of %d contacts in the boundary\n", parts, boundary, nc);
+  }
+  EXPECT_GT(boundary_seen, 0) << "no part boundary was crossed: the test saw nothing";
+  // colours again with serial_lanes 0
+  world->settings().serial_lanes = 0;
+  world->colour_contacts();
+  EXPECT_TRUE(world->buffers().row_layout == RowLayout::Colours);
 }
 
 // a world stepped twice carries its last step's colours to the contacts that persist; the
@@ -1328,10 +1403,13 @@ bool same_pairs_or_marginal(const std::vector<ref::Contact>& got,
 // Where a pair's gap sits within rounding of the contact margin, one side may have a contact
 // the other lacks, and the solves then legitimately differ: such a sample is redrawn (seen
 // about once in 80 runs).
-void five_steps(SweepKind sweep, int serial_lanes) {
+void five_steps(SweepKind sweep, int serial_lanes, int one_group_rows = kPgsOneGroupRows,
+                int sweep_parts = 0) {
   const double synced_position_tol = 3e-7, free_position_tol = 3e-6;
-  const std::string name =
-      std::string(sweep_name(sweep)) + " (serial_lanes " + std::to_string(serial_lanes) + ")";
+  const std::string name = std::string(sweep_name(sweep)) + " (serial_lanes " +
+                           std::to_string(serial_lanes) + ", one_group_rows " +
+                           std::to_string(one_group_rows) + ", sweep_parts " +
+                           std::to_string(sweep_parts) + ")";
   for (int attempt = 0; attempt < 3; ++attempt) {
     uint64_t seed = test::fresh_seed() + attempt;
     SCOPED_TRACE(test::seed_note(seed));
@@ -1344,9 +1422,12 @@ void five_steps(SweepKind sweep, int serial_lanes) {
     s.settings.sweep = sweep;
     s.settings.iterations = 20;
     s.settings.serial_lanes = serial_lanes;
+    s.settings.one_group_rows = one_group_rows;
+    s.settings.sweep_parts = sweep_parts;
     auto world = make_world(s);
     ref::ReferenceWorld free;
     free.one_item_sweeps = world->one_item_sweeps();
+    free.sweep_parts = world->sweep_parts();
     free.particles = world->particles();
     free.geoms = geoms_of(*world);
     free.params = params_of(*world);
@@ -1373,9 +1454,11 @@ void five_steps(SweepKind sweep, int serial_lanes) {
       ref::step(synced);
       ref::step(free);
       // the layout under test is the one the device made
-      EXPECT_EQ(b.rows_interleaved, sweep == SweepKind::Pgs && serial_lanes > 0 &&
-                                        free.one_item_sweeps &&
-                                        b.n_contacts <= s.settings.one_group_rows)
+      const bool walked = sweep == SweepKind::Pgs && serial_lanes > 0 && free.one_item_sweeps;
+      EXPECT_EQ(b.row_layout == RowLayout::Interleaved,
+                walked && b.n_contacts <= s.settings.one_group_rows)
+          << "step " << step;
+      EXPECT_EQ(b.row_layout == RowLayout::Runs, walked && b.n_contacts > s.settings.one_group_rows)
           << "step " << step;
       // this step's contacts (the device swapped its current and previous lists)
       std::vector<ref::Contact> got = contacts_of(*world, 1 - b.current);
@@ -1407,6 +1490,11 @@ void five_steps(SweepKind sweep, int serial_lanes) {
 // PGS as a CPU device runs this system (one work-item, rows interleaved), and coloured (as a GPU)
 TEST(ReferenceStep, FiveStepsPgsMatchPositions) { five_steps(SweepKind::Pgs, kSerialLanes); }
 TEST(ReferenceStep, FiveStepsColouredPgsMatchPositions) { five_steps(SweepKind::Pgs, 0); }
+// PGS as a CPU device runs a large system (its parts side by side, then their boundary), here
+// with every system above the one-group threshold, in three parts
+TEST(ReferenceStep, FiveStepsPgsInRunsMatchPositions) {
+  five_steps(SweepKind::Pgs, kSerialLanes, /*one_group_rows=*/0, /*sweep_parts=*/3);
+}
 TEST(ReferenceStep, FiveStepsJacobiMatchPositions) { five_steps(SweepKind::Jacobi, kSerialLanes); }
 
 }  // namespace

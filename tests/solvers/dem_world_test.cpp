@@ -107,10 +107,11 @@ struct BedPair {
   Scene scene;
   std::unique_ptr<DemWorld> first, second;
 };
-BedPair bed_pair(Device& dev, int serial_lanes = 0) {
+BedPair bed_pair(Device& dev, int serial_lanes = 0, int one_group_rows = kPgsOneGroupRows) {
   BedPair out{small_bed(), nullptr, nullptr};
   out.scene.settings.dt = 5e-4;
   out.scene.settings.serial_lanes = serial_lanes;
+  out.scene.settings.one_group_rows = one_group_rows;
   for (auto* w : {&out.first, &out.second}) {
     *w = std::make_unique<DemWorld>(dev, out.scene.material, out.scene.settings, out.scene.bounds,
                                     out.scene.geoms);
@@ -119,9 +120,14 @@ BedPair bed_pair(Device& dev, int serial_lanes = 0) {
   return out;
 }
 
-TEST(DemWorld, TwoRunsAreBitIdentical) {
+// the default layout and, on a CPU device, runs (one_group_rows 0: this bed above the threshold),
+// whose parts' walks run side by side on the cores
+class DemWorldLayouts : public ::testing::TestWithParam<int> {};
+
+TEST_P(DemWorldLayouts, TwoRunsAreBitIdentical) {
   Device dev;
   Scene scene = small_bed();
+  scene.settings.one_group_rows = GetParam();
   auto run = [&] {
     DemWorld world(dev, scene.material, scene.settings, scene.bounds, scene.geoms);
     world.set_particles(scene.particles);
@@ -137,24 +143,31 @@ TEST(DemWorld, TwoRunsAreBitIdentical) {
   EXPECT_EQ(0, std::memcmp(a.data(), b.data(), a.size() * sizeof(a[0])));
 }
 
+INSTANTIATE_TEST_SUITE_P(DemWorld, DemWorldLayouts, ::testing::Values(kPgsOneGroupRows, 0));
+
 // a bed that comes to rest pairs the same bodies step after step, and DemWorld keeps their
 // colouring then: a world that colours afresh every step (its stages called by hand; a colouring
 // redone within a step carries the same colours) must end with the same bytes, and the first
 // world must have kept the colouring in many steps, so that the keep is what was compared (140-190
 // of 600 with the carried colours, 2026-11-27: pairs at the margin flicker)
-void kept_layout_gives_the_bits_of_a_fresh_one(int serial_lanes) {
+void kept_layout_gives_the_bits_of_a_fresh_one(int serial_lanes,
+                                               int one_group_rows = kPgsOneGroupRows) {
   Device dev;
-  BedPair bed = bed_pair(dev, serial_lanes);
+  BedPair bed = bed_pair(dev, serial_lanes, one_group_rows);
   const Scene& scene = bed.scene;
   DemWorld& kept = *bed.first;
   DemWorld& fresh = *bed.second;
   const int steps = 600;
   int kept_steps = 0;
-  // the layout asked for is the one made (interleaved only where one work-item walks the rows)
-  const bool interleaved = serial_lanes > 0 && kept.one_item_sweeps();
+  // the layout asked for is the one made (interleaved or runs only where one work-item walks the
+  // rows; the bed's rows are fewer than the default one_group_rows)
+  const bool walked = serial_lanes > 0 && kept.one_item_sweeps();
+  const RowLayout layout = !walked                             ? RowLayout::Colours
+                           : one_group_rows < kPgsOneGroupRows ? RowLayout::Runs
+                                                               : RowLayout::Interleaved;
   for (int i = 0; i < steps; ++i) {
     kept.step();
-    ASSERT_EQ(kept.buffers().rows_interleaved, interleaved) << "step " << i;
+    ASSERT_TRUE(kept.buffers().row_layout == layout) << "step " << i;
     kept_steps += kept.stats().colouring_kept ? 1 : 0;
     fresh.begin_step();
     EXPECT_EQ(fresh.stats().colouring_kept, kept.stats().colouring_kept) << "step " << i;
@@ -166,8 +179,8 @@ void kept_layout_gives_the_bits_of_a_fresh_one(int serial_lanes) {
     fresh.sweep(scene.settings.iterations);
     fresh.end_step();
   }
-  std::printf("[ measured ] serial_lanes %d: layout kept in %d of %d steps\n", serial_lanes,
-              kept_steps, steps);
+  std::printf("[ measured ] serial_lanes %d, one_group_rows %d: layout kept in %d of %d steps\n",
+              serial_lanes, one_group_rows, kept_steps, steps);
   EXPECT_GT(kept_steps, steps / 10);
   const size_t n = scene.particles.size();
   for (auto buffer : {&DemBuffers::position, &DemBuffers::velocity, &DemBuffers::omega}) {
@@ -184,9 +197,13 @@ TEST(DemWorld, AColouringKeptWhileThePairsHoldGivesTheBitsOfAFreshOne) {
 TEST(DemWorld, AnInterleavedLayoutKeptWhileThePairsHoldGivesTheBitsOfAFreshOne) {
   kept_layout_gives_the_bits_of_a_fresh_one(kSerialLanes);
 }
+// and for runs, the layout of a system above the threshold there
+TEST(DemWorld, RunsKeptWhileThePairsHoldGiveTheBitsOfFreshOnes) {
+  kept_layout_gives_the_bits_of_a_fresh_one(kSerialLanes, /*one_group_rows=*/0);
+}
 
 // the layout follows settings changed between steps: a world walked interleaved that is asked for
-// a launch per colour (one_group_rows 0), for colours (serial_lanes 0), and back, lays out each
+// runs (one_group_rows 0; in 2 and 3 parts), for colours (serial_lanes 0), and back, lays out each
 // step as asked (a layout kept from the step before would reach a sweep it was not made for, which
 // refuses it) and steps on without an error
 TEST(DemWorld, TheRowLayoutFollowsSettingsChangedBetweenSteps) {
@@ -197,21 +214,31 @@ TEST(DemWorld, TheRowLayoutFollowsSettingsChangedBetweenSteps) {
   // the bed at rest, where steps keep their layout
   for (int i = 0; i < 300; ++i) world.step();
   struct Change {
-    int one_group_rows, serial_lanes;
-    bool interleaved;
+    int one_group_rows, serial_lanes, sweep_parts;
+    RowLayout layout;
+    int colours;  // the runs' count; 0: more than one colour
   };
-  for (const Change c :
-       {Change{0, kSerialLanes, false}, Change{kPgsOneGroupRows, kSerialLanes, true},
-        Change{kPgsOneGroupRows, 0, false}, Change{kPgsOneGroupRows, 3, true},
-        Change{kPgsOneGroupRows, kSerialLanes, true}}) {
+  for (const Change c : {Change{0, kSerialLanes, 2, RowLayout::Runs, 3},
+                         Change{0, kSerialLanes, 3, RowLayout::Runs, 4},
+                         Change{kPgsOneGroupRows, kSerialLanes, 3, RowLayout::Interleaved, 1},
+                         Change{0, 0, 3, RowLayout::Colours, 0},
+                         Change{kPgsOneGroupRows, 0, 0, RowLayout::Colours, 0},
+                         Change{kPgsOneGroupRows, 3, 0, RowLayout::Interleaved, 1},
+                         Change{kPgsOneGroupRows, kSerialLanes, 0, RowLayout::Interleaved, 1}}) {
     SCOPED_TRACE("one_group_rows " + std::to_string(c.one_group_rows) + ", serial_lanes " +
-                 std::to_string(c.serial_lanes));
+                 std::to_string(c.serial_lanes) + ", sweep_parts " + std::to_string(c.sweep_parts));
     world.settings().one_group_rows = c.one_group_rows;
     world.settings().serial_lanes = c.serial_lanes;
+    world.settings().sweep_parts = c.sweep_parts;
     for (int i = 0; i < 5; ++i) {
       ASSERT_NO_THROW(world.step()) << "step " << i;
-      EXPECT_EQ(world.buffers().rows_interleaved, c.interleaved) << "step " << i;
-      EXPECT_EQ(world.stats().colours > 1, !c.interleaved) << "step " << i;
+      EXPECT_TRUE(world.buffers().row_layout == c.layout) << "step " << i;
+      if (c.colours > 0) {
+        EXPECT_EQ(world.stats().colours, c.colours) << "step " << i;
+      } else {
+        EXPECT_GT(world.stats().colours, 1) << "step " << i;
+      }
+      EXPECT_EQ(world.stats().boundary_rows > 0, c.layout == RowLayout::Runs) << "step " << i;
     }
   }
 }
@@ -452,38 +479,60 @@ TEST(DemWorld, ConvergenceTableOfTheRelaxation) {
 // device's one work-item walks (DemSettings::serial_lanes; 1 block is contact order), from the
 // same state (the bed settles coloured): Gauss-Seidel in another order, so the residual must fall
 // as fast, sweep for sweep, within the spread of orders
-TEST(DemWorld, ConvergenceTableColouredAndInterleavedRows) {
+TEST(DemWorld, ConvergenceTableColouredInterleavedAndRunRows) {
   Device dev;
   Scene scene = small_bed();
   scene.settings.iterations = 20;
   scene.settings.serial_lanes = 0;
-  const std::vector<int> lanes = {0, 1, kSerialLanes, 64};
+  // the layouts: colours (serial_lanes 0), one walk interleaved from 1, 8 and 64 blocks, and runs
+  // (one_group_rows 0: this small bed above the threshold) in 2 and 8 parts
+  struct Layout {
+    int lanes, one_group_rows, parts;
+    const char* label;
+  };
+  const std::vector<Layout> layouts = {{0, kPgsOneGroupRows, 0, "coloured"},
+                                       {1, kPgsOneGroupRows, 0, "1 block"},
+                                       {kSerialLanes, kPgsOneGroupRows, 0, "8 blocks"},
+                                       {64, kPgsOneGroupRows, 0, "64 blocks"},
+                                       {kSerialLanes, 0, 2, "2 parts"},
+                                       {kSerialLanes, 0, 8, "8 parts"}};
   std::vector<std::vector<double>> r;
-  for (int l : lanes) {
+  std::vector<int> boundary;
+  for (const Layout& l : layouts) {
     DemWorld w(dev, scene.material, scene.settings, scene.bounds, scene.geoms);
     w.set_particles(scene.particles);
     for (int i = 0; i < 150; ++i) w.step();
     if (!w.one_item_sweeps()) GTEST_SKIP() << "this device sweeps in several work-items";
     w.settings().iterations = 100;
-    w.settings().serial_lanes = l;
+    w.settings().serial_lanes = l.lanes;
+    w.settings().one_group_rows = l.one_group_rows;
+    w.settings().sweep_parts = l.parts;
     r.push_back(w.step_recording_residuals());
+    ASSERT_EQ(w.buffers().row_layout == RowLayout::Runs, l.parts > 0) << l.label;
+    boundary.push_back(w.stats().boundary_rows);
   }
   std::printf("%10s", "iteration");
-  for (int l : lanes) std::printf("   residual, %2d blocks", l);
-  std::printf("   (0 blocks: coloured)\n");
+  for (const Layout& l : layouts) std::printf(" %14s", l.label);
+  std::printf("   (residual [m/s])\n");
   for (int it : {0, 1, 2, 5, 10, 15, 20, 50, 100}) {
     std::printf("%10d", it);
-    for (const auto& h : r) std::printf(" %22.4e", h[it]);
+    for (const auto& h : r) std::printf(" %14.4e", h[it]);
     std::printf("\n");
   }
+  std::printf("boundary rows: %d of 2 parts, %d of 8 parts\n", boundary[4], boundary[5]);
   // the same start (the residual sums its rows in row order: equal to rounding), then each order
   // converges; the interleaved one within a quarter of the colours' residual (measured 2026-12-02:
-  // 1.06-1.11 times it from 5 to 100 sweeps, contact order 1.04-1.11, 64 blocks 1.04-1.06)
+  // 1.06-1.11 times it from 5 to 100 sweeps, contact order 1.04-1.11, 64 blocks 1.04-1.06), the
+  // runs too (2 parts 1.05-1.08, 8 parts 1.01-1.05)
   EXPECT_NEAR(r[2][0], r[0][0], 1e-5 * r[0][0]);
-  for (int it : {5, 10, 15, 20, 50, 100}) {
-    EXPECT_LT(r[2][it], 1.25 * r[0][it]) << "after " << it << " sweeps";
+  for (size_t k : {size_t{2}, size_t{4}, size_t{5}}) {
+    for (int it : {5, 10, 15, 20, 50, 100}) {
+      EXPECT_LT(r[k][it], 1.25 * r[0][it]) << layouts[k].label << " after " << it << " sweeps";
+    }
+    EXPECT_LT(r[k][100], 0.5 * r[k][1]) << layouts[k].label;
   }
-  EXPECT_LT(r[2][100], 0.5 * r[2][1]);
+  EXPECT_GT(boundary[4], 0);
+  EXPECT_GT(boundary[5], boundary[4]);
 }
 
 TEST(DemWorld, ConvergenceTablePgsAndJacobi) {
@@ -543,7 +592,7 @@ TEST(DemWorld, ToleranceStopsTheSweepsEarly) {
 // it changes the particles, naming the field
 // serial_lanes outside 0-kMaxSerialLanes is refused by the step that would use it, naming the
 // field, before it changes the particles
-TEST(DemWorld, SerialLanesOutsideTheirRangeAreRefused) {
+TEST(DemWorld, SerialLanesAndSweepPartsOutsideTheirRangeAreRefused) {
   Device dev;
   Scene scene = small_bed();
   DemWorld world(dev, scene.material, scene.settings, scene.bounds, scene.geoms);
@@ -556,6 +605,17 @@ TEST(DemWorld, SerialLanesOutsideTheirRangeAreRefused) {
       FAIL() << "expected an InputError for " << bad;
     } catch (const InputError& e) {
       EXPECT_NE(std::string(e.what()).find("DemSettings.serial_lanes"), std::string::npos)
+          << e.what();
+    }
+  }
+  world.settings().serial_lanes = kSerialLanes;
+  for (int bad : {-1, kMaxSweepParts + 1}) {
+    world.settings().sweep_parts = bad;
+    try {
+      world.step();
+      FAIL() << "expected an InputError for " << bad;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("DemSettings.sweep_parts"), std::string::npos)
           << e.what();
     }
   }

@@ -133,7 +133,7 @@ TEST(PgsSweep, InterleavedRowsAreRefusedByAParallelSweep) {
   world.warm_start();
   DemBuffers& b = world.buffers();
   ASSERT_GT(b.n_contacts, 0);
-  ASSERT_TRUE(b.rows_interleaved);
+  ASSERT_TRUE(b.row_layout == RowLayout::Interleaved);
   try {
     make_pgs_sweep(world.device(), 0)->iterate(b, 1);
     FAIL() << "expected an Error";
@@ -142,6 +142,36 @@ TEST(PgsSweep, InterleavedRowsAreRefusedByAParallelSweep) {
         << e.what();
   }
   EXPECT_NO_THROW(make_pgs_sweep(world.device(), b.n_contacts)->iterate(b, 1));
+}
+
+// rows laid out in runs (a system above the one-group threshold on a CPU device) share bodies
+// within each run: a sweep that would take them as one work-group's colours (a threshold above
+// their count) refuses them, and the sweep that walks runs takes them
+TEST(PgsSweep, RunsAreRefusedByASweepThatDoesNotWalkThem) {
+  const uint64_t seed = test::fresh_seed();
+  SCOPED_TRACE(test::seed_note(seed));
+  std::mt19937_64 rng(seed);
+  test::Scene s = test::random_scene(rng);
+  s.settings.sweep = SweepKind::Pgs;
+  s.settings.one_group_rows = 0;
+  s.settings.sweep_parts = 2;
+  DemWorld world(test::shared_device(), s.material, s.settings, s.bounds, s.geoms);
+  world.set_particles(s.particles);
+  if (!world.one_item_sweeps()) GTEST_SKIP() << "this device sweeps in several work-items";
+  world.begin_step();
+  world.apply_gravity();
+  world.warm_start();
+  DemBuffers& b = world.buffers();
+  ASSERT_GT(b.n_contacts, 0);
+  ASSERT_TRUE(b.row_layout == RowLayout::Runs);
+  ASSERT_EQ(b.colour_start.size(), 4u);
+  try {
+    make_pgs_sweep(world.device(), b.n_contacts)->iterate(b, 1);
+    FAIL() << "expected an Error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("laid out in runs"), std::string::npos) << e.what();
+  }
+  EXPECT_NO_THROW(make_pgs_sweep(world.device(), 0)->iterate(b, 1));
 }
 
 }  // namespace
