@@ -21,10 +21,11 @@ namespace talus::app {
 namespace {
 
 // --one-group-rows of both benchmarks: the threshold is a device's speed question (with colours
-// the same bits; a CPU device walks such a system in one work-item, see --serial-lanes)
+// the same bits; a CPU device walks such a system in one work-item, see --serial-lanes, and a
+// larger one in runs, see --sweep-parts)
 const char* const kOneGroupRowsHelp =
     "PGS sweeps systems of at most this many rows in one work-group, larger ones a launch per "
-    "colour or, on a CPU device, in parts (0: never)";
+    "colour or, on a CPU device, in runs (0: never)";
 const char* const kSerialLanesHelp =
     "on a CPU device a system the one work-group sweeps is walked by one work-item without "
     "colours, its rows interleaved from this many blocks of contacts (0: coloured as on a GPU); "
@@ -32,7 +33,8 @@ const char* const kSerialLanesHelp =
 
 const char* const kSweepPartsHelp =
     "on a CPU device a larger system is cut into this many parts by particle index, walked side "
-    "by side by a work-item each, then their boundary (0: one per compute unit)";
+    "by side by a work-item each, then the contacts across them level by level (0: one per "
+    "compute unit)";
 
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
@@ -128,7 +130,7 @@ nlohmann::json bench_level(Device& dev, const FidelityPreset& preset, int steps,
     step_s.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
     sweep_s.push_back(world.stats().sweep_seconds);
     contacts.push_back(world.stats().contacts);
-    boundary.push_back(world.stats().boundary_rows);
+    boundary.push_back(world.stats().boundary_rows / std::max(1.0, 1.0 * world.stats().contacts));
   }
   double ms = 1e3 * median(step_s);
   double n_contacts = median(contacts);
@@ -136,7 +138,7 @@ nlohmann::json bench_level(Device& dev, const FidelityPreset& preset, int steps,
                       {"particles", world.size()},
                       {"contacts", n_contacts},
                       {"colours", world.stats().colours},
-                      {"boundary_share", median(boundary) / std::max(n_contacts, 1.0)},
+                      {"boundary_share", median(boundary)},
                       {"iterations", preset.iterations},
                       {"dt_s", preset.dt},
                       {"steps_timed", steps},
@@ -147,6 +149,7 @@ nlohmann::json bench_level(Device& dev, const FidelityPreset& preset, int steps,
   // the last step's runs (a CPU device's layout of a large system): each part's rows, the
   // boundary's last; the slowest part sets a sweep's time
   if (world.buffers().row_layout == RowLayout::Runs) {
+    j["sweep_parts_used"] = world.buffers().run_parts;
     const std::vector<int>& start = world.buffers().colour_start;
     std::vector<int> rows;
     for (size_t k = 0; k + 1 < start.size(); ++k) rows.push_back(start[k + 1] - start[k]);
@@ -225,6 +228,7 @@ nlohmann::ordered_json dig_cost_json(const DigCost& c, const std::string& device
           {"stages", stages},
           {"contacts", c.contacts},
           {"boundary_rows", c.boundary_rows},
+          {"sweep_parts_used", c.sweep_parts_used},
           {"bucket_contacts", c.bucket_contacts},
           {"passes", c.passes},
           {"sweeps", c.sweeps},

@@ -82,6 +82,8 @@ DigCost measure_dig_cost(Device& dev, const vehicle::Scenario& scenario,
     ++(profile ? profiled : plain);
     // the work this step did (type G: the zone's DEM with the bucket kinematic, one pass)
     cost.particles += sim.particle_count();
+    if (dem.buffers().row_layout == RowLayout::Runs)
+      cost.sweep_parts_used = std::max(cost.sweep_parts_used, dem.buffers().run_parts);
     if (type_g) {
       // the zone's DEM steps only while it holds particles (its stats are the last step's
       // otherwise), then with the level's sweeps (solvers/tool_world)

@@ -34,6 +34,9 @@ struct DigCost {
   // of them, rows in the boundary of the runs (StepStats::boundary_rows; 0 unless a CPU device
   // walks the system in parts), walked after the parts by one work-item
   double boundary_rows = 0.0;
+  // the parts a step's runs were made of (the device's count for sweep_parts 0), the most over
+  // the measured steps; 0 when no step was laid out in runs
+  int sweep_parts_used = 0;
   double bucket_contacts = 0.0;  // particle-bucket rows (type D; type G's bucket is kinematic)
   double passes = 0.0;           // outer coupling passes
   double sweeps = 0.0;           // particle sweeps, all passes (fewer with a sweep tolerance)

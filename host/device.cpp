@@ -145,6 +145,9 @@ Device::Device(const DeviceChoice& choice) {
   is_cpu_ = cl_checked("querying the device's type", [&] {
     return (device_.getInfo<CL_DEVICE_TYPE>() & CL_DEVICE_TYPE_CPU) != 0;
   });
+  compute_units_ = static_cast<int>(cl_checked("querying the device's compute units", [&] {
+    return device_.getInfo<CL_DEVICE_MAX_COMPUTE_UNITS>();
+  }));
   cl_checked("creating the context and queue", [&] {
     context_ = cl::Context(device_);
     queue_ = cl::CommandQueue(context_, device_);

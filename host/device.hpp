@@ -79,9 +79,7 @@ class Device {
   // idle items (the one-group sweeps, short scans) take one work-item there instead
   bool is_cpu() const { return is_cpu_; }
   // the device's compute units (CL_DEVICE_MAX_COMPUTE_UNITS): cores of a CPU device
-  int compute_units() const {
-    return static_cast<int>(device_.getInfo<CL_DEVICE_MAX_COMPUTE_UNITS>());
-  }
+  int compute_units() const { return compute_units_; }
   // "platform / device (compute units, global memory)"
   std::string description() const { return description_; }
   // the device's global memory [bytes] (CL_DEVICE_GLOBAL_MEM_SIZE), what its buffers share
@@ -112,6 +110,7 @@ class Device {
   cl::CommandQueue queue_;
   bool is_gpu_ = false;
   bool is_cpu_ = false;
+  int compute_units_ = 1;
   std::string description_;
   // the platform's and device's names and versions and the driver's: what a program binary is
   // built for (host/program_cache.hpp)

@@ -154,11 +154,12 @@ __kernel void identity_order(int n_contacts, __global int* order, __global int* 
   row_of_contact[c] = c;
 }
 
-// rows for a sweep that one work-item walks in turn (a CPU device's one-group sweep), which needs
-// no colours: the contacts cut into `lanes` blocks of n/lanes or n/lanes + 1 in contact order
-// (block j starts at floor(j n / lanes)), and the rows taking one contact of each block in turn.
-// Rows next to each other then belong to blocks far apart in the grid's order and rarely share a
-// body, so the core overlaps one row's arithmetic with the next's instead of waiting on the
+// The row of the c-th of n contacts in the interleaved order of `lanes` blocks (interleaved_order,
+// interleave_runs). Rows for a sweep that one work-item walks in turn (a CPU device's one-group
+// sweep) need no colours: the contacts cut into `lanes` blocks of n/lanes or n/lanes + 1 in contact
+// order (block j starts at floor(j n / lanes)), and the rows taking one contact of each block in
+// turn. Rows next to each other then belong to blocks far apart in the grid's order and rarely
+// share a body, so the core overlaps one row's arithmetic with the next's instead of waiting on the
 // velocities the row before wrote (DemSettings::serial_lanes). Row of contact c at position p of
 // block j: p lanes + j for p < n/lanes; the blocks of n/lanes + 1 (the first j of them number
 // start_j - j (n/lanes)) give their last contacts the rows after those
@@ -173,6 +174,7 @@ int interleaved_row(int c, int n_contacts, int lanes) {
   return p < q ? p * lanes + j : q * lanes + (start - j * q);
 }
 
+// a whole system's rows interleaved (one work-item walks them)
 __kernel void interleaved_order(int n_contacts, int lanes, __global int* order,
                                 __global int* row_of_contact) {
   int c = get_global_id(0);
@@ -182,25 +184,26 @@ __kernel void interleaved_order(int n_contacts, int lanes, __global int* order,
   row_of_contact[c] = row;
 }
 
-// Parts (issue 13): a large system on a CPU device is swept as `parts` runs of rows, each walked
-// by one work-item of its own work-group, side by side on the cores, then the boundary's rows by
-// one work-item (solvers/pgs_sweep.cpp). Particle i belongs to part floor(i parts / particles); a
-// contact belongs to the part of its dynamic bodies when they share one, else to the boundary
-// (part `parts`). Two parts then share no dynamic body, so their walks never race and the result
-// is that of one walk over all rows in turn, bit for bit. The piles emit particles layer by layer
-// and the grains of a dig stay near their neighbours, so index ranges are regions of the pile and
-// few contacts cross them (bench/RESULTS.md 2026-12-02, "runs")
+// Runs (issue 13): a large system on a CPU device is swept as runs of rows, each walked by one
+// work-item of its own work-group, a level's runs side by side on the cores, the levels in turn
+// (solvers/pgs_sweep.cpp). Particle i belongs to part floor(i parts / particles); a contact to the
+// run of its dynamic bodies' parts (kernels/dem_types.h tl_run_of: its part's, or for one across
+// parts the smallest aligned group's that holds both). Two runs of a level share no dynamic body,
+// so their walks never race and the result is that of one walk over all runs in turn, bit for bit.
+// The piles emit particles layer by layer and the grains of a dig stay near their neighbours, so
+// index ranges are regions of the pile and few contacts cross them (bench/RESULTS.md 2026-12-02,
+// "runs")
 __kernel void contact_part(__global const TlContact* contacts, int n_contacts, int particles,
-                           int parts, __global int* part) {
+                           int parts, __global int* run) {
   int c = get_global_id(0);
   if (c >= n_contacts) return;
   int pa = (int)((long)contacts[c].a * parts / particles);
   int b = contacts[c].b;
   int pb = b >= 0 ? (int)((long)b * parts / particles) : pa;
-  part[c] = pa == pb ? pa : parts;
+  run[c] = tl_run_of(pa, pb, parts);
 }
 
-// the rows of each part (laid out part after part by the stable partition, `by_part`; the runs'
+// the rows of each run (laid out run after run by the stable partition, `by_part`; the runs'
 // first rows in part_start, `runs` + 1 entries) interleaved within their run as interleaved_order
 // lays out a whole system
 __kernel void interleave_runs(__global const int* by_part, __global const int* part_start, int runs,

@@ -18,6 +18,41 @@
 // a sphere has at most ~14 neighbours of similar size, so a contact has < 32 neighbours
 #define TL_MAX_COLOURS 64
 
+// Runs (RowLayout::Runs, kernels/colouring.cl contact_part): a large system on a CPU device is cut
+// into `parts` ranges of particle indices. A contact within one part belongs to that part's run
+// (level 0); one across parts pa < pb to the run of the smallest aligned group of parts that holds
+// both: level l = the bit length of pa ^ pb, group pa >> l, parts [g 2^l, (g + 1) 2^l). Runs of one
+// level hold disjoint ranges of bodies, so each level's runs are walked side by side (a work-item
+// each) and the levels in turn: log2(parts) + 1 launches a sweep, and only the top level's one run
+// (the contacts across the middle cut) is walked alone. With a flat boundary instead, every cut's
+// contacts would wait for one work-item: 35 % of D200's rows in 16 parts (bench/RESULTS.md
+// 2026-12-02 "runs in levels"). Integer arithmetic only, the same in OpenCL C and C++.
+
+// the groups of runs at `level`: ceil(parts / 2^level)
+static inline int tl_run_groups(int parts, int level) {
+  return (parts + (1 << level) - 1) >> level;
+}
+// the levels: 0 up to the first with one group
+static inline int tl_run_levels(int parts) {
+  int level = 0;
+  while (tl_run_groups(parts, level) > 1) ++level;
+  return level + 1;
+}
+// the index of the first run of `level` (the runs are numbered level after level)
+static inline int tl_run_first(int parts, int level) {
+  int first = 0;
+  for (int k = 0; k < level; ++k) first += tl_run_groups(parts, k);
+  return first;
+}
+// the runs of `parts` parts, all levels
+static inline int tl_runs(int parts) { return tl_run_first(parts, tl_run_levels(parts)); }
+// the run of a contact between bodies of parts pa and pb (pb = pa for one with static geometry)
+static inline int tl_run_of(int pa, int pb, int parts) {
+  int level = 0;
+  for (int x = pa ^ pb; x != 0; x >>= 1) ++level;
+  return tl_run_first(parts, level) + (pa >> level);
+}
+
 // the narrow phase's warm-start matching: last step's particle pairs, its static contacts
 #define TL_MATCH_PAIRS 1
 #define TL_MATCH_STATIC 2

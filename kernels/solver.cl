@@ -234,11 +234,11 @@ __kernel void pgs_colour(__global TlRow* rows, int begin, int end, __global floa
   pgs_row(rows, k, velocity, omega);
 }
 
-// projected Gauss-Seidel over runs of rows that share no dynamic body (the parts of a large system
-// on a CPU device: kernels/colouring.cl contact_part): the one work-item of work-group g walks
-// run `first + g`, rows [run_start[first + g], run_start[first + g + 1]) in order. The runs of
-// one launch run side by side on the cores without a race; the boundary's run comes in a launch
-// of its own after them (solvers/pgs_sweep.cpp)
+// projected Gauss-Seidel over runs of rows that share no dynamic body (one level's runs of a large
+// system on a CPU device: kernels/colouring.cl contact_part): the one work-item of work-group g
+// walks run `first + g`, rows [run_start[first + g], run_start[first + g + 1]) in order. The runs
+// of one launch run side by side on the cores without a race; the next level's come in a launch
+// of their own after them (solvers/pgs_sweep.cpp)
 __kernel void pgs_runs(__global TlRow* rows, __global const int* run_start, int first,
                        __global float4* velocity, __global float4* omega) {
   int k = first + get_group_id(0);

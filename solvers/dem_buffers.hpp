@@ -15,8 +15,9 @@ namespace talus {
 // Colours: colour after colour, no dynamic body twice in a colour (any sweep may take them);
 // Interleaved: one "colour" whose rows share bodies, for one work-item to walk
 //   (DemSettings::serial_lanes);
-// Runs: the parts of a large system, then their boundary, each interleaved within itself, for a
-//   work-item per part to walk (DemSettings::sweep_parts): colour_start holds the runs' rows
+// Runs: the runs of a large system's parts (kernels/dem_types.h tl_run_of), each interleaved
+//   within itself, for a work-item per run to walk, level by level (DemSettings::sweep_parts):
+//   colour_start holds the runs' rows
 enum class RowLayout { Colours, Interleaved, Runs };
 
 struct DemBuffers {
@@ -107,8 +108,9 @@ struct DemBuffers {
   std::vector<int> colour_start;  // host copy: rows of colour k are [start[k], start[k+1])
   // how the rows are laid out (RowLayout); colour_start holds the colours' or the runs' rows
   RowLayout row_layout = RowLayout::Colours;
-  // runs: each contact's part (kernels/colouring.cl contact_part) and the contacts part after
-  // part in contact order, which the runs' interleaving reads
+  // runs: the parts they were made for, each contact's run (kernels/colouring.cl contact_part)
+  // and the contacts run after run in contact order, which the runs' interleaving reads
+  int run_parts = 0;
   Buffer<int> part, by_part;
   int colour_rounds = 0;
   // set by kernels/colouring.cl contact_pairs_differ when this step's contacts pair other bodies

@@ -438,15 +438,20 @@ Partition interleaved_partition(int n_contacts, int lanes) {
 }
 
 Partition run_partition(const std::vector<Contact>& contacts, int particles, int parts, int lanes) {
-  // each contact's run: its dynamic bodies' part when they share one, else the boundary
+  if (parts < 1 || parts > kMaxSweepParts || particles < 1 || lanes < 1)
+    throw Error("reference run_partition: " + std::to_string(parts) + " parts of " +
+                std::to_string(particles) + " particles in " + std::to_string(lanes) +
+                " blocks (want 1 to kMaxSweepParts parts, particles and blocks)");
+  // each contact's run: its dynamic bodies' part when they share one, else the run of the
+  // smallest aligned group of parts that holds both (kernels/dem_types.h)
   const auto part_of = [&](int body) {
     return static_cast<int>(std::int64_t(body) * parts / particles);
   };
-  std::vector<std::vector<int>> runs(parts + 1);
+  std::vector<std::vector<int>> runs(tl_runs(parts));
   for (size_t c = 0; c < contacts.size(); ++c) {
     const int pa = part_of(contacts[c].a);
     const int pb = contacts[c].b >= 0 ? part_of(contacts[c].b) : pa;
-    runs[pa == pb ? pa : parts].push_back(static_cast<int>(c));
+    runs[tl_run_of(pa, pb, parts)].push_back(static_cast<int>(c));
   }
   // run after run, each laid out as a whole system of its contacts is
   Partition out;

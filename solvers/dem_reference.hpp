@@ -123,9 +123,9 @@ Partition identity_partition(int n_contacts);
 // each block in turn, one colour (a sweep one work-item walks; DemSettings::serial_lanes)
 Partition interleaved_partition(int n_contacts, int lanes);
 // kernels/colouring.cl contact_part + the stable partition + interleave_runs: the contacts of
-// each of `parts` parts of the particle indices (a contact whose dynamic bodies lie in one part),
-// then the rest (the boundary), each run interleaved from `lanes` blocks; colour_start holds the
-// parts + 1 runs, empty ones kept (DemSettings::sweep_parts)
+// each run of `parts` parts of the particle indices (kernels/dem_types.h tl_run_of), run after
+// run, each interleaved from `lanes` blocks; colour_start holds all tl_runs(parts) runs, empty
+// ones kept (DemSettings::sweep_parts)
 Partition run_partition(const std::vector<Contact>& contacts, int particles, int parts, int lanes);
 
 // kernels/solver.cl prepare_rows: rows in `order`, from the velocities before gravity
@@ -178,7 +178,8 @@ struct ReferenceWorld {
   // DemWorld::one_item_sweeps): systems of at most settings.one_group_rows rows are then laid out
   // interleaved instead of coloured (DemSettings::serial_lanes)
   bool one_item_sweeps = false;
-  // on such a device, the parts larger systems are walked in (DemWorld::sweep_parts)
+  // on such a device, the parts larger systems are walked in (DemWorld::sweep_parts, resolved:
+  // at least 1)
   int sweep_parts = 1;
 
   // by-products of the last step, for inspection

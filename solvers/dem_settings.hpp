@@ -38,10 +38,10 @@ inline constexpr int kPgsOneGroupRows = 4096;
 inline constexpr int kSerialLanes = 8;
 // more blocks than this interleave nothing a core can overlap (its window holds a few rows)
 inline constexpr int kMaxSerialLanes = 1024;
-// the most parts a large system's rows are walked in (DemSettings::sweep_parts): the parts and
-// their boundary are partitioned as colours are, at most TL_MAX_COLOURS (kernels/dem_types.h) of
-// them (a static_assert in solvers/dem_world.cpp)
-inline constexpr int kMaxSweepParts = 63;
+// the most parts a large system's rows are walked in (DemSettings::sweep_parts): their runs, all
+// levels (kernels/dem_types.h tl_runs: 63 for 32 parts), are partitioned as colours are, at most
+// TL_MAX_COLOURS of them (a static_assert in solvers/dem_world.cpp)
+inline constexpr int kMaxSweepParts = 32;
 
 // SPOOK damping times a study may ask for [s] (talus run --damping-time for the particle contacts,
 // --interface-damping-time for the type-G aggregate's interfaces): from 0.1 ms, the shortest
@@ -67,24 +67,27 @@ struct DemSettings {
   double tolerance = 0.0;
   SweepKind sweep = SweepKind::Pgs;
   // PGS sweeps systems of at most this many rows in one work-group, larger ones a launch per
-  // colour (with colours the same bits either way, only the speed differs by device; but see
-  // serial_lanes): 0 never, INT_MAX always
+  // colour, or on a CPU device in runs (sweep_parts). With colours the same bits either way, only
+  // the speed differs by device; on a CPU device the layouts differ (serial_lanes, sweep_parts):
+  // 0 never, INT_MAX always
   int one_group_rows = kPgsOneGroupRows;
   // where the one-group sweep is one work-item walking the rows (a CPU device), a system of at
   // most one_group_rows rows is a serial Gauss-Seidel sweep and needs no colours: its rows are then
   // laid out in contact order cut into this many blocks, taken one of each block in turn
   // (kernels/colouring.cl interleaved_order), and the colouring is skipped. Another order than
-  // the colours', so other bits than one_group_rows 0 gives on such a device; 0 colours them as a
-  // GPU does (the one-group and per-colour paths then give the same bits)
+  // the colours', so other bits than a GPU gives; 0 colours every system as a GPU does, large ones
+  // too (no runs; the one-group and per-colour paths then give the same bits)
   int serial_lanes = kSerialLanes;
   // where the sweep walks rows with one work-item (a CPU device) and serial_lanes > 0, a system
   // of more than one_group_rows rows is cut into this many parts by particle index: a contact
-  // whose dynamic bodies lie in one part belongs to it, the rest to the boundary
-  // (kernels/colouring.cl contact_part). Each sweep walks the parts side by side, one work-item
-  // each, then the boundary; each run of rows interleaved as serial_lanes says. No colouring, and
-  // another order than the colours' (other bits); 0: one part per compute unit of the device
-  // (Device::compute_units), so the bits follow the device as a GPU's colours do. 1 to
-  // kMaxSweepParts: that many, on any CPU device
+  // whose dynamic bodies lie in one part belongs to its run, one across parts to the run of the
+  // smallest aligned group of parts holding both (kernels/dem_types.h tl_run_of). Each sweep walks
+  // the runs level by level, a level's runs side by side, one work-item each; each run's rows
+  // interleaved as serial_lanes says. No colouring, and another order than the colours' (other
+  // bits); 0: one part per compute unit of the device (Device::compute_units, at most
+  // kMaxSweepParts), so the bits of a large system depend on the device's core count (and differ
+  // between PoCL's in-thread device, 1 compute unit, and its threaded one): a fixed count gives
+  // the same bits on any CPU device. 1 to kMaxSweepParts
   int sweep_parts = 0;
   Vec3 gravity = Vec3(0.0, 0.0, -9.81);  // [m/s^2]
   // pairs closer than margin_rel * min(r_a, r_b) get a (speculative) contact row: it never

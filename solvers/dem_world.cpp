@@ -611,9 +611,6 @@ bool DemWorld::rows_in_runs(int rows) const {
          sweep_->walks_in_runs(rows);
 }
 
-// the parts and their boundary are partitioned as colours (kernels/colouring.cl)
-static_assert(kMaxSweepParts + 1 <= TL_MAX_COLOURS, "the parts and boundary must fit the colours");
-
 int DemWorld::sweep_parts() const {
   if (settings_.sweep_parts > 0) return settings_.sweep_parts;
   return std::clamp(dev_.compute_units(), 1, kMaxSweepParts);
@@ -682,20 +679,26 @@ void DemWorld::colour_contacts() {
     return;
   }
   if (rows_in_runs(nc)) {
-    // a work-item per part walks its rows, then one the boundary's: each contact's part, the
-    // contacts part by part (the colours' stable partition), each run interleaved
+    // a work-item per run walks its rows, level by level: each contact's run, the contacts run
+    // by run (the colours' stable partition), each run interleaved
     const int parts = sweep_parts();
+    const int runs = tl_runs(parts);
+    if (runs > TL_MAX_COLOURS)
+      throw Error("DemWorld: " + std::to_string(parts) + " parts make " + std::to_string(runs) +
+                  " runs, more than the partition's " + std::to_string(TL_MAX_COLOURS) +
+                  " (internal error: kMaxSweepParts is too large)");
     b.part.resize(std::max(nc, 1));
     b.by_part.resize(std::max(nc, 1));
     set_args(k_contact_part_, b.contacts[b.current], nc, static_cast<int>(particle_count_), parts,
              b.part);
     launch(dev_, k_contact_part_, nc, "contact_part");
     partition_rows(b.part, b.by_part);
-    set_args(k_interleave_runs_, b.by_part, b.colour_start_dev, parts + 1, nc,
-             settings_.serial_lanes, b.order, b.row_of_contact);
+    set_args(k_interleave_runs_, b.by_part, b.colour_start_dev, runs, nc, settings_.serial_lanes,
+             b.order, b.row_of_contact);
     launch(dev_, k_interleave_runs_, nc, "interleave_runs");
-    // every run kept, empty or not: the sweep launches the parts together and the boundary last
-    b.colour_start = b.colour_start_dev.download(parts + 2);
+    // every run kept, empty or not: the sweep launches each level's runs together
+    b.colour_start = b.colour_start_dev.download(runs + 1);
+    b.run_parts = parts;
     b.colour_rounds = 0;
     b.row_layout = RowLayout::Runs;
     colours_made_ = false;
@@ -910,7 +913,7 @@ void DemWorld::begin_step() {
   stats_.colours = static_cast<int>(buffers_.colour_start.size()) - 1;
   const std::vector<int>& start = buffers_.colour_start;
   stats_.boundary_rows =
-      buffers_.row_layout == RowLayout::Runs ? start.back() - start[start.size() - 2] : 0;
+      buffers_.row_layout == RowLayout::Runs ? start.back() - start[buffers_.run_parts] : 0;
   stats_.colour_rounds = stats_.colouring_kept ? 0 : buffers_.colour_rounds;
 }
 

@@ -24,8 +24,8 @@ namespace talus {
 
 struct StepStats {
   int contacts = 0;
-  int colours = 0;         // colours, or runs (RowLayout::Runs: the parts and their boundary)
-  int boundary_rows = 0;   // rows in the runs' boundary, walked after the parts (else 0)
+  int colours = 0;         // colours, or runs (RowLayout::Runs: every level's)
+  int boundary_rows = 0;   // rows in runs across parts, walked after the parts (else 0)
   int colour_rounds = 0;   // Jones-Plassmann rounds launched (whole batches: solvers/dem_world.cpp)
   // the contacts paired the same bodies as the last step's, so their colouring was kept
   bool colouring_kept = false;

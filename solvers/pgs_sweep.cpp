@@ -105,20 +105,23 @@ class PgsSweep : public ContactSweep {
   // one sweep of a system above the one-group threshold: its runs or its colours
   void sweep_large(DemBuffers& b, int colours) {
     if (b.row_layout == RowLayout::Runs) {
-      sweep_runs(b, colours);
+      sweep_runs(b);
     } else {
       sweep_colours(b, colours);
     }
   }
 
-  // one sweep over runs: the parts side by side (a work-group of one item each), then the
-  // boundary, the last run, after them (the in-order queue keeps the two launches in turn)
-  void sweep_runs(DemBuffers& b, int runs) {
-    set_args(runs_, b.rows, b.colour_start_dev, 0, b.velocity, b.omega);
-    launch_walks(dev_, runs_, static_cast<size_t>(runs - 1), "pgs_runs");
-    if (b.colour_start[runs] == b.colour_start[runs - 1]) return;
-    set_args(runs_, b.rows, b.colour_start_dev, runs - 1, b.velocity, b.omega);
-    launch_walks(dev_, runs_, 1, "pgs_runs");
+  // one sweep over runs: level by level, each level's runs side by side (a work-group of one
+  // item each; the in-order queue keeps the levels in turn), a level without rows skipped
+  void sweep_runs(DemBuffers& b) {
+    const int parts = b.run_parts;
+    for (int level = 0; level < tl_run_levels(parts); ++level) {
+      const int first = tl_run_first(parts, level);
+      const int groups = tl_run_groups(parts, level);
+      if (b.colour_start[first + groups] == b.colour_start[first]) continue;
+      set_args(runs_, b.rows, b.colour_start_dev, first, b.velocity, b.omega);
+      launch_walks(dev_, runs_, static_cast<size_t>(groups), "pgs_runs");
+    }
   }
 
   // `sweeps` sweeps of every colour in one launch of one work-group

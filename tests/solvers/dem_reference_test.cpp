@@ -814,11 +814,52 @@ TEST(ReferenceColouring, InterleavedRowsMatchExactly) {
       kMaxSerialLanes);
 }
 
-// a large system on a CPU device is laid out in runs (its parts by particle index, then their
-// boundary, each interleaved): the device's layout must equal the reference's for parts and
-// blocks drawn fresh, no dynamic body may appear in two parts' runs (their walks run side by
-// side), and the boundary holds exactly the contacts whose bodies lie in two parts
-TEST(ReferenceColouring, RunsMatchExactlyAndKeepThePartsApart) {
+// the runs' arithmetic shared by the kernels and the host (kernels/dem_types.h), checked from its
+// promise for every count of parts up to kMaxSweepParts: the runs fit the partition's colours,
+// every pair of parts has a run, within one part its own, and no part is touched by two runs of
+// one level (the runs of a level are walked side by side)
+TEST(ReferenceColouring, RunLevelsGiveEveryPairOfPartsOneRunAndKeepALevelsRunsApart) {
+  for (int parts = 1; parts <= kMaxSweepParts; ++parts) {
+    SCOPED_TRACE("parts " + std::to_string(parts));
+    const int runs = tl_runs(parts);
+    ASSERT_LE(runs, TL_MAX_COLOURS);
+    ASSERT_GE(runs, parts);
+    // each run's level: the last level whose first run is at or below it
+    const int levels = tl_run_levels(parts);
+    std::vector<int> level_of(runs, -1);
+    for (int l = 0; l < levels; ++l)
+      for (int r = tl_run_first(parts, l); r < runs; ++r) level_of[r] = l;
+    // for each level, the one run each part's contacts of that level go to
+    std::vector<std::vector<int>> run_at(levels, std::vector<int>(parts, -1));
+    for (int pa = 0; pa < parts; ++pa) {
+      for (int pb = 0; pb < parts; ++pb) {
+        const int r = tl_run_of(pa, pb, parts);
+        ASSERT_GE(r, 0);
+        ASSERT_LT(r, runs);
+        if (pa == pb) {
+          EXPECT_EQ(r, pa);
+        }
+        EXPECT_EQ(r, tl_run_of(pb, pa, parts)) << pa << ", " << pb;
+        for (int p : {pa, pb}) {
+          int& slot = run_at[level_of[r]][p];
+          EXPECT_TRUE(slot == -1 || slot == r)
+              << "part " << p << " in runs " << slot << " and " << r << " of level " << level_of[r];
+          slot = r;
+        }
+      }
+    }
+    // the top level is one run, which a part pair across the middle uses
+    EXPECT_EQ(tl_run_first(parts, levels - 1), runs - 1);
+  }
+  std::printf("[ measured ] runs of 2, 16, 32 parts: %d, %d, %d\n", tl_runs(2), tl_runs(16),
+              tl_runs(32));
+}
+
+// a large system on a CPU device is laid out in runs (its parts by particle index, then the runs
+// across them level by level, each interleaved): the device's layout must equal the reference's
+// for parts and blocks drawn fresh; no dynamic body may appear in two runs of one level (their
+// walks run side by side), and the rows outside level 0 are exactly the contacts across parts
+TEST(ReferenceColouring, RunsMatchExactlyAndKeepALevelsRunsApart) {
   // every system walks in runs, however small (the threshold is a speed question)
   RandomWorld r = random_world(kSerialLanes, /*one_group_rows=*/0);
   SCOPED_TRACE(r.seed_note);
@@ -831,12 +872,13 @@ TEST(ReferenceColouring, RunsMatchExactlyAndKeepThePartsApart) {
   const int n = static_cast<int>(world->size());
   ASSERT_GT(nc, 0);
   const std::vector<ref::Contact> contacts = current_contacts(*world);
-  const int drawn_parts = 2 + static_cast<int>(r.rng() % 30);
+  const int drawn_parts = 2 + static_cast<int>(r.rng() % (kMaxSweepParts - 2));
   const int drawn_lanes = 1 + static_cast<int>(r.rng() % 40);
-  int boundary_seen = 0;
+  int across_seen = 0;
   for (auto [parts, lanes] :
        {std::pair{1, kSerialLanes}, std::pair{2, kSerialLanes}, std::pair{3, 1},
-        std::pair{drawn_parts, drawn_lanes}, std::pair{kMaxSweepParts, 2}}) {
+        std::pair{drawn_parts, drawn_lanes}, std::pair{kMaxSweepParts, 2},
+        std::pair{kMaxSweepParts, kMaxSerialLanes}}) {
     SCOPED_TRACE("sweep_parts " + std::to_string(parts) + ", serial_lanes " +
                  std::to_string(lanes));
     world->settings().sweep_parts = parts;
@@ -846,41 +888,52 @@ TEST(ReferenceColouring, RunsMatchExactlyAndKeepThePartsApart) {
     const ref::Partition want = ref::run_partition(contacts, n, parts, lanes);
     const DemBuffers& b = world->buffers();
     ASSERT_TRUE(b.row_layout == RowLayout::Runs);
+    EXPECT_EQ(b.run_parts, parts);
     EXPECT_EQ(b.colour_start, want.colour_start);
-    ASSERT_EQ(b.colour_start.size(), static_cast<size_t>(parts + 2));
+    const int runs = tl_runs(parts);
+    ASSERT_EQ(b.colour_start.size(), static_cast<size_t>(runs + 1));
     const std::vector<int> order = b.order.download(nc), row_of = b.row_of_contact.download(nc);
     EXPECT_EQ(order, want.order);
     EXPECT_EQ(row_of, want.row_of_contact);
-    // a bijection; each part's run holds only bodies of that part, the boundary only contacts
-    // across two parts
+    // a bijection; a part's run holds only contacts within that part; within each level, every
+    // dynamic body in one run only
+    const auto part_of = [&](int body) { return static_cast<int>(std::int64_t(body) * parts / n); };
     std::vector<int> seen(nc, 0);
-    for (int k = 0; k <= parts; ++k) {
-      for (int row = b.colour_start[k]; row < b.colour_start[k + 1]; ++row) {
-        const int c = order[row];
-        ASSERT_GE(c, 0);
-        ASSERT_LT(c, nc);
-        ++seen[c];
-        EXPECT_EQ(row_of[c], row);
-        const int pa = static_cast<int>(std::int64_t(contacts[c].a) * parts / n);
-        const int pb =
-            contacts[c].b >= 0 ? static_cast<int>(std::int64_t(contacts[c].b) * parts / n) : pa;
-        if (k < parts) {
-          EXPECT_EQ(pa, k) << "row " << row;
-          EXPECT_EQ(pb, k) << "row " << row;
-        } else {
-          EXPECT_NE(pa, pb) << "boundary row " << row;
+    for (int l = 0; l < tl_run_levels(parts); ++l) {
+      const int first = tl_run_first(parts, l);
+      std::vector<int> run_of_body(n, -1);
+      for (int k = first; k < first + tl_run_groups(parts, l); ++k) {
+        for (int row = b.colour_start[k]; row < b.colour_start[k + 1]; ++row) {
+          const int c = order[row];
+          ASSERT_GE(c, 0);
+          ASSERT_LT(c, nc);
+          ++seen[c];
+          EXPECT_EQ(row_of[c], row);
+          const int pa = part_of(contacts[c].a);
+          const int pb = contacts[c].b >= 0 ? part_of(contacts[c].b) : pa;
+          EXPECT_EQ(pa == pb, l == 0) << "row " << row << " of level " << l;
+          if (l == 0) {
+            EXPECT_EQ(pa, k) << "row " << row;
+          }
+          for (int body : {contacts[c].a, contacts[c].b}) {
+            if (body < 0) continue;
+            EXPECT_TRUE(run_of_body[body] == -1 || run_of_body[body] == k)
+                << "body " << body << " in runs " << run_of_body[body] << " and " << k;
+            run_of_body[body] = k;
+          }
         }
       }
     }
     EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), nc);
-    const int boundary = b.colour_start[parts + 1] - b.colour_start[parts];
+    const int across = b.colour_start[runs] - b.colour_start[parts];
     if (parts == 1) {
-      EXPECT_EQ(boundary, 0);
+      EXPECT_EQ(across, 0);
     }
-    boundary_seen += boundary;
-    std::printf("[ measured ] %d parts: %d of %d contacts in the boundary\n", parts, boundary, nc);
+    across_seen += across;
+    std::printf("[ measured ] %d parts, %d runs: %d of %d contacts across parts\n", parts, runs,
+                across, nc);
   }
-  EXPECT_GT(boundary_seen, 0) << "no part boundary was crossed: the test saw nothing";
+  EXPECT_GT(across_seen, 0) << "no part boundary was crossed: the test saw nothing";
   // colours again with serial_lanes 0
   world->settings().serial_lanes = 0;
   world->colour_contacts();

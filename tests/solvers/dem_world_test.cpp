@@ -120,18 +120,24 @@ BedPair bed_pair(Device& dev, int serial_lanes = 0, int one_group_rows = kPgsOne
   return out;
 }
 
-// the default layout and, on a CPU device, runs (one_group_rows 0: this bed above the threshold),
-// whose parts' walks run side by side on the cores
+// the default layout and, on a CPU device, runs (one_group_rows 0: this bed above the threshold;
+// 4 parts), whose walks run side by side on the cores
 class DemWorldLayouts : public ::testing::TestWithParam<int> {};
 
 TEST_P(DemWorldLayouts, TwoRunsAreBitIdentical) {
   Device dev;
   Scene scene = small_bed();
   scene.settings.one_group_rows = GetParam();
+  scene.settings.sweep_parts = 4;  // three levels of runs
   auto run = [&] {
     DemWorld world(dev, scene.material, scene.settings, scene.bounds, scene.geoms);
     world.set_particles(scene.particles);
-    for (int i = 0; i < 60; ++i) world.step();
+    for (int i = 0; i < 60; ++i) {
+      world.step();
+      if (world.one_item_sweeps()) {
+        EXPECT_EQ(world.buffers().row_layout == RowLayout::Runs, GetParam() == 0) << i;
+      }
+    }
     auto x = world.buffers().position.download(scene.particles.size());
     auto v = world.buffers().velocity.download(scene.particles.size());
     x.insert(x.end(), v.begin(), v.end());
@@ -203,9 +209,9 @@ TEST(DemWorld, RunsKeptWhileThePairsHoldGiveTheBitsOfFreshOnes) {
 }
 
 // the layout follows settings changed between steps: a world walked interleaved that is asked for
-// runs (one_group_rows 0; in 2 and 3 parts), for colours (serial_lanes 0), and back, lays out each
-// step as asked (a layout kept from the step before would reach a sweep it was not made for, which
-// refuses it) and steps on without an error
+// runs (one_group_rows 0; in 2 and 3 parts: 3 and 6 runs), for colours (serial_lanes 0), and back,
+// lays out each step as asked (a layout kept from the step before would reach a sweep it was not
+// made for, which refuses it) and steps on without an error
 TEST(DemWorld, TheRowLayoutFollowsSettingsChangedBetweenSteps) {
   Device dev;
   BedPair bed = bed_pair(dev, kSerialLanes);
@@ -218,13 +224,15 @@ TEST(DemWorld, TheRowLayoutFollowsSettingsChangedBetweenSteps) {
     RowLayout layout;
     int colours;  // the runs' count; 0: more than one colour
   };
-  for (const Change c : {Change{0, kSerialLanes, 2, RowLayout::Runs, 3},
-                         Change{0, kSerialLanes, 3, RowLayout::Runs, 4},
-                         Change{kPgsOneGroupRows, kSerialLanes, 3, RowLayout::Interleaved, 1},
-                         Change{0, 0, 3, RowLayout::Colours, 0},
-                         Change{kPgsOneGroupRows, 0, 0, RowLayout::Colours, 0},
-                         Change{kPgsOneGroupRows, 3, 0, RowLayout::Interleaved, 1},
-                         Change{kPgsOneGroupRows, kSerialLanes, 0, RowLayout::Interleaved, 1}}) {
+  for (const Change c :
+       {Change{0, kSerialLanes, 2, RowLayout::Runs, 3},
+        Change{0, kSerialLanes, 3, RowLayout::Runs, 6}, Change{0, 0, 2, RowLayout::Colours, 0},
+        Change{0, kSerialLanes, 2, RowLayout::Runs, 3},
+        Change{kPgsOneGroupRows, kSerialLanes, 3, RowLayout::Interleaved, 1},
+        Change{0, 0, 3, RowLayout::Colours, 0},
+        Change{kPgsOneGroupRows, 0, 0, RowLayout::Colours, 0},
+        Change{kPgsOneGroupRows, 3, 0, RowLayout::Interleaved, 1},
+        Change{kPgsOneGroupRows, kSerialLanes, 0, RowLayout::Interleaved, 1}}) {
     SCOPED_TRACE("one_group_rows " + std::to_string(c.one_group_rows) + ", serial_lanes " +
                  std::to_string(c.serial_lanes) + ", sweep_parts " + std::to_string(c.sweep_parts));
     world.settings().one_group_rows = c.one_group_rows;

@@ -88,6 +88,63 @@ TEST(PgsSweep, OneGroupGivesTheBitsOfALaunchPerColour) {
               rows, colours, sweeps);
 }
 
+// runs walked level by level, a level's runs side by side on the cores, give the bits of one
+// work-item walking all their rows in turn: a random scene laid out in runs (one_group_rows 0,
+// 5 parts: 3 levels), swept from one state by the runs' sweep and by the one-item sweep over the
+// same rows as one range (as an interleaved system is walked)
+TEST(PgsSweep, RunsGiveTheBitsOfOneWalkOverAllTheirRows) {
+  const uint64_t seed = test::fresh_seed();
+  SCOPED_TRACE(test::seed_note(seed));
+  std::mt19937_64 rng(seed);
+  test::Scene s = test::random_scene(rng);
+  s.settings.sweep = SweepKind::Pgs;
+  s.settings.one_group_rows = 0;
+  s.settings.sweep_parts = 5;
+  DemWorld world(test::shared_device(), s.material, s.settings, s.bounds, s.geoms);
+  world.set_particles(s.particles);
+  if (!world.one_item_sweeps()) GTEST_SKIP() << "this device sweeps in several work-items";
+  world.step();
+  world.begin_step();
+  world.apply_gravity();
+  world.warm_start();
+  DemBuffers& b = world.buffers();
+  ASSERT_TRUE(b.row_layout == RowLayout::Runs);
+  const size_t n = world.size();
+  const int rows = b.n_contacts;
+  ASSERT_GT(rows, 0);
+  ASSERT_GT(world.stats().boundary_rows, 0) << "no contact across parts: the levels untested";
+  const auto v0 = b.velocity.download(n);
+  const auto w0 = b.omega.download(n);
+  const auto r0 = b.rows.download(rows);
+  const std::vector<int> runs = b.colour_start;
+
+  const int sweeps = 7;
+  auto state = [&] {
+    std::vector<char> out = bytes_of(b.velocity, n);
+    for (const auto& part : {bytes_of(b.omega, n), bytes_of(b.rows, rows)})
+      out.insert(out.end(), part.begin(), part.end());
+    return out;
+  };
+  // the runs' sweep
+  make_pgs_sweep(world.device(), 0)->iterate(b, sweeps);
+  const std::vector<char> in_runs = state();
+  // the same rows from the same state as one range that one work-item walks
+  b.velocity.upload(v0);
+  b.omega.upload(w0);
+  b.rows.upload(r0);
+  b.colour_start = {0, rows};
+  b.colour_start_dev.upload(b.colour_start);
+  b.row_layout = RowLayout::Interleaved;
+  make_pgs_sweep(world.device(), rows)->iterate(b, sweeps);
+  std::vector<char> untouched(v0.size() * sizeof(v0[0]));
+  std::memcpy(untouched.data(), v0.data(), untouched.size());
+  expect_the_same_changed_bytes(in_runs, state(), untouched);
+  std::printf(
+      "[ measured ] %zu particles, %d rows in %zu runs (%d across parts), %d sweeps: "
+      "bit-identical\n",
+      n, rows, runs.size() - 1, world.stats().boundary_rows, sweeps);
+}
+
 // with colours (serial_lanes 0) DemSettings::one_group_rows only picks the path: a world stepped
 // with every system in one work-group and one stepped with a launch per colour end in the same
 // bits after many steps (warm starts, carried colours and speculative rows included)
