@@ -897,7 +897,11 @@ TEST(ReferenceColouring, RunsMatchExactlyAndKeepALevelsRunsApart) {
     EXPECT_EQ(row_of, want.row_of_contact);
     // a bijection; a part's run holds only contacts within that part; within each level, every
     // dynamic body in one run only
-    const auto part_of = [&](int body) { return static_cast<int>(std::int64_t(body) * parts / n); };
+    // (a copy: a structured binding cannot be captured in C++17)
+    const int part_count = parts;
+    const auto part_of = [&](int body) {
+      return static_cast<int>(std::int64_t(body) * part_count / n);
+    };
     std::vector<int> seen(nc, 0);
     for (int l = 0; l < tl_run_levels(parts); ++l) {
       const int first = tl_run_first(parts, l);
