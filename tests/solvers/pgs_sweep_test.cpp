@@ -5,6 +5,7 @@
 #include <climits>
 #include <cstdio>
 #include <cstring>
+#include <memory>
 #include <random>
 #include <string>
 
@@ -39,6 +40,26 @@ void expect_the_same_changed_bytes(const std::vector<char>& per_colour,
   ASSERT_LE(start.size(), one_group.size());
   EXPECT_EQ(0, std::memcmp(per_colour.data(), one_group.data(), per_colour.size()));
   EXPECT_NE(0, std::memcmp(start.data(), one_group.data(), start.size()));
+}
+
+// a world of a random scene from `seed` with PGS (one_group_rows and sweep_parts as given), `steps`
+// full steps in, then the next step up to its sweeps: contacts found and laid out, rows made,
+// gravity and warm start applied
+std::unique_ptr<DemWorld> world_at_its_sweeps(uint64_t seed, int one_group_rows, int sweep_parts,
+                                              int steps) {
+  std::mt19937_64 rng(seed);
+  test::Scene s = test::random_scene(rng);
+  s.settings.sweep = SweepKind::Pgs;
+  s.settings.one_group_rows = one_group_rows;
+  s.settings.sweep_parts = sweep_parts;
+  auto world =
+      std::make_unique<DemWorld>(test::shared_device(), s.material, s.settings, s.bounds, s.geoms);
+  world->set_particles(s.particles);
+  for (int i = 0; i < steps; ++i) world->step();
+  world->begin_step();
+  world->apply_gravity();
+  world->warm_start();
+  return world;
 }
 
 // a random scene's rows and bodies at the start of its sweeps (contacts found, coloured, rows
@@ -95,18 +116,9 @@ TEST(PgsSweep, OneGroupGivesTheBitsOfALaunchPerColour) {
 TEST(PgsSweep, RunsGiveTheBitsOfOneWalkOverAllTheirRows) {
   const uint64_t seed = test::fresh_seed();
   SCOPED_TRACE(test::seed_note(seed));
-  std::mt19937_64 rng(seed);
-  test::Scene s = test::random_scene(rng);
-  s.settings.sweep = SweepKind::Pgs;
-  s.settings.one_group_rows = 0;
-  s.settings.sweep_parts = 5;
-  DemWorld world(test::shared_device(), s.material, s.settings, s.bounds, s.geoms);
-  world.set_particles(s.particles);
+  const auto made = world_at_its_sweeps(seed, /*one_group_rows=*/0, /*sweep_parts=*/5, 1);
+  DemWorld& world = *made;
   if (!world.one_item_sweeps()) GTEST_SKIP() << "this device sweeps in several work-items";
-  world.step();
-  world.begin_step();
-  world.apply_gravity();
-  world.warm_start();
   DemBuffers& b = world.buffers();
   ASSERT_TRUE(b.row_layout == RowLayout::Runs);
   const size_t n = world.size();
@@ -179,15 +191,9 @@ TEST(PgsSweep, OneGroupRowsSettingChangesNoBitOfAWorld) {
 TEST(PgsSweep, InterleavedRowsAreRefusedByAParallelSweep) {
   const uint64_t seed = test::fresh_seed();
   SCOPED_TRACE(test::seed_note(seed));
-  std::mt19937_64 rng(seed);
-  test::Scene s = test::random_scene(rng);
-  s.settings.sweep = SweepKind::Pgs;
-  DemWorld world(test::shared_device(), s.material, s.settings, s.bounds, s.geoms);
-  world.set_particles(s.particles);
+  const auto made = world_at_its_sweeps(seed, kPgsOneGroupRows, 0, 0);
+  DemWorld& world = *made;
   if (!world.one_item_sweeps()) GTEST_SKIP() << "this device sweeps in several work-items";
-  world.begin_step();
-  world.apply_gravity();
-  world.warm_start();
   DemBuffers& b = world.buffers();
   ASSERT_GT(b.n_contacts, 0);
   ASSERT_TRUE(b.row_layout == RowLayout::Interleaved);
@@ -207,17 +213,9 @@ TEST(PgsSweep, InterleavedRowsAreRefusedByAParallelSweep) {
 TEST(PgsSweep, RunsAreRefusedByASweepThatDoesNotWalkThem) {
   const uint64_t seed = test::fresh_seed();
   SCOPED_TRACE(test::seed_note(seed));
-  std::mt19937_64 rng(seed);
-  test::Scene s = test::random_scene(rng);
-  s.settings.sweep = SweepKind::Pgs;
-  s.settings.one_group_rows = 0;
-  s.settings.sweep_parts = 2;
-  DemWorld world(test::shared_device(), s.material, s.settings, s.bounds, s.geoms);
-  world.set_particles(s.particles);
+  const auto made = world_at_its_sweeps(seed, /*one_group_rows=*/0, /*sweep_parts=*/2, 0);
+  DemWorld& world = *made;
   if (!world.one_item_sweeps()) GTEST_SKIP() << "this device sweeps in several work-items";
-  world.begin_step();
-  world.apply_gravity();
-  world.warm_start();
   DemBuffers& b = world.buffers();
   ASSERT_GT(b.n_contacts, 0);
   ASSERT_TRUE(b.row_layout == RowLayout::Runs);
