@@ -41,8 +41,9 @@ class ContactSweep {
     return false;
   }
   // whether systems of `rows` rows are swept as runs that one work-item each walks, the parts
-  // side by side and then their boundary (PGS on a CPU device, above its one-group threshold):
-  // their rows then need no colours (DemSettings::sweep_parts, RowLayout::Runs)
+  // side by side and then the runs across them, level by level (PGS on a CPU device, above its
+  // one-group threshold): their rows then need no colours (DemSettings::sweep_parts,
+  // RowLayout::Runs)
   virtual bool walks_in_runs(int rows) const {
     (void)rows;
     return false;

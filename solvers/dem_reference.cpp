@@ -756,7 +756,7 @@ void step(ReferenceWorld& world) {
     // one work-item walks the rows: no colours, none carried to the next step
     world.partition = interleaved_partition(static_cast<int>(contacts.size()), s.serial_lanes);
   } else if (runs) {
-    // a work-item per part, then the boundary: one walk over the runs in turn, no colours
+    // a work-item per run, level by level: one walk over the runs in turn, no colours
     world.partition = run_partition(contacts, static_cast<int>(world.particles.size()),
                                     world.sweep_parts, s.serial_lanes);
   } else if (s.sweep == SweepKind::Pgs) {

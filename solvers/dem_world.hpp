@@ -121,8 +121,8 @@ class DemWorld {
   // whether this step's `rows` are laid out interleaved for one work-item instead of coloured
   // (DemSettings::serial_lanes)
   bool rows_interleaved(int rows) const;
-  // whether this step's `rows` are laid out in runs, parts and their boundary, each walked by one
-  // work-item, instead of coloured (DemSettings::sweep_parts)
+  // whether this step's `rows` are laid out in runs (the parts' and those across them), each
+  // walked by one work-item, instead of coloured (DemSettings::sweep_parts)
   bool rows_in_runs(int rows) const;
   // the parts a large system's rows are cut into: DemSettings::sweep_parts, or for 0 the
   // device's compute units (at most kMaxSweepParts)

@@ -3,7 +3,8 @@
 // race). On a CPU device, whose work-groups run one item at a time on a core, no colours: a
 // system of up to one_group_rows rows comes as one "colour" of interleaved rows that one
 // work-item walks (DemSettings::serial_lanes), a larger one as runs, its parts walked side by
-// side by a work-item each and then their boundary (DemSettings::sweep_parts). Rows that share
+// side by a work-item each and then the runs across them, level by level (DemSettings::sweep_parts,
+// kernels/dem_types.h). Rows that share
 // bodies may only reach the walk they were laid out for (check_layout). Within a contact the
 // normal row goes first, then friction, then rolling (kernels/solver.cl).
 #include <algorithm>
@@ -88,8 +89,8 @@ class PgsSweep : public ContactSweep {
   }
 
  private:
-  // rows laid out for one work-item (no colours) must not reach the parallel per-colour launches,
-  // whose items would race on shared bodies
+  // rows laid out for one work-item (interleaved) or in runs share bodies: they must reach only
+  // the walk they were laid out for, never the parallel per-colour launches (which would race)
   void check_layout(const DemBuffers& b) const {
     const int rows = b.colour_start.back();
     if (b.row_layout == RowLayout::Interleaved && !walks_in_one_item(rows))

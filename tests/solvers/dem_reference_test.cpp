@@ -57,6 +57,15 @@ RandomWorld random_world(int serial_lanes = kSerialLanes, int one_group_rows = k
   return out;
 }
 
+// the first stages of a step on the device: the broad and narrow phases and the adjacency; the
+// contacts found
+int find_device_contacts(DemWorld& w) {
+  w.broad_phase();
+  w.narrow_phase();
+  w.build_adjacency();
+  return w.buffers().n_contacts;
+}
+
 // the device's inputs, read back (float values, so the reference sees exactly the same)
 ref::StepParams params_of(const DemWorld& w) { return ref::from_device(w.params()); }
 
@@ -717,9 +726,7 @@ TEST(ReferenceAdjacency, MatchesExactly) {
   RandomWorld r = random_world();
   SCOPED_TRACE(r.seed_note);
   auto& world = r.world;
-  world->broad_phase();
-  world->narrow_phase();
-  world->build_adjacency();
+  find_device_contacts(*world);
 
   ref::Adjacency want = ref::adjacency(current_contacts(*world), static_cast<int>(world->size()));
   const DemBuffers& b = world->buffers();
@@ -731,9 +738,7 @@ TEST(ReferenceColouring, MatchesExactlyAndIsValid) {
   RandomWorld r = random_world(/*serial_lanes=*/0);
   SCOPED_TRACE(r.seed_note);
   auto& world = r.world;
-  world->broad_phase();
-  world->narrow_phase();
-  world->build_adjacency();
+  find_device_contacts(*world);
   world->colour_contacts();
 
   std::vector<ref::Contact> contacts = current_contacts(*world);
@@ -766,10 +771,7 @@ TEST(ReferenceColouring, InterleavedRowsMatchExactly) {
   SCOPED_TRACE(r.seed_note);
   auto& world = r.world;
   if (!world->one_item_sweeps()) GTEST_SKIP() << "this device sweeps in several work-items";
-  world->broad_phase();
-  world->narrow_phase();
-  world->build_adjacency();
-  const int nc = world->buffers().n_contacts;
+  const int nc = find_device_contacts(*world);
   ASSERT_GT(nc, 0);
   const int drawn = 2 + static_cast<int>(r.rng() % 60);
   for (int lanes : {1, 2, 3, kSerialLanes, drawn, nc - 1, nc + 5, kMaxSerialLanes}) {
@@ -865,10 +867,7 @@ TEST(ReferenceColouring, RunsMatchExactlyAndKeepALevelsRunsApart) {
   SCOPED_TRACE(r.seed_note);
   auto& world = r.world;
   if (!world->one_item_sweeps()) GTEST_SKIP() << "this device sweeps in several work-items";
-  world->broad_phase();
-  world->narrow_phase();
-  world->build_adjacency();
-  const int nc = world->buffers().n_contacts;
+  const int nc = find_device_contacts(*world);
   const int n = static_cast<int>(world->size());
   ASSERT_GT(nc, 0);
   const std::vector<ref::Contact> contacts = current_contacts(*world);
@@ -965,9 +964,7 @@ TEST(ReferenceColouring, CarriedColoursMatchExactlyAndAreValid) {
       for (int& k : previous_colours) k = static_cast<int>(r.rng() % 4);
       b.colour_previous.upload(previous_colours);
     }
-    world->broad_phase();
-    world->narrow_phase();
-    world->build_adjacency();
+    find_device_contacts(*world);
     world->colour_contacts();
     std::vector<ref::Contact> contacts = current_contacts(*world);
     const int nc = static_cast<int>(contacts.size());

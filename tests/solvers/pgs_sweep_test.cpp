@@ -62,6 +62,17 @@ std::unique_ptr<DemWorld> world_at_its_sweeps(uint64_t seed, int one_group_rows,
   return world;
 }
 
+// a sweep made for `one_group_rows` refuses the world's rows, laid out for another walk, with an
+// Error saying `why`
+void expect_layout_refused(DemWorld& world, int one_group_rows, const std::string& why) {
+  try {
+    make_pgs_sweep(world.device(), one_group_rows)->iterate(world.buffers(), 1);
+    FAIL() << "expected an Error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+  }
+}
+
 // a random scene's rows and bodies at the start of its sweeps (contacts found, coloured, rows
 // made, gravity and warm start applied), then swept by each path from that same state: the
 // velocities, angular velocities and row impulses must agree bit for bit. Coloured
@@ -197,13 +208,7 @@ TEST(PgsSweep, InterleavedRowsAreRefusedByAParallelSweep) {
   DemBuffers& b = world.buffers();
   ASSERT_GT(b.n_contacts, 0);
   ASSERT_TRUE(b.row_layout == RowLayout::Interleaved);
-  try {
-    make_pgs_sweep(world.device(), 0)->iterate(b, 1);
-    FAIL() << "expected an Error";
-  } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("laid out for one work-item"), std::string::npos)
-        << e.what();
-  }
+  expect_layout_refused(world, 0, "laid out for one work-item");
   EXPECT_NO_THROW(make_pgs_sweep(world.device(), b.n_contacts)->iterate(b, 1));
 }
 
@@ -220,12 +225,7 @@ TEST(PgsSweep, RunsAreRefusedByASweepThatDoesNotWalkThem) {
   ASSERT_GT(b.n_contacts, 0);
   ASSERT_TRUE(b.row_layout == RowLayout::Runs);
   ASSERT_EQ(b.colour_start.size(), 4u);
-  try {
-    make_pgs_sweep(world.device(), b.n_contacts)->iterate(b, 1);
-    FAIL() << "expected an Error";
-  } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("laid out in runs"), std::string::npos) << e.what();
-  }
+  expect_layout_refused(world, b.n_contacts, "laid out in runs");
   EXPECT_NO_THROW(make_pgs_sweep(world.device(), 0)->iterate(b, 1));
 }
 
