@@ -80,7 +80,7 @@ void bucket_chunk_store_particles(int count, __global float4* velocity, __global
 
 // one row's starting impulses on its particle (w: inverse mass and inertia)
 void bucket_row_warm_start(TlRow row, float4* velocity, float4* omega) {
-  float3 P = ROW_IMPULSE_N(row) * row.normal.xyz + row.impulse_t.xyz;
+  float3 P = TOOL_ROW_IMPULSE_N(row) * row.normal.xyz + row.impulse_t.xyz;
   float4 va = *velocity;
   float4 wa = *omega;
   *velocity = (float4)(va.xyz - va.w * P, va.w);
@@ -179,12 +179,13 @@ TL_INLINE void tool_row_solve(TlRow* row, float4* velocity, float4* omega, const
   float3 n = row->normal.xyz;
   float3 arm_a = row->arm_a.xyz;
   float3 arm_b = row->arm_b.xyz;
-  float ln = ROW_IMPULSE_N(*row);
+  float ln = TOOL_ROW_IMPULSE_N(*row);
 
   // normal: the bucket's point velocity against the particle's (its arm is along n); the
   // bucket holds no tensile impulse
   float un = dot(n, *vb + cross(*wb, arm_b) - va);
-  float ln_new = normal_impulse(ln, ROW_RHS(*row), un, ROW_SIGMA(*row), ROW_INV_DN(*row), 0.0f);
+  float ln_new =
+      normal_impulse(ln, TOOL_ROW_RHS(*row), un, TOOL_ROW_SIGMA(*row), TOOL_ROW_INV_DN(*row), 0.0f);
   float dln = ln_new - ln;
   va -= ima * dln * n;
   if (moves) {
@@ -197,7 +198,7 @@ TL_INLINE void tool_row_solve(TlRow* row, float4* velocity, float4* omega, const
   float3 u = (*vb + cross(*wb, arm_b)) - (va + cross(wa, arm_a));
   float3 ut = u - dot(u, n) * n;
   float3 lt = row->impulse_t.xyz;
-  float3 lt_new = friction_impulse(lt, ut, ROW_INV_DT(*row), ROW_FRICTION(*row) * ln);
+  float3 lt_new = friction_impulse(lt, ut, TOOL_ROW_INV_DT(*row), TOOL_ROW_FRICTION(*row) * ln);
   float3 dlt = lt_new - lt;
   va -= ima * dlt;
   wa -= iia * cross(arm_a, dlt);
@@ -206,13 +207,14 @@ TL_INLINE void tool_row_solve(TlRow* row, float4* velocity, float4* omega, const
   // rolling (on the disc) and twist (about n), both bounded by mu_r R* lambda_n
   float3 wrel = *wb - wa;
   float3 lr = row->impulse_r.xyz;
-  float3 lr_new = rolling_impulse(lr, wrel, n, ROW_INV_DR(*row), ROW_ROLLING_LIMIT(*row) * ln);
+  float3 lr_new =
+      rolling_impulse(lr, wrel, n, TOOL_ROW_INV_DR(*row), TOOL_ROW_ROLLING_LIMIT(*row) * ln);
   float3 dlr = lr_new - lr;
   wa -= iia * dlr;
   if (moves) bucket_twist_change3(W + 3, 6, dlr, vb, wb);
 
   row->impulse_t = (float4)(lt_new, ln);
-  row->impulse_r = (float4)(lr_new, ROW_INV_DT(*row));
+  row->impulse_r = (float4)(lr_new, TOOL_ROW_INV_DT(*row));
   *velocity = (float4)(va, ima);
   *omega = (float4)(wa, iia);
 }
@@ -444,16 +446,15 @@ __kernel void kinematic_tool_sweep(__global TlRow* rows, __global const int* gro
 // (kernels/solver.cl pgs_sweeps_one_group) and then the kinematic tools' rows: the bits of a
 // launch per colour and a kinematic_tool_sweep launch per sweep, in one launch instead of
 // (colours + 1) x iterations (the type-G step: 2 x iterations launches before, issue 14)
-__kernel void pgs_sweeps_one_group_tools(__global TlRow* rows, __global const int* colour_start,
-                                         int colours, int iterations, __global float4* velocity,
-                                         __global float4* omega, __global TlRow* tool_rows,
-                                         __global const int* group_start, int groups,
-                                         __global const int* row_tool,
-                                         __global const TlBucketBody* tools) {
+__kernel void pgs_sweeps_one_group_tools(
+    __global const TlParticleRow* rows, __global TlImpulse* impulses,
+    __global const int* colour_start, int colours, int iterations, __global float4* velocity,
+    __global float4* omega, __global TlRow* tool_rows, __global const int* group_start, int groups,
+    __global const int* row_tool, __global const TlBucketBody* tools) {
   int lid = get_local_id(0);
   int size = get_local_size(0);
   for (int it = 0; it < iterations; ++it) {
-    pgs_colours_in_group(rows, colour_start, colours, velocity, omega);
+    pgs_colours_in_group(rows, impulses, colour_start, colours, velocity, omega);
     for (int g = lid; g < groups; g += size)
       kinematic_group_sweep(g, tool_rows, group_start, row_tool, tools, velocity, omega);
     // the tools' changes seen by the whole group before the next sweep's colours

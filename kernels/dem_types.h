@@ -127,11 +127,35 @@ typedef struct {
   tl_int pad1;
 } TlContact;
 
-// one contact's constraint rows prepared for the sweeps (SPOOK, Hertz), laid out in colour
-// order for PGS. Friction and rolling rows act on world vectors: for spheres the lever arms
-// are parallel to the normal, so their effective masses are isotropic (one scalar each). The
-// particle rows carry the relaxation omega in their inverse effective masses
-// (TlStepParams::relaxation); the bucket's rows, made on the host, carry 1.
+// A particle contact's constraint rows prepared for the sweeps (SPOOK, Hertz), laid out in the
+// sweeps' order (colours, interleaved or runs), split in two arrays: what the sweeps only read
+// (TlParticleRow, 64 B, one cache line) and the impulses they read and write (TlImpulse, 32 B).
+// A sweep's row update so moves 64 + 32 + 32 B of row (the 112 B TlRow below, impulses in its
+// middle, dirtied two cache lines a row: about 112 + 112 B), besides its two bodies. Friction and
+// rolling rows act on world vectors: for spheres, and a sphere against a plane or a box, the lever
+// arms lie along the normal (kernels/narrowphase.cl emit_pair, emit_static), so each arm is one
+// signed length times n and the effective masses are isotropic (one scalar each). The rows carry
+// the relaxation omega in their inverse effective masses (TlStepParams::relaxation).
+typedef struct {
+  tl_float4 normal;  // xyz unit normal from a towards b; w = rhs of the normal row B_n [m/s]
+  tl_float4 mass;    // x = omega/D_n, D_n = G M^-1 G^T + Sigma_n; y = Sigma_n [m/(N s)];
+                     // z = omega/D_t (friction); w = omega/D_r (rolling)
+  tl_float4 coef;    // x = mu, y = mu_r R* [m], z = the tensile impulse the contact holds, h F_c
+                     // [N s] (0: no cohesion), w = a's lever arm along n [m] (arm_a = w n)
+  tl_float arm_b;    // b's lever arm along n [m] (arm_b = arm_b n; 0 for static geometry)
+  tl_int a, b;       // bodies (b < 0 static)
+  tl_int contact;    // index of the TlContact this row was made from
+} TlParticleRow;
+
+// a particle row's impulses over the step, warm-started from the contact's (TlContact)
+typedef struct {
+  tl_float4 t;  // xyz friction impulse on b [N s]; w = normal impulse lambda_n [N s]
+  tl_float4 r;  // xyz rolling + twisting impulse (angular, on b) [N m s]; w unused (0)
+} TlImpulse;
+
+// one contact's constraint rows for the bucket and kinematic tools (made on the host:
+// solvers/bucket_rows, solvers/kinematic_tool_rows), whose lever arms are not along the normal:
+// full arm vectors, the impulses in the row. They carry no relaxation (omega = 1).
 typedef struct {
   tl_float4 normal;     // xyz normal; w = rhs of the normal row B_n [m/s]
   tl_float4 arm_a;      // xyz lever arm of a; w = omega/D_n, D_n = G M^-1 G^T + Sigma_n
@@ -147,16 +171,26 @@ typedef struct {
 
 #ifdef __OPENCL_VERSION__
 // the packed lanes of a row by name, for a row in registers or in global memory alike (the C++
-// side decodes a row once, in solvers/dem_reference from_device)
+// side decodes a row once, in solvers/contact_rows from_device): ROW_ for a particle row
+// (TlParticleRow), TOOL_ROW_ for a bucket's or tool's (TlRow)
 #define ROW_RHS(row) ((row).normal.w)
-#define ROW_INV_DN(row) ((row).arm_a.w)
-#define ROW_SIGMA(row) ((row).arm_b.w)
-#define ROW_IMPULSE_N(row) ((row).impulse_t.w)
-#define ROW_INV_DT(row) ((row).impulse_r.w)
+#define ROW_INV_DN(row) ((row).mass.x)
+#define ROW_SIGMA(row) ((row).mass.y)
+#define ROW_INV_DT(row) ((row).mass.z)
+#define ROW_INV_DR(row) ((row).mass.w)
 #define ROW_FRICTION(row) ((row).coef.x)
 #define ROW_ROLLING_LIMIT(row) ((row).coef.y)
-#define ROW_INV_DR(row) ((row).coef.z)
-#define ROW_COHESION(row) ((row).coef.w)
+#define ROW_COHESION(row) ((row).coef.z)
+#define ROW_ARM_A(row) ((row).coef.w)
+#define TOOL_ROW_RHS(row) ((row).normal.w)
+#define TOOL_ROW_INV_DN(row) ((row).arm_a.w)
+#define TOOL_ROW_SIGMA(row) ((row).arm_b.w)
+#define TOOL_ROW_IMPULSE_N(row) ((row).impulse_t.w)
+#define TOOL_ROW_INV_DT(row) ((row).impulse_r.w)
+#define TOOL_ROW_FRICTION(row) ((row).coef.x)
+#define TOOL_ROW_ROLLING_LIMIT(row) ((row).coef.y)
+#define TOOL_ROW_INV_DR(row) ((row).coef.z)
+#define TOOL_ROW_COHESION(row) ((row).coef.w)
 #endif
 
 // the bucket: one rigid body of the vehicle that particles touch (SPEC §1 steps 3-6). Its rows

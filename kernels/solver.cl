@@ -5,8 +5,8 @@
 // the row of a contact: effective masses, SPOOK right-hand side, warm-start impulses
 __kernel void prepare_rows(__global const TlContact* contacts, __global const int* order,
                            int n_rows, __global const float4* velocity,
-                           __global const float4* omega, __global TlRow* rows,
-                           const TlStepParams p, int warm_start) {
+                           __global const float4* omega, __global TlParticleRow* rows,
+                           __global TlImpulse* impulses, const TlStepParams p, int warm_start) {
   int k = get_global_id(0);
   if (k >= n_rows) return;
   int c = order[k];
@@ -34,11 +34,12 @@ __kernel void prepare_rows(__global const TlContact* contacts, __global const in
   float sigma = 4.0f * compliance * upsilon / (h * h);
   float rhs = -(4.0f / h) * upsilon * gap + upsilon * un;
 
-  // effective masses: lever arms are parallel to n, so normal rows see no rotation
+  // effective masses: lever arms lie along n (one signed length each), so normal rows see no
+  // rotation and the friction row's arms add their squares
   float inv_m = va.w + vb.w;
-  float3 arm_a = con.arm_a.xyz;
-  float3 arm_b = con.arm_b.xyz;
-  float d_t = inv_m + wa.w * dot(arm_a, arm_a) + wb.w * dot(arm_b, arm_b);
+  float arm_a = dot(con.arm_a.xyz, n);
+  float arm_b = dot(con.arm_b.xyz, n);
+  float d_t = inv_m + wa.w * (arm_a * arm_a) + wb.w * (arm_b * arm_b);
   float d_r = wa.w + wb.w;
 
   // cohesion: a particle pair closer than margin_rel R* (a liquid bridge's reach; half the narrow
@@ -76,18 +77,20 @@ __kernel void prepare_rows(__global const TlContact* contacts, __global const in
   // omega times Gauss-Seidel's (projected SOR; omega = 1 is PGS, the same bits as 1/D where the
   // division is correctly rounded, as on PoCL)
   float omega_sor = p.relaxation;
-  TlRow row;
+  TlParticleRow row;
   row.normal = (float4)(n, rhs);
-  row.arm_a = (float4)(arm_a, omega_sor / (inv_m + sigma));
-  row.arm_b = (float4)(arm_b, sigma);
-  row.impulse_t = (float4)(lt, ln);
-  row.impulse_r = (float4)(lr, d_t > 0.0f ? omega_sor / d_t : 0.0f);
-  row.coef = (float4)(p.friction, rolling * reduced, d_r > 0.0f ? omega_sor / d_r : 0.0f, cohesion);
+  row.mass = (float4)(omega_sor / (inv_m + sigma), sigma, d_t > 0.0f ? omega_sor / d_t : 0.0f,
+                      d_r > 0.0f ? omega_sor / d_r : 0.0f);
+  row.coef = (float4)(p.friction, rolling * reduced, cohesion, arm_a);
+  row.arm_b = arm_b;
   row.a = con.a;
   row.b = con.b;
   row.contact = c;
-  row.pad0 = 0;
   rows[k] = row;
+  TlImpulse impulse;
+  impulse.t = (float4)(lt, ln);
+  impulse.r = (float4)(lr, 0.0f);
+  impulses[k] = impulse;
 }
 
 // external forces: gravity on every dynamic particle
@@ -98,20 +101,26 @@ __kernel void apply_gravity(__global float4* velocity, const TlStepParams p) {
   if (v.w > 0.0f) velocity[i] = (float4)(v.xyz + p.dt * p.gravity.xyz, v.w);
 }
 
+// the lever arm of body `i` in a row: a's or b's length along the normal, times it
+float3 row_arm_of(const TlParticleRow* row, int i) {
+  return (row->a == i ? ROW_ARM_A(*row) : row->arm_b) * row->normal.xyz;
+}
+
 // the impulse body `i` receives from a row: linear and angular (sign -1 for a, +1 for b)
-void row_impulse_on(const TlRow* row, int i, float3* lin, float3* ang) {
+void row_impulse_on(const TlParticleRow* row, const TlImpulse* impulse, int i, float3* lin,
+                    float3* ang) {
   float s = row->a == i ? -1.0f : 1.0f;
-  float3 arm = row->a == i ? row->arm_a.xyz : row->arm_b.xyz;
-  float3 P = ROW_IMPULSE_N(*row) * row->normal.xyz + row->impulse_t.xyz;
+  float3 P = impulse->t.w * row->normal.xyz + impulse->t.xyz;
   *lin = s * P;
-  *ang = s * (cross(arm, P) + row->impulse_r.xyz);
+  *ang = s * (cross(row_arm_of(row, i), P) + impulse->r.xyz);
 }
 
 // applies the rows' current impulses to each body (warm start), summing in contact order
-__kernel void apply_row_impulses(__global const TlRow* rows, __global const int* adj_offsets,
-                                 __global const int* adjacency, __global const int* row_of_contact,
-                                 __global float4* velocity, __global float4* omega,
-                                 const TlStepParams p) {
+__kernel void apply_row_impulses(__global const TlParticleRow* rows,
+                                 __global const TlImpulse* impulses,
+                                 __global const int* adj_offsets, __global const int* adjacency,
+                                 __global const int* row_of_contact, __global float4* velocity,
+                                 __global float4* omega, const TlStepParams p) {
   int i = get_global_id(0);
   if (i >= p.particles) return;
   float4 v = velocity[i];
@@ -120,9 +129,11 @@ __kernel void apply_row_impulses(__global const TlRow* rows, __global const int*
   float3 dw = (float3)(0.0f);
   int end = adj_offsets[i + 1];
   for (int k = adj_offsets[i]; k < end; ++k) {
-    TlRow row = rows[row_of_contact[adjacency[k]]];
+    int r = row_of_contact[adjacency[k]];
+    TlParticleRow row = rows[r];
+    TlImpulse impulse = impulses[r];
     float3 lin, ang;
-    row_impulse_on(&row, i, &lin, &ang);
+    row_impulse_on(&row, &impulse, i, &lin, &ang);
     dv += lin;
     dw += ang;
   }
@@ -131,16 +142,17 @@ __kernel void apply_row_impulses(__global const TlRow* rows, __global const int*
 }
 
 // one contact's rows solved in sequence (normal, friction, rolling; the law in contact_law.cl)
-// against local copies of the two bodies' velocities. inv_ma/inv_ia/inv_mb/inv_ib are the
-// (possibly split) inverse masses; d_n, d_t, d_r the matching inverse effective masses. Returns
-// the impulse changes.
-TL_INLINE void solve_contact(TlRow* row, float3* va, float3* wa, float3* vb, float3* wb,
-                             float inv_ma, float inv_ia, float inv_mb, float inv_ib, float inv_dn,
-                             float inv_dt, float inv_dr, float3* d_lin, float3* d_ang) {
+// against local copies of the two bodies' velocities, updating its impulses. inv_ma/inv_ia/
+// inv_mb/inv_ib are the (possibly split) inverse masses; d_n, d_t, d_r the matching inverse
+// effective masses. Returns the impulse changes.
+TL_INLINE void solve_contact(const TlParticleRow* row, TlImpulse* impulse, float3* va, float3* wa,
+                             float3* vb, float3* wb, float inv_ma, float inv_ia, float inv_mb,
+                             float inv_ib, float inv_dn, float inv_dt, float inv_dr, float3* d_lin,
+                             float3* d_ang) {
   float3 n = row->normal.xyz;
-  float3 arm_a = row->arm_a.xyz;
-  float3 arm_b = row->arm_b.xyz;
-  float ln = ROW_IMPULSE_N(*row);
+  float arm_a = ROW_ARM_A(*row);
+  float arm_b = row->arm_b;
+  float ln = impulse->t.w;
 
   // normal: SPOOK row with compliance, lambda_n >= -h F_c (0 without cohesion)
   float cohesion = ROW_COHESION(*row);
@@ -156,25 +168,28 @@ TL_INLINE void solve_contact(TlRow* row, float3* va, float3* wa, float3* vb, flo
   // of radius mu_r ... (ln + h F_c) = 0, which gives zero from zero, so the rest of the contact is
   // skipped with bit-identical velocities. Separated speculative contacts skip two thirds of the
   // work this way
-  float3 lt = row->impulse_t.xyz;
-  float3 lr = row->impulse_r.xyz;
+  float3 lt = impulse->t.xyz;
+  float3 lr = impulse->r.xyz;
   if (ln + cohesion == 0.0f && all(lt == (float3)(0.0f)) && all(lr == (float3)(0.0f))) {
-    row->impulse_t.w = ln;
+    impulse->t.w = ln;
     *d_lin = dln * n;
     *d_ang = (float3)(0.0f);
     return;
   }
 
   // friction: tangential relative velocity at the contact point, impulse on the disc
-  // mu (lambda_n + h F_c): cohesion adds to the normal load friction sees (Mohr-Coulomb)
-  float3 u = (*vb + cross(*wb, arm_b)) - (*va + cross(*wa, arm_a));
+  // mu (lambda_n + h F_c): cohesion adds to the normal load friction sees (Mohr-Coulomb). With
+  // the arms along n, w_b x (arm_b n) - w_a x (arm_a n) = (arm_b w_b - arm_a w_a) x n, and each
+  // body's angular impulse is its arm times n x dlt: one cross product each way
+  float3 u = (*vb - *va) + cross(arm_b * *wb - arm_a * *wa, n);
   float3 ut = u - dot(u, n) * n;
   float3 lt_new = friction_impulse(lt, ut, inv_dt, ROW_FRICTION(*row) * (ln + cohesion));
   float3 dlt = lt_new - lt;
+  float3 n_dlt = cross(n, dlt);
   *va -= inv_ma * dlt;
-  *wa -= inv_ia * cross(arm_a, dlt);
+  *wa -= (inv_ia * arm_a) * n_dlt;
   *vb += inv_mb * dlt;
-  *wb += inv_ib * cross(arm_b, dlt);
+  *wb += (inv_ib * arm_b) * n_dlt;
 
   // rolling (tangential, on the disc) and twisting (about n), both bounded by
   // mu_r R* (lambda_n + h F_c)
@@ -184,16 +199,16 @@ TL_INLINE void solve_contact(TlRow* row, float3* va, float3* wa, float3* vb, flo
   *wa -= inv_ia * dlr;
   *wb += inv_ib * dlr;
 
-  row->impulse_t = (float4)(lt_new, ln);
-  row->impulse_r = (float4)(lr_new, ROW_INV_DT(*row));
+  impulse->t = (float4)(lt_new, ln);
+  impulse->r = (float4)(lr_new, 0.0f);
   *d_lin = dln * n + dlt;
   *d_ang = dlr;
 }
 
 // the velocity and angular velocity (w: inverse mass / inertia) of a row's two bodies;
 // static geometry (b < 0) reads as zero velocity with zero inverse mass
-void load_bodies(const TlRow* row, __global const float4* velocity, __global const float4* omega,
-                 float4* va, float4* wa, float4* vb, float4* wb) {
+void load_bodies(const TlParticleRow* row, __global const float4* velocity,
+                 __global const float4* omega, float4* va, float4* wa, float4* vb, float4* wb) {
   *va = velocity[row->a];
   *wa = omega[row->a];
   *vb = row->b >= 0 ? velocity[row->b] : (float4)(0.0f);
@@ -202,8 +217,10 @@ void load_bodies(const TlRow* row, __global const float4* velocity, __global con
 
 // one PGS row update: the row's contact solved against its bodies' velocities, which it writes
 // back with the row's impulses
-void pgs_row(__global TlRow* rows, int k, __global float4* velocity, __global float4* omega) {
-  TlRow row = rows[k];
+void pgs_row(__global const TlParticleRow* rows, __global TlImpulse* impulses, int k,
+             __global float4* velocity, __global float4* omega) {
+  TlParticleRow row = rows[k];
+  TlImpulse impulse = impulses[k];
   int a = row.a;
   int b = row.b;
   // the bodies are loaded inline rather than through load_bodies: on PoCL the helper's
@@ -214,10 +231,9 @@ void pgs_row(__global TlRow* rows, int k, __global float4* velocity, __global fl
   float4 wb4 = b >= 0 ? omega[b] : (float4)(0.0f);
   float3 va = va4.xyz, wa = wa4.xyz, vb = vb4.xyz, wb = wb4.xyz;
   float3 d_lin, d_ang;
-  solve_contact(&row, &va, &wa, &vb, &wb, va4.w, wa4.w, vb4.w, wb4.w, ROW_INV_DN(row), ROW_INV_DT(row),
-                ROW_INV_DR(row), &d_lin, &d_ang);
-  rows[k].impulse_t = row.impulse_t;
-  rows[k].impulse_r = row.impulse_r;
+  solve_contact(&row, &impulse, &va, &wa, &vb, &wb, va4.w, wa4.w, vb4.w, wb4.w, ROW_INV_DN(row),
+                ROW_INV_DT(row), ROW_INV_DR(row), &d_lin, &d_ang);
+  impulses[k] = impulse;
   velocity[a] = (float4)(va, va4.w);
   omega[a] = (float4)(wa, wa4.w);
   if (b >= 0) {
@@ -227,11 +243,11 @@ void pgs_row(__global TlRow* rows, int k, __global float4* velocity, __global fl
 }
 
 // projected Gauss-Seidel over one colour: rows [begin, end) share no dynamic body
-__kernel void pgs_colour(__global TlRow* rows, int begin, int end, __global float4* velocity,
-                         __global float4* omega) {
+__kernel void pgs_colour(__global const TlParticleRow* rows, __global TlImpulse* impulses,
+                         int begin, int end, __global float4* velocity, __global float4* omega) {
   int k = begin + get_global_id(0);
   if (k >= end) return;
-  pgs_row(rows, k, velocity, omega);
+  pgs_row(rows, impulses, k, velocity, omega);
 }
 
 // projected Gauss-Seidel over runs of rows that share no dynamic body (one level's runs of a large
@@ -239,24 +255,27 @@ __kernel void pgs_colour(__global TlRow* rows, int begin, int end, __global floa
 // walks run `first + g`, rows [run_start[first + g], run_start[first + g + 1]) in order. The runs
 // of one launch run side by side on the cores without a race; the next level's come in a launch
 // of their own after them (solvers/pgs_sweep.cpp)
-__kernel void pgs_runs(__global TlRow* rows, __global const int* run_start, int first,
-                       __global float4* velocity, __global float4* omega) {
+__kernel void pgs_runs(__global const TlParticleRow* rows, __global TlImpulse* impulses,
+                       __global const int* run_start, int first, __global float4* velocity,
+                       __global float4* omega) {
   int k = first + get_group_id(0);
   int end = run_start[k + 1];
   // a run's rows share bodies: one work-item walks them (work-groups of one item)
-  for (int r = run_start[k]; r < end; ++r) pgs_row(rows, r, velocity, omega);
+  for (int r = run_start[k]; r < end; ++r) pgs_row(rows, impulses, r, velocity, omega);
 }
 
 // one PGS sweep over every colour by one work-group, a barrier between colours: a colour's rows
 // share no dynamic body and each is solved by pgs_row, so the result is that of pgs_colour's
 // launches bit for bit, whichever work-item takes a row
-void pgs_colours_in_group(__global TlRow* rows, __global const int* colour_start, int colours,
-                          __global float4* velocity, __global float4* omega) {
+void pgs_colours_in_group(__global const TlParticleRow* rows, __global TlImpulse* impulses,
+                          __global const int* colour_start, int colours, __global float4* velocity,
+                          __global float4* omega) {
   int lid = get_local_id(0);
   int size = get_local_size(0);
   for (int k = 0; k < colours; ++k) {
     int end = colour_start[k + 1];
-    for (int r = colour_start[k] + lid; r < end; r += size) pgs_row(rows, r, velocity, omega);
+    for (int r = colour_start[k] + lid; r < end; r += size)
+      pgs_row(rows, impulses, r, velocity, omega);
     // the colour's velocities seen by the whole group before the next colour reads them
     barrier(CLK_GLOBAL_MEM_FENCE);
   }
@@ -265,21 +284,23 @@ void pgs_colours_in_group(__global TlRow* rows, __global const int* colour_start
 // `iterations` PGS sweeps in one work-group: for a system whose colours are too small to fill
 // the device, where a launch per colour costs more than its rows (the type-G zone, D400;
 // solvers/pgs_sweep.cpp). kernels/bucket.cl pgs_sweeps_one_group_tools adds kinematic tools' rows
-__kernel void pgs_sweeps_one_group(__global TlRow* rows, __global const int* colour_start,
-                                   int colours, int iterations, __global float4* velocity,
-                                   __global float4* omega) {
+__kernel void pgs_sweeps_one_group(__global const TlParticleRow* rows, __global TlImpulse* impulses,
+                                   __global const int* colour_start, int colours, int iterations,
+                                   __global float4* velocity, __global float4* omega) {
   for (int it = 0; it < iterations; ++it)
-    pgs_colours_in_group(rows, colour_start, colours, velocity, omega);
+    pgs_colours_in_group(rows, impulses, colour_start, colours, velocity, omega);
 }
 
 // projected Jacobi with mass splitting (Tonge 2012): every row against the same velocities,
 // each body's mass split evenly among its contacts; the impulse changes are gathered per body
-__kernel void jacobi_rows(__global TlRow* rows, int n_rows, __global const float4* velocity,
-                          __global const float4* omega, __global const int* adj_offsets,
-                          __global float4* delta_lin, __global float4* delta_ang) {
+__kernel void jacobi_rows(__global const TlParticleRow* rows, __global TlImpulse* impulses,
+                          int n_rows, __global const float4* velocity, __global const float4* omega,
+                          __global const int* adj_offsets, __global float4* delta_lin,
+                          __global float4* delta_ang) {
   int k = get_global_id(0);
   if (k >= n_rows) return;
-  TlRow row = rows[k];
+  TlParticleRow row = rows[k];
+  TlImpulse impulse = impulses[k];
   int a = row.a;
   int b = row.b;
   float4 va4, wa4, vb4, wb4;
@@ -288,22 +309,21 @@ __kernel void jacobi_rows(__global TlRow* rows, int n_rows, __global const float
   float na = (float)(adj_offsets[a + 1] - adj_offsets[a]);
   float nb = b >= 0 ? (float)(adj_offsets[b + 1] - adj_offsets[b]) : 0.0f;
   float ima = na * va4.w, iia = na * wa4.w, imb = nb * vb4.w, iib = nb * wb4.w;
-  float3 arm_a = row.arm_a.xyz, arm_b = row.arm_b.xyz;
+  float arm_a = ROW_ARM_A(row), arm_b = row.arm_b;
   float inv_dn = 1.0f / (ima + imb + ROW_SIGMA(row));
-  float dt_ = ima + iia * dot(arm_a, arm_a) + imb + iib * dot(arm_b, arm_b);
+  float dt_ = ima + iia * (arm_a * arm_a) + imb + iib * (arm_b * arm_b);
   float dr_ = iia + iib;
   float3 va = va4.xyz, wa = wa4.xyz, vb = vb4.xyz, wb = wb4.xyz;
   float3 d_lin, d_ang;
-  solve_contact(&row, &va, &wa, &vb, &wb, ima, iia, imb, iib, inv_dn,
+  solve_contact(&row, &impulse, &va, &wa, &vb, &wb, ima, iia, imb, iib, inv_dn,
                 dt_ > 0.0f ? 1.0f / dt_ : 0.0f, dr_ > 0.0f ? 1.0f / dr_ : 0.0f, &d_lin, &d_ang);
-  rows[k].impulse_t = row.impulse_t;
-  rows[k].impulse_r = row.impulse_r;
+  impulses[k] = impulse;
   delta_lin[k] = (float4)(d_lin, 0.0f);
   delta_ang[k] = (float4)(d_ang, 0.0f);
 }
 
 // sums each body's impulse changes in contact order: v += M^-1 sum(G^T d_lambda)
-__kernel void jacobi_bodies(__global const TlRow* rows, __global const float4* delta_lin,
+__kernel void jacobi_bodies(__global const TlParticleRow* rows, __global const float4* delta_lin,
                             __global const float4* delta_ang, __global const int* adj_offsets,
                             __global const int* adjacency, __global const int* row_of_contact,
                             __global float4* velocity, __global float4* omega, int particles) {
@@ -314,9 +334,9 @@ __kernel void jacobi_bodies(__global const TlRow* rows, __global const float4* d
   int end = adj_offsets[i + 1];
   for (int k = adj_offsets[i]; k < end; ++k) {
     int r = row_of_contact[adjacency[k]];
-    int is_a = rows[r].a == i;
-    float s = is_a ? -1.0f : 1.0f;
-    float3 arm = is_a ? rows[r].arm_a.xyz : rows[r].arm_b.xyz;
+    TlParticleRow row = rows[r];
+    float s = row.a == i ? -1.0f : 1.0f;
+    float3 arm = row_arm_of(&row, i);
     float3 P = delta_lin[r].xyz;
     dv += s * P;
     dw += s * (cross(arm, P) + delta_ang[r].xyz);
@@ -338,12 +358,14 @@ float residual_entry(float r2, float ln) { return r2 != 0.0f || ln != 0.0f ? r2 
 // times the lever arm's length); zero at the exact solution. The step is plain Gauss-Seidel's
 // whatever the sweeps' relaxation (the rows' inverse masses divided by it), so a tolerance means
 // the same for every omega
-__kernel void row_residual(__global const TlRow* rows, int n_rows, __global const float4* velocity,
+__kernel void row_residual(__global const TlParticleRow* rows, __global const TlImpulse* impulses,
+                           int n_rows, __global const float4* velocity,
                            __global const float4* omega, float relaxation,
                            __global float* residual) {
   int k = get_global_id(0);
   if (k >= n_rows) return;
-  TlRow row = rows[k];
+  TlParticleRow row = rows[k];
+  TlImpulse impulse = impulses[k];
   // the bodies loaded inline, as in pgs_row (load_bodies' out-pointers cost PoCL)
   int a = row.a;
   int b = row.b;
@@ -352,7 +374,7 @@ __kernel void row_residual(__global const TlRow* rows, int n_rows, __global cons
   float4 vb4 = b >= 0 ? velocity[b] : (float4)(0.0f);
   float4 wb4 = b >= 0 ? omega[b] : (float4)(0.0f);
   float3 n = row.normal.xyz;
-  float ln = ROW_IMPULSE_N(row);
+  float ln = impulse.t.w;
   float un = dot(n, vb4.xyz - va4.xyz);
   float cohesion = ROW_COHESION(row);
   float inv_dn = ROW_INV_DN(row) / relaxation;
@@ -363,16 +385,18 @@ __kernel void row_residual(__global const TlRow* rows, int n_rows, __global cons
   // a row that carries no load and holds no friction or rolling impulse: their discs have radius
   // zero and project zero onto zero (solve_contact's skip), so its residual is the normal one's,
   // bit for bit, without the friction and rolling work (speculative rows whose pairs stay apart)
-  if (ln + cohesion == 0.0f && all(row.impulse_t.xyz == (float3)(0.0f)) &&
-      all(row.impulse_r.xyz == (float3)(0.0f))) {
+  if (ln + cohesion == 0.0f && all(impulse.t.xyz == (float3)(0.0f)) &&
+      all(impulse.r.xyz == (float3)(0.0f))) {
     residual[k] = residual_entry(rn * rn, ln);
     return;
   }
-  float3 u = (vb4.xyz + cross(wb4.xyz, row.arm_b.xyz)) - (va4.xyz + cross(wa4.xyz, row.arm_a.xyz));
+  // the slip at the contact point, as in solve_contact (arms along n)
+  float arm_a = ROW_ARM_A(row);
+  float3 u = (vb4.xyz - va4.xyz) + cross(row.arm_b * wb4.xyz - arm_a * wa4.xyz, n);
   float3 ut = u - dot(u, n) * n;
   float rt = 0.0f;
   if (inv_dt > 0.0f) {
-    float3 lt = row.impulse_t.xyz;
+    float3 lt = impulse.t.xyz;
     float3 lt_new = friction_impulse(lt, ut, inv_dt, ROW_FRICTION(row) * (ln + cohesion));
     rt = length(lt_new - lt) / inv_dt;
   }
@@ -380,9 +404,9 @@ __kernel void row_residual(__global const TlRow* rows, int n_rows, __global cons
   float rr = 0.0f;
   if (inv_dr > 0.0f) {
     float3 wrel = wb4.xyz - wa4.xyz;
-    float3 lr = row.impulse_r.xyz;
+    float3 lr = impulse.r.xyz;
     float3 lr_new = rolling_impulse(lr, wrel, n, inv_dr, ROW_ROLLING_LIMIT(row) * (ln + cohesion));
-    rr = length(lr_new - lr) / inv_dr * length(row.arm_a.xyz);
+    rr = length(lr_new - lr) / inv_dr * fabs(arm_a);
   }
   residual[k] = residual_entry(rn * rn + rt * rt + rr * rr, ln);
 }
@@ -417,12 +441,13 @@ __kernel void sum_residual_blocks(__global const float* residual, int n, int blo
 }
 
 // copies the solved impulses back to the contacts for the next step's warm start
-__kernel void store_impulses(__global const TlRow* rows, int n_rows, __global TlContact* contacts) {
+__kernel void store_impulses(__global const TlParticleRow* rows, __global const TlImpulse* impulses,
+                             int n_rows, __global TlContact* contacts) {
   int k = get_global_id(0);
   if (k >= n_rows) return;
   int c = rows[k].contact;
-  contacts[c].impulse_t = rows[k].impulse_t;
-  contacts[c].impulse_r = (float4)(rows[k].impulse_r.xyz, 0.0f);
+  contacts[c].impulse_t = impulses[k].t;
+  contacts[c].impulse_r = impulses[k].r;
 }
 
 // SPOOK position update: x += h v, q += h/2 (omega, 0) q, renormalised

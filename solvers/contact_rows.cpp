@@ -66,6 +66,33 @@ ContactRow from_device(const TlRow& r) {
   return out;
 }
 
+// the particle row is one cache line, and its impulses half of one (kernels/dem_types.h)
+static_assert(sizeof(TlParticleRow) == 64,
+              "TlParticleRow must stay 64 bytes, as the kernels' layout");
+static_assert(sizeof(TlImpulse) == 32, "TlImpulse must stay 32 bytes, as the kernels' layout");
+
+ContactRow from_device(const TlParticleRow& r, const TlImpulse& impulse) {
+  ContactRow out;
+  out.normal = xyz(r.normal);
+  out.rhs = r.normal.s[3];
+  out.inv_dn = r.mass.s[0];
+  out.sigma = r.mass.s[1];
+  out.inv_dt = r.mass.s[2];
+  out.inv_dr = r.mass.s[3];
+  out.friction = r.coef.s[0];
+  out.rolling_limit = r.coef.s[1];
+  out.cohesion = r.coef.s[2];
+  out.arm_a = double(r.coef.s[3]) * out.normal;
+  out.arm_b = double(r.arm_b) * out.normal;
+  out.impulse_t = xyz(impulse.t);
+  out.impulse_n = impulse.t.s[3];
+  out.impulse_r = xyz(impulse.r);
+  out.a = r.a;
+  out.b = r.b;
+  out.contact = r.contact;
+  return out;
+}
+
 TlRow to_device(const ContactRow& r) {
   TlRow d{};
   d.normal = to_float4(r.normal, r.rhs);

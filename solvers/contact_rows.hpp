@@ -38,8 +38,9 @@ struct StepParams {
   int cells() const { return grid_nx * grid_ny * grid_nz; }
 };
 
-// one contact's rows (kernels/dem_types.h TlRow) in double: what the host builds for the bucket
-// and the tools, and what it reads back from the device
+// one contact's rows in double (kernels/dem_types.h TlRow, or a particle row TlParticleRow and
+// its impulses TlImpulse): what the host builds for the bucket and the tools, and what it reads
+// back from the device
 struct ContactRow {
   Vec3 normal = Vec3::Zero();
   double rhs = 0.0;               // SPOOK right-hand side of the normal row B_n [m/s]
@@ -67,6 +68,9 @@ cl_float4 to_float4(const Vec3& v, double w);
 StepParams from_device(const TlStepParams& p);
 ContactRow from_device(const TlRow& r);
 TlRow to_device(const ContactRow& r);
+// a particle row and its impulses: the arms are their lengths along the normal times it, and the
+// row's relaxation stays in its inverse effective masses
+ContactRow from_device(const TlParticleRow& r, const TlImpulse& impulse);
 // particles from the device's float4 arrays (position.w = radius, velocity.w = 1/m, ...)
 Particles particles_from_device(const std::vector<cl_float4>& position,
                                 const std::vector<cl_float4>& velocity,

@@ -38,6 +38,7 @@ DemBuffers::DemBuffers(Device& dev)
       by_part(dev, 1),
       pairs_differ(dev, 1),
       rows(dev, 1),
+      impulses(dev, 1),
       delta_lin(dev, 1),
       delta_ang(dev, 1),
       residual(dev, 1),

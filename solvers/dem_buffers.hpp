@@ -64,6 +64,7 @@ struct DemBuffers {
                           by_part.bytes(),
                           pairs_differ.bytes(),
                           rows.bytes(),
+                          impulses.bytes(),
                           delta_lin.bytes(),
                           delta_ang.bytes(),
                           residual.bytes(),
@@ -117,8 +118,10 @@ struct DemBuffers {
   // than the last step's (DemWorld keeps the colouring otherwise)
   Buffer<int> pairs_differ;
 
-  // rows and the Jacobi impulse changes
-  Buffer<TlRow> rows;
+  // the particle rows, their impulses (kernels/dem_types.h TlParticleRow, TlImpulse) and the
+  // Jacobi impulse changes
+  Buffer<TlParticleRow> rows;
+  Buffer<TlImpulse> impulses;
   Buffer<cl_float4> delta_lin, delta_ang;
   // each row's squared residual (-1 for a row that does not act: kernels/solver.cl
   // residual_entry), and per block their sum and the number of rows that act

@@ -774,8 +774,9 @@ void DemWorld::prepare_rows() {
   DemBuffers& b = buffers_;
   int nc = b.n_contacts;
   b.rows.resize(std::max(nc, 1));
-  set_args(k_prepare_, b.contacts[b.current], b.order, nc, b.velocity, b.omega, b.rows, params_,
-           settings_.warm_start ? 1 : 0);
+  b.impulses.resize(std::max(nc, 1));
+  set_args(k_prepare_, b.contacts[b.current], b.order, nc, b.velocity, b.omega, b.rows, b.impulses,
+           params_, settings_.warm_start ? 1 : 0);
   launch(dev_, k_prepare_, nc, "prepare_rows");
 }
 
@@ -787,8 +788,8 @@ void DemWorld::apply_gravity() {
 void DemWorld::warm_start() {
   if (!settings_.warm_start) return;
   DemBuffers& b = buffers_;
-  set_args(k_apply_impulses_, b.rows, b.adjacency_offsets, b.adjacency, b.row_of_contact, b.velocity,
-           b.omega, params_);
+  set_args(k_apply_impulses_, b.rows, b.impulses, b.adjacency_offsets, b.adjacency,
+           b.row_of_contact, b.velocity, b.omega, params_);
   launch(dev_, k_apply_impulses_, particle_count_, "apply_row_impulses");
 }
 
@@ -826,7 +827,7 @@ void DemWorld::sweep_fixed_with_tools(int iterations, KinematicToolRows& tools) 
 
 void DemWorld::store_impulses() {
   DemBuffers& b = buffers_;
-  set_args(k_store_, b.rows, b.n_contacts, b.contacts[b.current]);
+  set_args(k_store_, b.rows, b.impulses, b.n_contacts, b.contacts[b.current]);
   launch(dev_, k_store_, b.n_contacts, "store_impulses");
 }
 
@@ -845,7 +846,8 @@ double DemWorld::residual() {
   const int blocks = (nc + kResidualBlock - 1) / kResidualBlock;
   b.residual.resize(nc);
   b.residual_block_sums.resize(blocks);
-  set_args(k_residual_, b.rows, nc, b.velocity, b.omega, params_.relaxation, b.residual);
+  set_args(k_residual_, b.rows, b.impulses, nc, b.velocity, b.omega, params_.relaxation,
+           b.residual);
   launch(dev_, k_residual_, nc, "row_residual");
   set_args(k_sum_blocks_, b.residual, nc, kResidualBlock, b.residual_block_sums);
   launch(dev_, k_sum_blocks_, blocks, "sum_residual_blocks");

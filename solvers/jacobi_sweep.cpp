@@ -23,8 +23,8 @@ class JacobiSweep : public ContactSweep {
     b.delta_ang.resize(n);
     for (int it = 0; it < iterations; ++it) {
       // every row against the velocities of the previous sweep
-      set_args(rows_kernel_, b.rows, n, b.velocity, b.omega, b.adjacency_offsets, b.delta_lin,
-               b.delta_ang);
+      set_args(rows_kernel_, b.rows, b.impulses, n, b.velocity, b.omega, b.adjacency_offsets,
+               b.delta_lin, b.delta_ang);
       launch(dev_, rows_kernel_, static_cast<size_t>(n), "jacobi_rows");
       // each body sums its impulse changes
       set_args(bodies_kernel_, b.rows, b.delta_lin, b.delta_ang, b.adjacency_offsets, b.adjacency,

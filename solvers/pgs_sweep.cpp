@@ -69,9 +69,9 @@ class PgsSweep : public ContactSweep {
     // a small system: the sweeps and the tools' rows in one launch (with colours the same bits)
     const int particle_rows = colours > 0 ? b.colour_start.back() : 0;
     if (particle_rows + tools.rows() <= one_group_rows_) {
-      set_args(one_group_tools_, b.rows, b.colour_start_dev, std::max(colours, 0), iterations,
-               b.velocity, b.omega, tools.row_buffer(), tools.group_start(), tools.groups(),
-               tools.row_tool(), tools.tool_bodies());
+      set_args(one_group_tools_, b.rows, b.impulses, b.colour_start_dev, std::max(colours, 0),
+               iterations, b.velocity, b.omega, tools.row_buffer(), tools.group_start(),
+               tools.groups(), tools.row_tool(), tools.tool_bodies());
       launch_group(dev_, one_group_tools_, tools_group_size_, "pgs_sweeps_one_group_tools");
       return;
     }
@@ -120,14 +120,15 @@ class PgsSweep : public ContactSweep {
       const int first = tl_run_first(parts, level);
       const int groups = tl_run_groups(parts, level);
       if (b.colour_start[first + groups] == b.colour_start[first]) continue;
-      set_args(runs_, b.rows, b.colour_start_dev, first, b.velocity, b.omega);
+      set_args(runs_, b.rows, b.impulses, b.colour_start_dev, first, b.velocity, b.omega);
       launch_walks(dev_, runs_, static_cast<size_t>(groups), "pgs_runs");
     }
   }
 
   // `sweeps` sweeps of every colour in one launch of one work-group
   void sweeps_in_one_group(DemBuffers& b, int colours, int sweeps) {
-    set_args(one_group_, b.rows, b.colour_start_dev, colours, sweeps, b.velocity, b.omega);
+    set_args(one_group_, b.rows, b.impulses, b.colour_start_dev, colours, sweeps, b.velocity,
+             b.omega);
     launch_group(dev_, one_group_, group_size_, "pgs_sweeps_one_group");
   }
 
@@ -137,7 +138,7 @@ class PgsSweep : public ContactSweep {
       int begin = b.colour_start[k];
       int end = b.colour_start[k + 1];
       if (end == begin) continue;
-      set_args(kernel_, b.rows, begin, end, b.velocity, b.omega);
+      set_args(kernel_, b.rows, b.impulses, begin, end, b.velocity, b.omega);
       launch(dev_, kernel_, static_cast<size_t>(end - begin), "pgs_colour");
     }
   }

@@ -89,8 +89,10 @@ std::vector<ref::Contact> current_contacts(const DemWorld& w) {
 
 std::vector<ref::Row> rows_of(const DemWorld& w) {
   std::vector<ref::Row> out;
-  for (const TlRow& r : w.buffers().rows.download(w.buffers().n_contacts))
-    out.push_back(ref::from_device(r));
+  const DemBuffers& b = w.buffers();
+  const std::vector<TlParticleRow> rows = b.rows.download(b.n_contacts);
+  const std::vector<TlImpulse> impulses = b.impulses.download(b.n_contacts);
+  for (size_t k = 0; k < rows.size(); ++k) out.push_back(ref::from_device(rows[k], impulses[k]));
   return out;
 }
 
@@ -1175,9 +1177,12 @@ void compare_rows(const std::vector<ref::Row>& got, const std::vector<ref::Row>&
     coef.scalar(g.friction, w.friction, 1e-7, 0.0, at("row", k));
     coef.scalar(g.rolling_limit, w.rolling_limit, 1e-6, 0.0, at("row", k));
     coef.scalar(g.cohesion, w.cohesion, 1e-6, 0.0, at("row", k));
+    // the normal exact; each arm is stored as its length along n (kernels/dem_types.h
+    // TlParticleRow), a float dot product and a product away from the contact's arm: a few
+    // roundings, 1e-6 of its length
     geometry.vector(g.normal, w.normal, 0.0, 0.0, at("row", k));
-    geometry.vector(g.arm_a, w.arm_a, 0.0, 0.0, at("row", k));
-    geometry.vector(g.arm_b, w.arm_b, 0.0, 0.0, at("row", k));
+    geometry.vector(g.arm_a, w.arm_a, 1e-6, 0.0, at("row", k));
+    geometry.vector(g.arm_b, w.arm_b, 1e-6, 0.0, at("row", k));
     // exact, except a pulling warm start clamped to the bond limit (float h F_c vs double). The
     // cones' radii mu (lambda_n + h F_c) and mu_r R* (lambda_n + h F_c) cancel when a pulling
     // impulse nears the bond limit, so a clamped impulse is good to float's rounding of the

@@ -671,12 +671,12 @@ TEST(DemWorld, TheResidualCountsOnlyTheRowsThatAct) {
   // each row's entry: its squared residual, or -1 when it does not act (kernels/solver.cl
   // row_residual)
   const std::vector<float> entry = b.residual.download(b.n_contacts);
-  const std::vector<TlRow> rows = b.rows.download(b.n_contacts);
+  const std::vector<TlImpulse> impulses = b.impulses.download(b.n_contacts);
   double sum = 0.0;
   int acting = 0;
-  for (size_t k = 0; k < rows.size(); ++k) {
-    // the normal impulse is impulse_t.w (kernels/dem_types.h ROW_IMPULSE_N)
-    const bool acts = entry[k] > 0.0f || rows[k].impulse_t.s[3] != 0.0f;
+  for (size_t k = 0; k < impulses.size(); ++k) {
+    // the normal impulse is t.w (kernels/dem_types.h TlImpulse)
+    const bool acts = entry[k] > 0.0f || impulses[k].t.s[3] != 0.0f;
     if (acts) {
       EXPECT_GE(entry[k], 0.0f) << "row " << k;
       ++acting;
@@ -686,9 +686,9 @@ TEST(DemWorld, TheResidualCountsOnlyTheRowsThatAct) {
     sum += std::max(entry[k], 0.0f);
   }
   std::printf("[ measured ] %zu rows, %d act; RMS over them %.3e m/s, over all %.3e m/s\n",
-              rows.size(), acting, rms, std::sqrt(sum / static_cast<double>(rows.size())));
+              impulses.size(), acting, rms, std::sqrt(sum / static_cast<double>(impulses.size())));
   // the bed has rows that do not act (else this test could not tell the two apart)
-  EXPECT_LT(acting, static_cast<int>(rows.size()) * 9 / 10);
+  EXPECT_LT(acting, static_cast<int>(impulses.size()) * 9 / 10);
   EXPECT_GT(acting, 0);
   EXPECT_NEAR(rms, std::sqrt(sum / acting), 1e-5 * rms);
 }

@@ -99,16 +99,16 @@ TEST(PgsSweep, OneGroupGivesTheBitsOfALaunchPerColour) {
   ASSERT_GT(colours, 1);
   const auto v0 = b.velocity.download(n);
   const auto w0 = b.omega.download(n);
-  const auto r0 = b.rows.download(rows);
+  const auto r0 = b.impulses.download(rows);
 
   const int sweeps = 7;
   auto run = [&](int one_group_rows) {
     b.velocity.upload(v0);
     b.omega.upload(w0);
-    b.rows.upload(r0);
+    b.impulses.upload(r0);
     make_pgs_sweep(world.device(), one_group_rows)->iterate(b, sweeps);
     std::vector<char> out = bytes_of(b.velocity, n);
-    for (const auto& part : {bytes_of(b.omega, n), bytes_of(b.rows, rows)})
+    for (const auto& part : {bytes_of(b.omega, n), bytes_of(b.impulses, rows)})
       out.insert(out.end(), part.begin(), part.end());
     return out;
   };
@@ -138,13 +138,13 @@ TEST(PgsSweep, RunsGiveTheBitsOfOneWalkOverAllTheirRows) {
   ASSERT_GT(world.stats().boundary_rows, 0) << "no contact across parts: the levels untested";
   const auto v0 = b.velocity.download(n);
   const auto w0 = b.omega.download(n);
-  const auto r0 = b.rows.download(rows);
+  const auto r0 = b.impulses.download(rows);
   const std::vector<int> runs = b.colour_start;
 
   const int sweeps = 7;
   auto state = [&] {
     std::vector<char> out = bytes_of(b.velocity, n);
-    for (const auto& part : {bytes_of(b.omega, n), bytes_of(b.rows, rows)})
+    for (const auto& part : {bytes_of(b.omega, n), bytes_of(b.impulses, rows)})
       out.insert(out.end(), part.begin(), part.end());
     return out;
   };
@@ -154,7 +154,7 @@ TEST(PgsSweep, RunsGiveTheBitsOfOneWalkOverAllTheirRows) {
   // the same rows from the same state as one range that one work-item walks
   b.velocity.upload(v0);
   b.omega.upload(w0);
-  b.rows.upload(r0);
+  b.impulses.upload(r0);
   b.colour_start = {0, rows};
   b.colour_start_dev.upload(b.colour_start);
   b.row_layout = RowLayout::Interleaved;
