@@ -130,8 +130,9 @@ typedef struct {
 // A particle contact's constraint rows prepared for the sweeps (SPOOK, Hertz), laid out in the
 // sweeps' order (colours, interleaved or runs), split in two arrays: what the sweeps only read
 // (TlParticleRow, 64 B, one cache line) and the impulses they read and write (TlImpulse, 32 B).
-// A sweep's row update so moves 64 + 32 + 32 B of row (the 112 B TlRow below, impulses in its
-// middle, dirtied two cache lines a row: about 112 + 112 B), besides its two bodies. Friction and
+// A sweep's row update so reads 64 + 32 B of row and writes back 32 B (the 112 B TlRow below held
+// the impulses at its offset 48, so a row update read 112 B and dirtied 1.25 cache lines of it on
+// average: 80 B written back), besides its two bodies. Friction and
 // rolling rows act on world vectors: for spheres, and a sphere against a plane or a box, the lever
 // arms lie along the normal (kernels/narrowphase.cl emit_pair, emit_static), so each arm is one
 // signed length times n and the effective masses are isotropic (one scalar each). The rows carry
@@ -140,7 +141,7 @@ typedef struct {
   tl_float4 normal;  // xyz unit normal from a towards b; w = rhs of the normal row B_n [m/s]
   tl_float4 mass;    // x = omega/D_n, D_n = G M^-1 G^T + Sigma_n; y = Sigma_n [m/(N s)];
                      // z = omega/D_t (friction); w = omega/D_r (rolling)
-  tl_float4 coef;    // x = mu, y = mu_r R* [m], z = the tensile impulse the contact holds, h F_c
+  tl_float4 law;     // x = mu, y = mu_r R* [m], z = the tensile impulse the contact holds, h F_c
                      // [N s] (0: no cohesion), w = a's lever arm along n [m] (arm_a = w n)
   tl_float arm_b;    // b's lever arm along n [m] (arm_b = arm_b n; 0 for static geometry)
   tl_int a, b;       // bodies (b < 0 static)
@@ -178,10 +179,11 @@ typedef struct {
 #define ROW_SIGMA(row) ((row).mass.y)
 #define ROW_INV_DT(row) ((row).mass.z)
 #define ROW_INV_DR(row) ((row).mass.w)
-#define ROW_FRICTION(row) ((row).coef.x)
-#define ROW_ROLLING_LIMIT(row) ((row).coef.y)
-#define ROW_COHESION(row) ((row).coef.z)
-#define ROW_ARM_A(row) ((row).coef.w)
+#define ROW_FRICTION(row) ((row).law.x)
+#define ROW_ROLLING_LIMIT(row) ((row).law.y)
+#define ROW_COHESION(row) ((row).law.z)
+#define ROW_ARM_A(row) ((row).law.w)
+#define ROW_ARM_B(row) ((row).arm_b)
 #define TOOL_ROW_RHS(row) ((row).normal.w)
 #define TOOL_ROW_INV_DN(row) ((row).arm_a.w)
 #define TOOL_ROW_SIGMA(row) ((row).arm_b.w)
@@ -190,7 +192,6 @@ typedef struct {
 #define TOOL_ROW_FRICTION(row) ((row).coef.x)
 #define TOOL_ROW_ROLLING_LIMIT(row) ((row).coef.y)
 #define TOOL_ROW_INV_DR(row) ((row).coef.z)
-#define TOOL_ROW_COHESION(row) ((row).coef.w)
 #endif
 
 // the bucket: one rigid body of the vehicle that particles touch (SPEC §1 steps 3-6). Its rows

@@ -81,7 +81,7 @@ __kernel void prepare_rows(__global const TlContact* contacts, __global const in
   row.normal = (float4)(n, rhs);
   row.mass = (float4)(omega_sor / (inv_m + sigma), sigma, d_t > 0.0f ? omega_sor / d_t : 0.0f,
                       d_r > 0.0f ? omega_sor / d_r : 0.0f);
-  row.coef = (float4)(p.friction, rolling * reduced, cohesion, arm_a);
+  row.law = (float4)(p.friction, rolling * reduced, cohesion, arm_a);
   row.arm_b = arm_b;
   row.a = con.a;
   row.b = con.b;
@@ -103,7 +103,7 @@ __kernel void apply_gravity(__global float4* velocity, const TlStepParams p) {
 
 // the lever arm of body `i` in a row: a's or b's length along the normal, times it
 float3 row_arm_of(const TlParticleRow* row, int i) {
-  return (row->a == i ? ROW_ARM_A(*row) : row->arm_b) * row->normal.xyz;
+  return (row->a == i ? ROW_ARM_A(*row) : ROW_ARM_B(*row)) * row->normal.xyz;
 }
 
 // the impulse body `i` receives from a row: linear and angular (sign -1 for a, +1 for b)
@@ -151,7 +151,7 @@ TL_INLINE void solve_contact(const TlParticleRow* row, TlImpulse* impulse, float
                              float3* d_ang) {
   float3 n = row->normal.xyz;
   float arm_a = ROW_ARM_A(*row);
-  float arm_b = row->arm_b;
+  float arm_b = ROW_ARM_B(*row);
   float ln = impulse->t.w;
 
   // normal: SPOOK row with compliance, lambda_n >= -h F_c (0 without cohesion)
@@ -309,7 +309,7 @@ __kernel void jacobi_rows(__global const TlParticleRow* rows, __global TlImpulse
   float na = (float)(adj_offsets[a + 1] - adj_offsets[a]);
   float nb = b >= 0 ? (float)(adj_offsets[b + 1] - adj_offsets[b]) : 0.0f;
   float ima = na * va4.w, iia = na * wa4.w, imb = nb * vb4.w, iib = nb * wb4.w;
-  float arm_a = ROW_ARM_A(row), arm_b = row.arm_b;
+  float arm_a = ROW_ARM_A(row), arm_b = ROW_ARM_B(row);
   float inv_dn = 1.0f / (ima + imb + ROW_SIGMA(row));
   float dt_ = ima + iia * (arm_a * arm_a) + imb + iib * (arm_b * arm_b);
   float dr_ = iia + iib;
@@ -392,7 +392,7 @@ __kernel void row_residual(__global const TlParticleRow* rows, __global const Tl
   }
   // the slip at the contact point, as in solve_contact (arms along n)
   float arm_a = ROW_ARM_A(row);
-  float3 u = (vb4.xyz - va4.xyz) + cross(row.arm_b * wb4.xyz - arm_a * wa4.xyz, n);
+  float3 u = (vb4.xyz - va4.xyz) + cross(ROW_ARM_B(row) * wb4.xyz - arm_a * wa4.xyz, n);
   float3 ut = u - dot(u, n) * n;
   float rt = 0.0f;
   if (inv_dt > 0.0f) {
@@ -447,7 +447,7 @@ __kernel void store_impulses(__global const TlParticleRow* rows, __global const 
   if (k >= n_rows) return;
   int c = rows[k].contact;
   contacts[c].impulse_t = impulses[k].t;
-  contacts[c].impulse_r = impulses[k].r;
+  contacts[c].impulse_r = (float4)(impulses[k].r.xyz, 0.0f);
 }
 
 // SPOOK position update: x += h v, q += h/2 (omega, 0) q, renormalised

@@ -79,10 +79,10 @@ ContactRow from_device(const TlParticleRow& r, const TlImpulse& impulse) {
   out.sigma = r.mass.s[1];
   out.inv_dt = r.mass.s[2];
   out.inv_dr = r.mass.s[3];
-  out.friction = r.coef.s[0];
-  out.rolling_limit = r.coef.s[1];
-  out.cohesion = r.coef.s[2];
-  out.arm_a = double(r.coef.s[3]) * out.normal;
+  out.friction = r.law.s[0];
+  out.rolling_limit = r.law.s[1];
+  out.cohesion = r.law.s[2];
+  out.arm_a = double(r.law.s[3]) * out.normal;
   out.arm_b = double(r.arm_b) * out.normal;
   out.impulse_t = xyz(impulse.t);
   out.impulse_n = impulse.t.s[3];

@@ -434,7 +434,7 @@ void check_device_memory(double particles, std::size_t global_bytes,
                      " bytes a particle), more than the device's " +
                      text(static_cast<double>(global_bytes)) + fix);
   if (!(largest <= static_cast<double>(max_allocation_bytes)))
-    throw InputError(pile + ", whose contact rows need one buffer of about " + text(largest) +
+    throw InputError(pile + ", whose contacts need one buffer of about " + text(largest) +
                      ", more than the device allocates at once (" +
                      text(static_cast<double>(max_allocation_bytes)) + ")" + fix);
 }

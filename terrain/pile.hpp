@@ -42,9 +42,10 @@ inline constexpr double kMaxPileParticles = 4.5e6;
 // spheres of the level's diameter
 double estimated_pile_particles(const PileProfile& profile, double diameter);
 // the DEM's device memory per particle of a settled pile [bytes], all arrays and the largest one
-// (the contact rows): measured 1611 and 439 at D400, 1802 and 486 at D200 (`talus pile`'s
-// device_bytes_per_particle and largest_buffer_bytes, 2026-11-27, PoCL); bounds with 40 % over the
-// measured, for the capacities' growth ahead of the sizes (host/device.hpp Buffer)
+// (an array of contacts): measured 1611 and 439 at D400, 1802 and 486 at D200 (`talus pile`'s
+// device_bytes_per_particle and largest_buffer_bytes, 2026-11-27, PoCL; 1611 and 432, 1809 and 487
+// with the particle rows in two arrays, 2026-12-02); bounds with 40 % over the measured, for the
+// capacities' growth ahead of the sizes (host/device.hpp Buffer)
 inline constexpr double kDemDeviceBytesPerParticle = 2500.0;
 inline constexpr double kDemLargestBufferBytesPerParticle = 700.0;
 // a pile of `particles` on a device with `global_bytes` of memory and `max_allocation_bytes` per
