@@ -267,8 +267,10 @@ TEST(DiagnoseTest, FiveEffectsOfComparableSizeAreFoundThreeTogether) {
   const TempDir scratch("talus_diagnose_set_" + std::to_string(seed));
   const fs::path& base = scratch.path();
   synthesise(base, effects, seed);
+  // up to three rounds: the set of three in round 1, the two biases it leaves after it, and all
+  // of them refitted together
   const auto j = diagnose(base,
-                          " --max-effects 1 --candidates 'sensor_bias[f_lift],sensor_bias[f_tilt],"
+                          " --max-effects 3 --candidates 'sensor_bias[f_lift],sensor_bias[f_tilt],"
                           "sensor_bias[f_traction],sensor_bias[v_drive],sensor_bias[power]'");
   const auto& round = j["rounds"][0];
   // the case needs a set of three: no pair clears the bar. A draw whose best pair does (none of
@@ -276,8 +278,8 @@ TEST(DiagnoseTest, FiveEffectsOfComparableSizeAreFoundThreeTogether) {
   // set: then the pair is what the round must add, and no set of three is searched
   ASSERT_FALSE(round["pairs"].empty()) << context << ": " << round.dump();
   const bool pair_enough = round["pairs"][0]["explained"].get<double>() >= 0.5;
-  // three biases added together (two where a pair was enough), each on a channel that carries one
-  // and within 8 % of it (the draws measured: within 3.7 %)
+  // round 1: three biases added together (two where a pair was enough), each on a channel that
+  // carries one, each channel once
   ASSERT_TRUE(round["added"].get<bool>()) << context << ": " << round["triples"].dump();
   if (pair_enough) {
     EXPECT_TRUE(round["triples"].empty()) << context;
@@ -286,10 +288,20 @@ TEST(DiagnoseTest, FiveEffectsOfComparableSizeAreFoundThreeTogether) {
     EXPECT_GE(round["triples"][0]["explained"].get<double>(), 0.5) << context;
   }
   const std::size_t members = pair_enough ? 2 : 3;
-  // (the discovery may then write one of the two biases left as a constant correction of its
-  // reading: a learned correction, on a channel that carries a bias)
-  int biases_found = 0;
+  std::set<std::string> first_round;
+  for (std::size_t k = 0; k < members && k < j["effects_found"].size(); ++k) {
+    const auto& f = j["effects_found"][k];
+    ASSERT_EQ(f["name"], "sensor_bias") << context << ": " << f.dump();
+    first_round.insert(f["params"]["channel"].get<std::string>());
+  }
+  EXPECT_EQ(first_round.size(), members) << context << ": " << j["effects_found"].dump();
+  // in the end all five, each channel once, refitted together and each within 5 % of its bias
+  // (a set's fit is pulled by the biases it lacks: power follows the force and speed readings,
+  // so a set without f_lift fitted f_traction 11 % low, seed 3709446671, and the refit of all
+  // five brought it within 1 %; docs/sim2real.md step 5). The discovery may write one of them as
+  // a constant correction of its reading instead: a learned correction, skipped here
   std::set<std::string> channels;
+  double worst = 0.0;  // the largest relative error of a bias found, printed for the docs' tally
   for (const auto& f : j["effects_found"]) {
     if (f["name"].get<std::string>().rfind("learned_", 0) == 0) continue;
     ASSERT_EQ(f["name"], "sensor_bias") << context;
@@ -297,14 +309,14 @@ TEST(DiagnoseTest, FiveEffectsOfComparableSizeAreFoundThreeTogether) {
     const auto truth = std::find_if(biases.begin(), biases.end(),
                                     [&](const auto& b) { return b.first == channel; });
     ASSERT_NE(truth, biases.end()) << context << ": " << f.dump();
-    ++biases_found;
-    channels.insert(channel);
-    EXPECT_NEAR(f["params"]["bias"].get<double>(), truth->second, 0.08 * std::abs(truth->second))
-        << context << ": " << f.dump();
+    EXPECT_TRUE(channels.insert(channel).second) << context << ": " << channel << " twice";
+    const double error = std::abs(f["params"]["bias"].get<double>() / truth->second - 1.0);
+    worst = std::max(worst, error);
+    EXPECT_LE(error, 0.05) << context << ": " << f.dump();
   }
-  EXPECT_EQ(static_cast<std::size_t>(biases_found), members)
-      << context << ": " << j["effects_found"].dump();
-  EXPECT_EQ(channels.size(), members) << context << ": as many channels, each once";
+  std::cerr << "five biases: " << context << ": " << members << " in round 1, "
+            << j["rounds"].size() << " rounds, the worst bias " << 100.0 * worst << " % off\n";
+  EXPECT_EQ(channels.size(), biases.size()) << context << ": " << j["effects_found"].dump();
 }
 
 TEST(DiagnoseTest, EffectsFoundInTwoRoundsAreRefittedTogether) {
