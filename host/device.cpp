@@ -178,7 +178,9 @@ const cl::Program& Device::program(const std::vector<std::string>& files, const 
     if (name.size() > 2 && name.compare(name.size() - 2, 2, ".h") == 0) source += e.text + "\n";
   }
   for (auto& f : files) source += embedded_source(f) + "\n";
-  const std::string build_options = "-cl-std=CL1.2 " + options;
+  // a CPU device's kernels may use CPU-only hints (TL_PREFETCH, kernels/common.h)
+  const std::string build_options =
+      std::string("-cl-std=CL1.2 ") + (is_cpu_ ? "-DTL_CPU_DEVICE " : "") + options;
 
   // the binary a former run saved for this very source, options and driver, if the driver takes
   // it back; anything else builds the source

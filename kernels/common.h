@@ -13,6 +13,15 @@ typedef ulong tl_ulong;
 // the contact law out of line and calls them once per work-item, which cost the D200 sweeps 11 %
 // (262 against 295 ms per step, talus bench dem, bench/RESULTS.md 2026-11-24 issue 13)
 #define TL_INLINE __attribute__((always_inline))
+// a hint that a walk will soon read the cache line at p. On a CPU device (TL_CPU_DEVICE, set by
+// host/device.cpp) it is the compiler's prefetch instruction, because PoCL compiles OpenCL's own
+// prefetch() to nothing (checked in pgs_runs.so's disassembly, 2026-12-02); elsewhere nothing: a
+// GPU hides a load's latency behind its other work-items
+#if defined(TL_CPU_DEVICE) && defined(__clang__)
+#define TL_PREFETCH(p) __builtin_prefetch((const __global void*)(p))
+#else
+#define TL_PREFETCH(p)
+#endif
 #else
 #include <CL/cl_platform.h>
 typedef cl_float4 tl_float4;

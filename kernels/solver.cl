@@ -255,13 +255,27 @@ __kernel void pgs_colour(__global const TlParticleRow* rows, __global TlImpulse*
 // walks run `first + g`, rows [run_start[first + g], run_start[first + g + 1]) in order. The runs
 // of one launch run side by side on the cores without a race; the next level's come in a launch
 // of their own after them (solvers/pgs_sweep.cpp)
+// The rows a walk asks for ahead of the one it solves (TL_PREFETCH): 8 rows are about 250 ns at
+// this VM's ~30 ns an update, twice a miss to memory. A large system's rows stream from memory (a
+// D50 fill's 1.2 M rows are 120 MB with their impulses), and with the hardware prefetcher alone the
+// walk waited on each row: a quarter of pgs_row's samples on its first load, the fill's sweeps 1.5
+// times as fast with the hint (bench/RESULTS.md 2026-12-02, "a walk's rows prefetched")
+#define TL_RUN_PREFETCH_ROWS 8
+
 __kernel void pgs_runs(__global const TlParticleRow* rows, __global TlImpulse* impulses,
                        __global const int* run_start, int first, __global float4* velocity,
                        __global float4* omega) {
   int k = first + get_group_id(0);
   int end = run_start[k + 1];
-  // a run's rows share bodies: one work-item walks them (work-groups of one item)
-  for (int r = run_start[k]; r < end; ++r) pgs_row(rows, impulses, r, velocity, omega);
+  // a run's rows share bodies: one work-item walks them (work-groups of one item), asking for the
+  // row and impulse it will reach TL_RUN_PREFETCH_ROWS rows on
+  for (int r = run_start[k]; r < end; ++r) {
+    if (r + TL_RUN_PREFETCH_ROWS < end) {
+      TL_PREFETCH(rows + r + TL_RUN_PREFETCH_ROWS);
+      TL_PREFETCH(impulses + r + TL_RUN_PREFETCH_ROWS);
+    }
+    pgs_row(rows, impulses, r, velocity, omega);
+  }
 }
 
 // one PGS sweep over every colour by one work-group, a barrier between colours: a colour's rows
