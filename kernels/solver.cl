@@ -250,11 +250,6 @@ __kernel void pgs_colour(__global const TlParticleRow* rows, __global TlImpulse*
   pgs_row(rows, impulses, k, velocity, omega);
 }
 
-// projected Gauss-Seidel over runs of rows that share no dynamic body (one level's runs of a large
-// system on a CPU device: kernels/colouring.cl contact_part): the one work-item of work-group g
-// walks run `first + g`, rows [run_start[first + g], run_start[first + g + 1]) in order. The runs
-// of one launch run side by side on the cores without a race; the next level's come in a launch
-// of their own after them (solvers/pgs_sweep.cpp)
 // The rows a walk asks for ahead of the one it solves (TL_PREFETCH): 8 rows are about 250 ns at
 // this VM's ~30 ns an update, twice a miss to memory. A large system's rows stream from memory (a
 // D50 fill's 1.2 M rows are 120 MB with their impulses), and with the hardware prefetcher alone the
@@ -262,6 +257,11 @@ __kernel void pgs_colour(__global const TlParticleRow* rows, __global TlImpulse*
 // times as fast with the hint (bench/RESULTS.md 2026-12-02, "a walk's rows prefetched")
 #define TL_RUN_PREFETCH_ROWS 8
 
+// projected Gauss-Seidel over runs of rows that share no dynamic body (one level's runs of a large
+// system on a CPU device: kernels/colouring.cl contact_part): the one work-item of work-group g
+// walks run `first + g`, rows [run_start[first + g], run_start[first + g + 1]) in order. The runs
+// of one launch run side by side on the cores without a race; the next level's come in a launch
+// of their own after them (solvers/pgs_sweep.cpp)
 __kernel void pgs_runs(__global const TlParticleRow* rows, __global TlImpulse* impulses,
                        __global const int* run_start, int first, __global float4* velocity,
                        __global float4* omega) {

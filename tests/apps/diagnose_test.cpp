@@ -298,8 +298,8 @@ TEST(DiagnoseTest, FiveEffectsOfComparableSizeAreFoundThreeTogether) {
   // in the end all five, each channel once, refitted together and each within 5 % of its bias
   // (a set's fit is pulled by the biases it lacks: power follows the force and speed readings,
   // so a set without f_lift fitted f_traction 11 % low, seed 3709446671, and the refit of all
-  // five brought it within 1 %; docs/sim2real.md step 5). The discovery may write one of them as
-  // a constant correction of its reading instead: a learned correction, skipped here
+  // five brought it within 1 %; docs/sim2real.md step 5). A learned correction the discovery
+  // might add is not a bias and not counted: all five must be found as sensor biases
   std::set<std::string> channels;
   double worst = 0.0;  // the largest relative error of a bias found, printed for the docs' tally
   for (const auto& f : j["effects_found"]) {
